@@ -1,0 +1,102 @@
+//! # master-test: an ethercrab master for software PAM-199 slaves
+//!
+//! [`VirtualBus`] puts an ethercrab [`MainDevice`] on a virtual link
+//! ([`link`]) to a chain of software slaves: real EtherCAT frames, no
+//! sockets, no root. Integration tests and the demo CLI use it.
+
+pub mod link;
+
+use ethercrab::{MainDevice, MainDeviceConfig, PduStorage, RetryBehaviour, Timeouts};
+use link::{Chain, Clock, Link, SharedChain};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+/// Most slaves one group can hold.
+pub const MAX_SUBDEVICES: usize = 64;
+/// Most EtherCAT frames in flight.
+pub const MAX_FRAMES: usize = 16;
+/// Payload bytes of one frame.
+pub const MAX_PDU_DATA: usize = PduStorage::element_size(1100);
+/// Process data image of a group in bytes (64 slaves x 21 bytes fit).
+pub const PDI_LEN: usize = 2048;
+
+/// The group type used throughout the tests.
+pub type Group<S> = ethercrab::SubDeviceGroup<MAX_SUBDEVICES, PDI_LEN, S>;
+
+/// Errors of setting up a virtual bus.
+#[derive(Debug, thiserror::Error)]
+pub enum BusError {
+    /// ethercrab reported an error.
+    #[error("ethercrab: {0}")]
+    Ethercrab(#[from] ethercrab::error::Error),
+    /// The link thread could not be started.
+    #[error("cannot start the virtual link thread: {0}")]
+    Thread(#[from] std::io::Error),
+    /// The PDU storage was already split.
+    #[error("PDU storage already in use")]
+    Storage,
+}
+
+/// Timeouts suited to the in-process link on a busy CI machine.
+pub fn timeouts() -> Timeouts {
+    Timeouts {
+        state_transition: Duration::from_secs(10),
+        pdu: Duration::from_millis(500),
+        eeprom: Duration::from_millis(100),
+        wait_loop_delay: Duration::from_micros(100),
+        mailbox_echo: Duration::from_millis(500),
+        mailbox_response: Duration::from_secs(2),
+    }
+}
+
+/// An ethercrab master connected to a chain of software slaves.
+pub struct VirtualBus {
+    /// The ethercrab master.
+    pub maindevice: Arc<MainDevice<'static>>,
+    /// The slaves on the line (lock with [`link::lock`]).
+    pub chain: SharedChain,
+    /// The slaves' clock.
+    pub clock: Clock,
+    _link: Link,
+}
+
+impl VirtualBus {
+    /// `n` slaves on real time.
+    pub fn new(n: usize) -> Result<Self, BusError> {
+        Self::with_clock(n, Clock::real())
+    }
+
+    /// `n` slaves whose firmware sees `clock`.
+    pub fn with_clock(n: usize, clock: Clock) -> Result<Self, BusError> {
+        // Each bus owns its storage for the life of the process; tests
+        // create a handful, so leaking is the simple, safe choice.
+        let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
+            Box::leak(Box::new(PduStorage::new()));
+        let (tx, rx, pdu_loop) = storage.try_split().map_err(|()| BusError::Storage)?;
+        let maindevice = Arc::new(MainDevice::new(
+            pdu_loop,
+            timeouts(),
+            MainDeviceConfig {
+                dc_static_sync_iterations: 0,
+                retry_behaviour: RetryBehaviour::None,
+            },
+        ));
+        let chain = Arc::new(Mutex::new(Chain::new(n)));
+        let link = Link::spawn(tx, rx, chain.clone(), clock.clone())?;
+        Ok(VirtualBus {
+            maindevice,
+            chain,
+            clock,
+            _link: link,
+        })
+    }
+
+    /// Discovers the slaves and brings them to PRE-OP (ethercrab's
+    /// `init_single_group`).
+    pub async fn init(&self) -> Result<Group<ethercrab::subdevice_group::PreOp>, BusError> {
+        let md: &MainDevice<'static> = &self.maindevice;
+        Ok(md
+            .init_single_group::<MAX_SUBDEVICES, PDI_LEN>(ethercrab::std::ethercat_now)
+            .await?)
+    }
+}

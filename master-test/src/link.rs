@@ -1,0 +1,184 @@
+//! The virtual EtherCAT link: every frame ethercrab sends passes through a
+//! chain of software slaves, in order, and comes back to ethercrab.
+//!
+//! No sockets and no root: a thread takes frames from ethercrab's
+//! [`PduTx`], runs them through [`Chain::process`] and hands the result to
+//! [`PduRx`]. The slaves' firmware is polled after every frame and at least
+//! every millisecond, with time from a [`Clock`] the test controls.
+
+use ethercrab::{PduRx, PduTx};
+use pam_slave::device::SoftSlave;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::task::{Wake, Waker};
+use std::thread::{self, JoinHandle, Thread};
+use std::time::{Duration, Instant};
+
+/// Where the slaves' time comes from.
+#[derive(Debug, Clone)]
+pub enum Clock {
+    /// Real time since the link started.
+    Real(Instant),
+    /// Simulated time in nanoseconds, advanced only by the test.
+    Simulated(Arc<AtomicU64>),
+}
+
+impl Clock {
+    /// Real time starting now.
+    pub fn real() -> Self {
+        Clock::Real(Instant::now())
+    }
+
+    /// Simulated time starting at 0; advance it with [`Clock::advance`].
+    pub fn simulated() -> Self {
+        Clock::Simulated(Arc::new(AtomicU64::new(0)))
+    }
+
+    /// Current time in nanoseconds.
+    pub fn now_ns(&self) -> u64 {
+        match self {
+            Clock::Real(start) => u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX),
+            Clock::Simulated(t) => t.load(Ordering::Acquire),
+        }
+    }
+
+    /// Advances simulated time (no effect on real time).
+    pub fn advance(&self, d: Duration) {
+        if let Clock::Simulated(t) = self {
+            let ns = u64::try_from(d.as_nanos()).unwrap_or(u64::MAX);
+            t.fetch_add(ns, Ordering::AcqRel);
+        }
+    }
+}
+
+/// A line of software slaves, first to last.
+pub struct Chain {
+    slaves: Vec<SoftSlave>,
+    frames: u64,
+}
+
+impl Chain {
+    /// `n` PAM-199 slaves in their power-on state.
+    pub fn new(n: usize) -> Self {
+        let mut slaves: Vec<SoftSlave> = (0..n).map(|_| SoftSlave::new()).collect();
+        let last = slaves.len().saturating_sub(1);
+        for (i, s) in slaves.iter_mut().enumerate() {
+            s.set_port1_link(i != last);
+        }
+        Chain { slaves, frames: 0 }
+    }
+
+    /// Passes one Ethernet frame through every slave in order (as the
+    /// frame travels down the line and back), then lets each slave's
+    /// firmware run.
+    pub fn process(&mut self, frame: &mut [u8], now_ns: u64) {
+        for s in &mut self.slaves {
+            s.process_frame(frame);
+        }
+        self.frames += 1;
+        self.poll(now_ns);
+    }
+
+    /// Runs every slave's firmware once.
+    pub fn poll(&mut self, now_ns: u64) {
+        for s in &mut self.slaves {
+            s.poll(now_ns);
+        }
+    }
+
+    /// The slaves.
+    pub fn slaves(&self) -> &[SoftSlave] {
+        &self.slaves
+    }
+
+    /// The slaves, mutably (to set inputs, inject faults).
+    pub fn slaves_mut(&mut self) -> &mut [SoftSlave] {
+        &mut self.slaves
+    }
+
+    /// Number of frames processed so far.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+}
+
+/// A chain shared between the link thread and the test.
+pub type SharedChain = Arc<Mutex<Chain>>;
+
+/// Locks a shared chain, recovering it if a panicking test poisoned it.
+pub fn lock(chain: &SharedChain) -> MutexGuard<'_, Chain> {
+    chain.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+struct ThreadWaker(Thread);
+
+impl Wake for ThreadWaker {
+    fn wake(self: Arc<Self>) {
+        self.0.unpark();
+    }
+    fn wake_by_ref(self: &Arc<Self>) {
+        self.0.unpark();
+    }
+}
+
+/// The running link thread; stops when dropped.
+pub struct Link {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl Link {
+    /// Starts the link thread between ethercrab's `tx`/`rx` and `chain`.
+    pub fn spawn(
+        mut tx: PduTx<'static>,
+        mut rx: PduRx<'static>,
+        chain: SharedChain,
+        clock: Clock,
+    ) -> std::io::Result<Self> {
+        let stop = Arc::new(AtomicBool::new(false));
+        let stop2 = stop.clone();
+        let thread = thread::Builder::new()
+            .name("ecat-virtual-link".into())
+            .spawn(move || {
+                let waker = Waker::from(Arc::new(ThreadWaker(thread::current())));
+                let mut buf: Vec<u8> = Vec::with_capacity(1536);
+                while !stop2.load(Ordering::Acquire) && !tx.should_exit() {
+                    tx.replace_waker(&waker);
+                    let mut sent = false;
+                    while let Some(frame) = tx.next_sendable_frame() {
+                        buf.clear();
+                        let res = frame.send_blocking(|data| {
+                            buf.extend_from_slice(data);
+                            Ok(data.len())
+                        });
+                        if res.is_err() {
+                            continue;
+                        }
+                        lock(&chain).process(&mut buf, clock.now_ns());
+                        // A frame ethercrab no longer waits for is dropped,
+                        // as on a real wire.
+                        let _ = rx.receive_frame(&buf);
+                        sent = true;
+                    }
+                    if !sent {
+                        lock(&chain).poll(clock.now_ns());
+                        thread::park_timeout(Duration::from_millis(1));
+                    }
+                }
+            })?;
+        Ok(Link {
+            stop,
+            thread: Some(thread),
+        })
+    }
+}
+
+impl Drop for Link {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Release);
+        if let Some(t) = self.thread.take() {
+            t.thread().unpark();
+            let _ = t.join();
+        }
+    }
+}

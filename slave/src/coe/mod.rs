@@ -1,0 +1,72 @@
+//! CANopen over EtherCAT servers (layer 3).
+//!
+//! [`CoeServer`] takes the CoE part of a mailbox request, dispatches on the
+//! CoE service and writes the CoE response. Object access goes through the
+//! [`ObjectAccess`] trait that the device implements, so this layer holds
+//! no object values and knows nothing of the ESC.
+
+pub mod sdo;
+
+use crate::wire::coe::{CoeHeader, CoeService, SdoAbortCode};
+use crate::wire::mailbox::MailboxErrorCode;
+
+/// What the CoE servers need from the object dictionary.
+pub trait ObjectAccess {
+    /// Reads `index:sub` (or the whole object with `complete_access`) into
+    /// `out`; returns the number of bytes.
+    fn sdo_upload(
+        &mut self,
+        index: u16,
+        sub: u8,
+        complete_access: bool,
+        out: &mut [u8],
+    ) -> Result<usize, SdoAbortCode>;
+
+    /// Writes `data` into `index:sub` (or the whole object with
+    /// `complete_access`), all or nothing.
+    fn sdo_download(
+        &mut self,
+        index: u16,
+        sub: u8,
+        complete_access: bool,
+        data: &[u8],
+    ) -> Result<(), SdoAbortCode>;
+}
+
+/// The CoE server of one slave.
+#[derive(Debug, Default)]
+pub struct CoeServer {
+    sdo: sdo::SdoServer,
+}
+
+impl CoeServer {
+    /// A server with no transfer in progress.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Handles the CoE payload `request` (CoE header onwards) and writes the
+    /// CoE response into `out`. Returns the response length, or the mailbox
+    /// error code to answer with when the request cannot be served at all.
+    pub fn handle(
+        &mut self,
+        request: &[u8],
+        out: &mut [u8],
+        od: &mut impl ObjectAccess,
+    ) -> Result<Option<usize>, MailboxErrorCode> {
+        let header = CoeHeader::new_checked(request).map_err(|_| MailboxErrorCode::SizeTooShort)?;
+        let body = request.get(CoeHeader::<&[u8]>::HEADER_LEN..).unwrap_or(&[]);
+        match header.service() {
+            CoeService::SdoRequest => {
+                let (head, rest) = out.split_at_mut_checked(CoeHeader::<&[u8]>::HEADER_LEN)
+                    .ok_or(MailboxErrorCode::NoMoreMemory)?;
+                let Some(n) = self.sdo.handle(body, rest, od)? else {
+                    return Ok(None);
+                };
+                CoeHeader::emit_into(head, 0, CoeService::SdoResponse);
+                Ok(Some(n + CoeHeader::<&[u8]>::HEADER_LEN))
+            }
+            _ => Err(MailboxErrorCode::ServiceNotSupported),
+        }
+    }
+}

@@ -1,0 +1,645 @@
+//! The PAM-199-P-ETC as one EtherCAT device (layer 1).
+//!
+//! [`Slave`] is the firmware: it polls the ESC through the PDI ([`Esc`]),
+//! runs the AL state machine on AL control events, serves the mailbox,
+//! moves process data between the SyncManagers and the object dictionary,
+//! and keeps 0x10F8 running. [`SoftSlave`] is a `Slave` on the software
+//! ESC, which also takes EtherCAT frames. [`sii_image`] encodes the SII from
+//! the same model.
+
+use crate::al::{self, AlState, AlStatus, AlStatusCode, TransitionChecks};
+use crate::coe::ObjectAccess;
+use crate::esc::registers::{self as reg, sm as smr};
+use crate::esc::soft::{FrameOutcome, SII_SIZE, SoftEsc};
+use crate::esc::{Esc, EscError};
+use crate::mailbox::MailboxServer;
+use crate::od::model;
+use crate::od::store::{self, ObjectStore};
+use crate::od::types::{DataType, PdoMapping};
+use crate::pdo::{Direction, MAX_IMAGE, PdoError, ProcessImage};
+use crate::sii;
+use crate::wire::coe::SdoAbortCode;
+
+/// Vendor ID of W.E.St. Elektronik GmbH.
+pub const VENDOR_ID: u32 = 0x0000_05AE;
+/// Product code of the PAM-199-P-ETC.
+pub const PRODUCT_CODE: u32 = 0x00C7_03F3;
+/// Revision number.
+pub const REVISION: u32 = 7;
+/// Device name.
+pub const DEVICE_NAME: &str = "PAM-199-P-ETC";
+
+/// Physical layout of the mailboxes and process data buffers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MemoryLayout {
+    /// Standard mailbox out (SM0, master to slave): start, length.
+    pub mbx_out: (u16, u16),
+    /// Standard mailbox in (SM1, slave to master): start, length.
+    pub mbx_in: (u16, u16),
+    /// Bootstrap mailbox out (SM0 in BOOT): start, length.
+    pub boot_out: (u16, u16),
+    /// Bootstrap mailbox in (SM1 in BOOT): start, length.
+    pub boot_in: (u16, u16),
+    /// Output process data buffer (SM2) start.
+    pub pd_out: u16,
+    /// Input process data buffer (SM3) start.
+    pub pd_in: u16,
+}
+
+/// The default layout: 128-byte standard mailboxes at 0x1000/0x1080, 1 KiB
+/// bootstrap mailboxes at 0x1000/0x1400, outputs at 0x1100, inputs at 0x1180.
+pub const LAYOUT: MemoryLayout = MemoryLayout {
+    mbx_out: (0x1000, 128),
+    mbx_in: (0x1080, 128),
+    boot_out: (0x1000, 1024),
+    boot_in: (0x1400, 1024),
+    pd_out: 0x1100,
+    pd_in: 0x1180,
+};
+
+/// SM control bytes as the SII advertises them.
+const SM_CONTROL: [u8; 4] = [0x26, 0x22, 0x64, 0x20];
+
+/// Largest mailbox the device handles.
+pub const MAX_MAILBOX: usize = 1024;
+
+/// The SII EEPROM image of the device, encoded from the object dictionary.
+pub fn sii_image() -> [u8; SII_SIZE] {
+    let mut out = [0xFFu8; SII_SIZE];
+    // The encoder only fails on a model that does not fit the EEPROM; the
+    // unit tests guarantee it fits, and an unencodable model yields a blank
+    // (all 0xFF) EEPROM that no master accepts.
+    let _ = encode_sii(&mut out);
+    out
+}
+
+/// Most entries of one PDO in the SII.
+const SII_MAX_ENTRIES: usize = 16;
+/// Most PDOs of one direction.
+const SII_MAX_PDOS: usize = 4;
+
+type PdoEntries = heapless::Vec<sii::SiiPdoEntry<'static>, SII_MAX_ENTRIES>;
+
+fn pdo_entries(pdo: u16) -> PdoEntries {
+    let mut v = PdoEntries::new();
+    let Some((_, obj)) = model::find(pdo) else {
+        return v;
+    };
+    for e in obj.entries.iter().filter(|e| e.sub != 0) {
+        let crate::od::types::DefaultValue::Int(mapping) = e.default else {
+            continue;
+        };
+        let mapping = mapping as u32;
+        let index = (mapping >> 16) as u16;
+        let sub = ((mapping >> 8) & 0xFF) as u8;
+        let bits = (mapping & 0xFF) as u8;
+        let (name, dtype) = match model::find_entry(index, sub) {
+            Some((_, m)) if index != 0 => (m.name, sii_type(&m.data_type)),
+            _ => ("", 0),
+        };
+        let _ = v.push(sii::SiiPdoEntry {
+            index,
+            sub,
+            name,
+            data_type: dtype,
+            bit_len: bits,
+        });
+    }
+    v
+}
+
+fn sii_type(t: &DataType) -> u8 {
+    // The SII carries the base type code in one byte; enums and bit types
+    // are not mapped into PDOs here.
+    (t.code() & 0xFF) as u8
+}
+
+fn encode_sii(out: &mut [u8]) -> Result<usize, sii::SiiError> {
+    const RX: [(u16, Option<u8>); 2] = [(0x1600, Some(2)), (0x1601, None)];
+    const TX: [(u16, Option<u8>); 4] = [
+        (0x1A00, Some(3)),
+        (0x1A01, None),
+        (0x1A02, Some(3)),
+        (0x1A03, None),
+    ];
+    let rx_entries: [PdoEntries; 2] = [pdo_entries(RX[0].0), pdo_entries(RX[1].0)];
+    let tx_entries: [PdoEntries; 4] = [
+        pdo_entries(TX[0].0),
+        pdo_entries(TX[1].0),
+        pdo_entries(TX[2].0),
+        pdo_entries(TX[3].0),
+    ];
+    let mut rx: heapless::Vec<sii::SiiPdo<'_>, SII_MAX_PDOS> = heapless::Vec::new();
+    for ((index, sm), entries) in RX.iter().zip(rx_entries.iter()) {
+        let name = model::find(*index).map_or("", |(_, o)| o.name);
+        let _ = rx.push(sii::SiiPdo {
+            index: *index,
+            sm: *sm,
+            name,
+            flags: 0,
+            entries,
+        });
+    }
+    let mut tx: heapless::Vec<sii::SiiPdo<'_>, SII_MAX_PDOS> = heapless::Vec::new();
+    for ((index, sm), entries) in TX.iter().zip(tx_entries.iter()) {
+        let name = model::find(*index).map_or("", |(_, o)| o.name);
+        let _ = tx.push(sii::SiiPdo {
+            index: *index,
+            sm: *sm,
+            name,
+            flags: 0,
+            entries,
+        });
+    }
+    let out_len = ProcessImage::build(&ObjectStore::new(), Direction::Outputs)
+        .map_or(0, |i| i.byte_len()) as u16;
+    let in_len = ProcessImage::build(&ObjectStore::new(), Direction::Inputs)
+        .map_or(0, |i| i.byte_len()) as u16;
+    let sms = [
+        sii::SiiSyncManager {
+            start: LAYOUT.mbx_out.0,
+            length: LAYOUT.mbx_out.1,
+            control: SM_CONTROL[0],
+            enable: 0x01,
+            sm_type: sii::SmType::MailboxOut,
+        },
+        sii::SiiSyncManager {
+            start: LAYOUT.mbx_in.0,
+            length: LAYOUT.mbx_in.1,
+            control: SM_CONTROL[1],
+            enable: 0x01,
+            sm_type: sii::SmType::MailboxIn,
+        },
+        sii::SiiSyncManager {
+            start: LAYOUT.pd_out,
+            length: out_len,
+            control: SM_CONTROL[2],
+            enable: 0x01,
+            sm_type: sii::SmType::ProcessOut,
+        },
+        sii::SiiSyncManager {
+            start: LAYOUT.pd_in,
+            length: in_len,
+            control: SM_CONTROL[3],
+            enable: 0x01,
+            sm_type: sii::SmType::ProcessIn,
+        },
+    ];
+    let fmmus = [
+        sii::FmmuUsage::Outputs,
+        sii::FmmuUsage::Inputs,
+        sii::FmmuUsage::SyncMStatus,
+    ];
+    let cfg = sii::SiiConfig {
+        // SPI PDI (0x05), no special ESC configuration.
+        pdi_control: 0x0005,
+        pdi_config: 0x0000,
+        sync_impulse: 0x0000,
+        pdi_config2: 0x0000,
+        station_alias: 0,
+        identity: sii::SiiIdentity {
+            vendor_id: VENDOR_ID,
+            product_code: PRODUCT_CODE,
+            revision: REVISION,
+            serial: 0,
+        },
+        bootstrap_mailbox: sii::SiiMailbox {
+            rx_offset: LAYOUT.boot_out.0,
+            rx_size: LAYOUT.boot_out.1,
+            tx_offset: LAYOUT.boot_in.0,
+            tx_size: LAYOUT.boot_in.1,
+        },
+        standard_mailbox: sii::SiiMailbox {
+            rx_offset: LAYOUT.mbx_out.0,
+            rx_size: LAYOUT.mbx_out.1,
+            tx_offset: LAYOUT.mbx_in.0,
+            tx_size: LAYOUT.mbx_in.1,
+        },
+        // CoE | FoE.
+        mailbox_protocols: 0x0004 | 0x0008,
+        eeprom_kbit: (SII_SIZE * 8 / 1024) as u16,
+        general: sii::SiiGeneral {
+            group: "PAM",
+            image: "",
+            order: DEVICE_NAME,
+            name: DEVICE_NAME,
+            // SDO (bit 0) and PDO assignment (bit 2); the rest is advertised
+            // as the CoE services become available.
+            coe_details: 0x01 | 0x04,
+            foe_details: 0x00,
+            eoe_details: 0x00,
+            // Identity in AL status code: no; safe-op: yes.
+            flags: 0x01,
+            current_on_ebus: 0,
+            physical_port: 0x0011,
+        },
+        fmmus: &fmmus,
+        sync_managers: &sms,
+        tx_pdos: &tx,
+        rx_pdos: &rx,
+    };
+    sii::encode(&cfg, out)
+}
+
+/// The PAM-199 firmware on an ESC reached through the PDI.
+pub struct Slave<E: Esc> {
+    esc: E,
+    /// The live object dictionary.
+    pub store: ObjectStore,
+    al: AlStatus,
+    outputs: ProcessImage,
+    inputs: ProcessImage,
+    mailbox: MailboxServer,
+    /// A response waiting for SM1 to become free.
+    pending: Option<(usize, [u8; MAX_MAILBOX])>,
+    now_ns: u64,
+}
+
+impl<E: Esc> core::fmt::Debug for Slave<E> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Slave")
+            .field("al", &self.al)
+            .finish_non_exhaustive()
+    }
+}
+
+/// What the checks need to see while the AL state machine runs.
+struct Checks<'a, E: Esc> {
+    esc: &'a mut E,
+    store: &'a ObjectStore,
+    images: Option<(ProcessImage, ProcessImage)>,
+}
+
+fn read_sm<E: Esc>(esc: &mut E, n: u8) -> Result<(u16, u16, u8, bool), EscError> {
+    let base = reg::sm(n).ok_or(EscError::OutOfRange { addr: 0, len: 0 })?;
+    let mut b = [0u8; 8];
+    esc.read(base, &mut b)?;
+    Ok((
+        u16::from_le_bytes([b[0], b[1]]),
+        u16::from_le_bytes([b[2], b[3]]),
+        b[4],
+        b[6] & smr::ACTIVATE_ENABLE != 0,
+    ))
+}
+
+impl<E: Esc> Checks<'_, E> {
+    fn mailbox_matches(&mut self, out: (u16, u16), inp: (u16, u16)) -> bool {
+        let (Ok(sm0), Ok(sm1)) = (read_sm(self.esc, 0), read_sm(self.esc, 1)) else {
+            return false;
+        };
+        sm0 == (out.0, out.1, sm0.2, true)
+            && sm0.2 & 0x0F == SM_CONTROL[0] & 0x0F
+            && sm1 == (inp.0, inp.1, sm1.2, true)
+            && sm1.2 & 0x0F == SM_CONTROL[1] & 0x0F
+    }
+}
+
+impl<E: Esc> TransitionChecks for Checks<'_, E> {
+    fn check_mailbox(&mut self) -> Result<(), AlStatusCode> {
+        if self.mailbox_matches(LAYOUT.mbx_out, LAYOUT.mbx_in) {
+            Ok(())
+        } else {
+            Err(AlStatusCode::InvalidMailboxPreOp)
+        }
+    }
+
+    fn check_boot_mailbox(&mut self) -> Result<(), AlStatusCode> {
+        if self.mailbox_matches(LAYOUT.boot_out, LAYOUT.boot_in) {
+            Ok(())
+        } else {
+            Err(AlStatusCode::InvalidMailboxBoot)
+        }
+    }
+
+    fn check_process_data(&mut self) -> Result<(), AlStatusCode> {
+        let outputs = ProcessImage::build(self.store, Direction::Outputs)
+            .map_err(|_| AlStatusCode::InvalidOutputConfig)?;
+        let inputs = ProcessImage::build(self.store, Direction::Inputs)
+            .map_err(|_| AlStatusCode::InvalidInputConfig)?;
+        if let (Some(a), Some(b)) = (outputs.mode(), inputs.mode()) {
+            if a != b {
+                return Err(AlStatusCode::InvalidInputConfig);
+            }
+        }
+        let sm2 = read_sm(self.esc, 2).map_err(|_| AlStatusCode::InvalidOutputConfig)?;
+        let sm3 = read_sm(self.esc, 3).map_err(|_| AlStatusCode::InvalidInputConfig)?;
+        let out_ok = if outputs.byte_len() == 0 {
+            !sm2.3
+        } else {
+            sm2.3
+                && sm2.0 == LAYOUT.pd_out
+                && usize::from(sm2.1) == outputs.byte_len()
+                && sm2.2 & 0x0F == SM_CONTROL[2] & 0x0F
+        };
+        if !out_ok {
+            return Err(AlStatusCode::InvalidOutputConfig);
+        }
+        let in_ok = if inputs.byte_len() == 0 {
+            !sm3.3
+        } else {
+            sm3.3
+                && sm3.0 == LAYOUT.pd_in
+                && usize::from(sm3.1) == inputs.byte_len()
+                && sm3.2 & 0x0F == SM_CONTROL[3] & 0x0F
+        };
+        if !in_ok {
+            return Err(AlStatusCode::InvalidInputConfig);
+        }
+        self.images = Some((outputs, inputs));
+        Ok(())
+    }
+
+    fn check_outputs(&mut self) -> Result<(), AlStatusCode> {
+        Ok(())
+    }
+}
+
+impl<E: Esc> Slave<E> {
+    /// The firmware in its power-on state on `esc`.
+    pub fn new(esc: E) -> Self {
+        let store = ObjectStore::new();
+        Slave {
+            esc,
+            store,
+            al: AlStatus::INIT,
+            outputs: ProcessImage::default(),
+            inputs: ProcessImage::default(),
+            mailbox: MailboxServer::new(),
+            pending: None,
+            now_ns: 0,
+        }
+    }
+
+    /// The ESC.
+    pub fn esc(&self) -> &E {
+        &self.esc
+    }
+
+    /// The ESC, mutably.
+    pub fn esc_mut(&mut self) -> &mut E {
+        &mut self.esc
+    }
+
+    /// The current AL status.
+    pub fn al_status(&self) -> AlStatus {
+        self.al
+    }
+
+    /// Runs the firmware once at time `now_ns`: AL control, mailbox,
+    /// process data. Returns an error only if the PDI itself fails.
+    pub fn poll(&mut self, now_ns: u64) -> Result<(), EscError> {
+        self.now_ns = now_ns;
+        self.store.set(0x10F8, 0, now_ns as i64);
+        let events = self.esc.read_u32(reg::AL_EVENT_REQUEST)?;
+        if events & reg::AL_EVENT_AL_CONTROL != 0 {
+            let control = self.esc.read_u16(reg::AL_CONTROL)?;
+            self.al_control(control)?;
+        }
+        if matches!(
+            self.al.state,
+            AlState::PreOp | AlState::SafeOp | AlState::Op | AlState::Boot
+        ) {
+            self.serve_mailbox()?;
+        }
+        if matches!(self.al.state, AlState::SafeOp | AlState::Op) {
+            self.exchange_process_data(events)?;
+        }
+        Ok(())
+    }
+
+    fn al_control(&mut self, control: u16) -> Result<(), EscError> {
+        let before = self.al;
+        let mut checks = Checks {
+            esc: &mut self.esc,
+            store: &self.store,
+            images: None,
+        };
+        let after = al::transition(before, control, &mut checks);
+        if let Some((o, i)) = checks.images.take() {
+            self.outputs = o;
+            self.inputs = i;
+        }
+        if after.state != AlState::Op && before.state == AlState::Op {
+            self.safe_outputs();
+        }
+        if matches!(after.state, AlState::Init | AlState::Boot) && before.state != after.state {
+            self.pending = None;
+            self.mailbox = MailboxServer::new();
+        }
+        self.al = after;
+        self.esc.write_u16(reg::AL_STATUS_CODE, after.code.code())?;
+        self.esc.write_u16(reg::AL_STATUS, after.register())?;
+        Ok(())
+    }
+
+    /// Outputs to their safe state: every RxPDO-mappable entry (ENABLE,
+    /// COMMAND VALUE) back to zero.
+    fn safe_outputs(&mut self) {
+        let mut flat = 0usize;
+        for obj in model::OBJECTS {
+            for e in obj.entries {
+                if e.pdo == PdoMapping::Rx {
+                    self.store.set_value(flat, 0);
+                }
+                flat += 1;
+            }
+        }
+    }
+
+    fn serve_mailbox(&mut self) -> Result<(), EscError> {
+        let (out, inp) = if self.al.state == AlState::Boot {
+            (LAYOUT.boot_out, LAYOUT.boot_in)
+        } else {
+            (LAYOUT.mbx_out, LAYOUT.mbx_in)
+        };
+        // Deliver a waiting response first.
+        if let Some((len, buf)) = &self.pending {
+            if self.sm_full(1)? {
+                return Ok(());
+            }
+            let mut frame = [0u8; MAX_MAILBOX];
+            let n = usize::from(inp.1).min(MAX_MAILBOX);
+            if let (Some(dst), Some(src)) = (frame.get_mut(..*len), buf.get(..*len)) {
+                dst.copy_from_slice(src);
+            }
+            if let Some(f) = frame.get(..n) {
+                self.esc.write(inp.0, f)?;
+            }
+            self.pending = None;
+        }
+        if !self.sm_full(0)? {
+            return Ok(());
+        }
+        let mut request = [0u8; MAX_MAILBOX];
+        let n = usize::from(out.1).min(MAX_MAILBOX);
+        let Some(req) = request.get_mut(..n) else {
+            return Ok(());
+        };
+        self.esc.read(out.0, req)?;
+        let mut response = [0u8; MAX_MAILBOX];
+        let max = usize::from(inp.1).min(MAX_MAILBOX);
+        let state = self.al.state;
+        let mut mailbox = core::mem::take(&mut self.mailbox);
+        let produced = {
+            let resp = response.get_mut(..max).unwrap_or(&mut []);
+            mailbox.handle(req, resp, &mut OdAccess { slave: self, state })
+        };
+        self.mailbox = mailbox;
+        if let Some(len) = produced {
+            self.pending = Some((len, response));
+            // Try to deliver right away.
+            if !self.sm_full(1)? {
+                if let Some((len, buf)) = self.pending.take() {
+                    let mut frame = [0u8; MAX_MAILBOX];
+                    if let (Some(dst), Some(src)) = (frame.get_mut(..len), buf.get(..len)) {
+                        dst.copy_from_slice(src);
+                    }
+                    if let Some(f) = frame.get(..max) {
+                        self.esc.write(inp.0, f)?;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn sm_full(&mut self, n: u8) -> Result<bool, EscError> {
+        let base = reg::sm(n).ok_or(EscError::OutOfRange { addr: 0, len: 0 })?;
+        Ok(self.esc.read_u8(base + smr::STATUS)? & smr::STATUS_MAILBOX_FULL != 0)
+    }
+
+    fn exchange_process_data(&mut self, events: u32) -> Result<(), EscError> {
+        let mut buf = [0u8; MAX_IMAGE];
+        if events & reg::al_event_sm(2) != 0 && self.outputs.byte_len() > 0 {
+            let n = self.outputs.byte_len();
+            if let Some(b) = buf.get_mut(..n) {
+                self.esc.read(LAYOUT.pd_out, b)?;
+                if self.al.state == AlState::Op {
+                    self.outputs.unpack(&mut self.store, b);
+                }
+            }
+        }
+        let n = self.inputs.byte_len();
+        if n > 0 {
+            let mut inb = [0u8; MAX_IMAGE];
+            if let Some(b) = inb.get_mut(..n) {
+                self.inputs.pack(&self.store, b);
+                self.esc.write(LAYOUT.pd_in, b)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The object dictionary as the CoE server sees it: the store plus the
+/// device's rules (state-dependent access, assignment consistency).
+struct OdAccess<'a, E: Esc> {
+    slave: &'a mut Slave<E>,
+    state: AlState,
+}
+
+impl<E: Esc> ObjectAccess for OdAccess<'_, E> {
+    fn sdo_upload(
+        &mut self,
+        index: u16,
+        sub: u8,
+        complete_access: bool,
+        out: &mut [u8],
+    ) -> Result<usize, SdoAbortCode> {
+        if complete_access {
+            return Err(SdoAbortCode::CompleteAccessNotSupported);
+        }
+        self.slave.store.upload(index, sub, out)
+    }
+
+    fn sdo_download(
+        &mut self,
+        index: u16,
+        sub: u8,
+        complete_access: bool,
+        data: &[u8],
+    ) -> Result<(), SdoAbortCode> {
+        if complete_access {
+            return Err(SdoAbortCode::CompleteAccessNotSupported);
+        }
+        let (flat, entry) = store::lookup(index, sub)?;
+        let value = ObjectStore::check(entry, data, self.state)?;
+        // The assignment may only name PDOs of its own direction.
+        if (index == 0x1C12 || index == 0x1C13) && sub != 0 {
+            let dir = if index == 0x1C12 {
+                Direction::Outputs
+            } else {
+                Direction::Inputs
+            };
+            let (lo, hi) = dir.pdo_range();
+            let pdo = value as u16;
+            if pdo < lo || pdo > hi || model::find(pdo).is_none() {
+                return Err(SdoAbortCode::ValueRange);
+            }
+        }
+        if (index == 0x1C12 || index == 0x1C13) && sub == 0 {
+            let cap = model::find(index).map_or(0, |(_, o)| o.max_sub());
+            if value > i64::from(cap) {
+                return Err(SdoAbortCode::ValueTooHigh);
+            }
+        }
+        self.slave.store.set_value(flat, value);
+        Ok(())
+    }
+}
+
+/// Error building the process image (kept for callers of [`ProcessImage`]).
+pub type ImageError = PdoError;
+
+/// The PAM-199 on the software ESC: takes EtherCAT frames.
+pub struct SoftSlave {
+    inner: Slave<SoftEsc>,
+}
+
+impl core::fmt::Debug for SoftSlave {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        self.inner.fmt(f)
+    }
+}
+
+impl Default for SoftSlave {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl SoftSlave {
+    /// A slave in its power-on state with the device's SII image.
+    pub fn new() -> Self {
+        let sii = sii_image();
+        SoftSlave {
+            inner: Slave::new(SoftEsc::new(&sii)),
+        }
+    }
+
+    /// Passes an Ethernet frame through the ESC (in place).
+    pub fn process_frame(&mut self, frame: &mut [u8]) -> FrameOutcome {
+        self.inner.esc.process_frame(frame)
+    }
+
+    /// Runs the firmware once. A PDI failure cannot happen on the software
+    /// ESC; should it, the poll is retried at the next call.
+    pub fn poll(&mut self, now_ns: u64) {
+        let _ = self.inner.poll(now_ns);
+    }
+
+    /// Sets whether port 1 has a link (every slave but the last).
+    pub fn set_port1_link(&mut self, link: bool) {
+        self.inner.esc.set_port1_link(link);
+    }
+
+    /// The firmware.
+    pub fn slave(&self) -> &Slave<SoftEsc> {
+        &self.inner
+    }
+
+    /// The firmware, mutably.
+    pub fn slave_mut(&mut self) -> &mut Slave<SoftEsc> {
+        &mut self.inner
+    }
+}

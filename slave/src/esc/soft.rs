@@ -1,0 +1,956 @@
+//! The software EtherCAT Slave Controller.
+//!
+//! [`SoftEsc`] holds the ESC memory (registers 0x0000-0x0FFF and process RAM
+//! from 0x1000), processes every datagram of an EtherCAT frame in place the
+//! way silicon does (addressing, working counter, SyncManager and FMMU rules,
+//! the SII EEPROM interface) and offers the PDI side through [`Esc`].
+//!
+//! Nothing here panics on input: every address computation is checked, an
+//! access that wraps past 0xFFFF or is refused by a SyncManager leaves memory
+//! untouched and does not count in the working counter.
+
+use super::registers::{self as reg, sm as smr};
+use super::{Esc, EscError};
+use crate::wire::ecat::{Command, Datagram, DatagramCursor, EcatFrame, FrameType};
+use crate::wire::ethernet::{ETHERTYPE_ETHERCAT, EthernetFrame};
+
+/// Size of the ESC address space modelled: 4 KiB registers + 8 KiB process RAM.
+pub const MEM_SIZE: usize = 0x3000;
+/// Number of SyncManagers implemented.
+pub const SM_COUNT: usize = 8;
+/// Number of FMMUs implemented.
+pub const FMMU_COUNT: usize = 8;
+/// Size of the emulated SII EEPROM in bytes (16 Kbit).
+pub const SII_SIZE: usize = 2048;
+/// Longest datagram payload the ESC processes (an Ethernet frame's worth).
+pub const MAX_DATAGRAM: usize = 1500;
+
+/// What [`SoftEsc::process_frame`] did with a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrameOutcome {
+    /// The frame was an EtherCAT frame and was processed (possibly partly,
+    /// when a later datagram was malformed).
+    Processed {
+        /// Number of datagrams handled.
+        datagrams: usize,
+    },
+    /// Not an EtherCAT frame (other EtherType): forwarded untouched.
+    NotEthercat,
+    /// The frame is too short or its EtherCAT header is inconsistent:
+    /// forwarded untouched.
+    Malformed,
+}
+
+/// Cached configuration of one SyncManager.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+struct SmConfig {
+    start: u16,
+    len: u16,
+    control: u8,
+    enabled: bool,
+}
+
+impl SmConfig {
+    fn is_mailbox(&self) -> bool {
+        self.control & 0x03 == smr::MODE_MAILBOX
+    }
+    fn ecat_writes(&self) -> bool {
+        self.control & 0x0C == smr::DIR_ECAT_WRITE
+    }
+    /// End address (exclusive) of the buffer.
+    fn end(&self) -> u32 {
+        u32::from(self.start) + u32::from(self.len)
+    }
+    /// Whether `[a, b)` overlaps the buffer.
+    fn overlaps(&self, a: u32, b: u32) -> bool {
+        self.enabled && self.len > 0 && a < self.end() && u32::from(self.start) < b
+    }
+    /// Whether `[a, b)` covers the last byte of the buffer.
+    fn covers_last(&self, a: u32, b: u32) -> bool {
+        let last = self.end() - 1;
+        a <= last && last < b
+    }
+}
+
+/// Cached configuration of one FMMU.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+struct FmmuConfig {
+    logical: u32,
+    len: u16,
+    start_bit: u8,
+    stop_bit: u8,
+    physical: u16,
+    physical_bit: u8,
+    read: bool,
+    write: bool,
+    enabled: bool,
+}
+
+impl FmmuConfig {
+    /// Logical range in bytes [start, end).
+    fn logical_end(&self) -> u64 {
+        u64::from(self.logical) + u64::from(self.len)
+    }
+    fn byte_aligned(&self) -> bool {
+        self.start_bit == 0 && self.stop_bit == 7 && self.physical_bit == 0
+    }
+}
+
+/// Direction of one ECAT-side physical access.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ReadMode {
+    /// Replace the frame data with memory contents.
+    Copy,
+    /// OR memory contents into the frame data (broadcast reads).
+    Or,
+}
+
+/// The software ESC.
+pub struct SoftEsc {
+    mem: [u8; MEM_SIZE],
+    sii: [u8; SII_SIZE],
+    sms: [SmConfig; SM_COUNT],
+    fmmus: [FmmuConfig; FMMU_COUNT],
+    /// Bit n set: FMMU n enabled (fast skip in logical addressing).
+    fmmu_active: u8,
+    /// Bit n set: an ECAT write completed the buffer of output SM n since the
+    /// last [`SoftEsc::take_sm_writes`].
+    sm_written: u16,
+}
+
+impl core::fmt::Debug for SoftEsc {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("SoftEsc")
+            .field("station_address", &self.mem_u16(reg::STATION_ADDRESS))
+            .field("al_status", &self.mem_u16(reg::AL_STATUS))
+            .finish_non_exhaustive()
+    }
+}
+
+impl SoftEsc {
+    /// Creates an ESC in its power-on state, loading the SII image `sii`
+    /// (truncated to [`SII_SIZE`], the rest reads 0xFF) and taking the
+    /// station alias and PDI configuration from it.
+    pub fn new(sii: &[u8]) -> Self {
+        let mut esc = SoftEsc {
+            mem: [0; MEM_SIZE],
+            sii: [0xFF; SII_SIZE],
+            sms: [SmConfig::default(); SM_COUNT],
+            fmmus: [FmmuConfig::default(); FMMU_COUNT],
+            fmmu_active: 0,
+            sm_written: 0,
+        };
+        let n = sii.len().min(SII_SIZE);
+        if let (Some(dst), Some(src)) = (esc.sii.get_mut(..n), sii.get(..n)) {
+            dst.copy_from_slice(src);
+        }
+        esc.power_on();
+        esc
+    }
+
+    /// Resets every register to its power-on value (as a power cycle does);
+    /// process RAM is cleared, the SII image is kept.
+    pub fn power_on(&mut self) {
+        self.mem = [0; MEM_SIZE];
+        self.sms = [SmConfig::default(); SM_COUNT];
+        self.fmmus = [FmmuConfig::default(); FMMU_COUNT];
+        self.fmmu_active = 0;
+        self.sm_written = 0;
+        self.set_u8(reg::TYPE, 0x11);
+        self.set_u8(reg::REVISION, 0x02);
+        self.set_u8(reg::FMMU_COUNT, FMMU_COUNT as u8);
+        self.set_u8(reg::SM_COUNT, SM_COUNT as u8);
+        self.set_u8(reg::RAM_SIZE, ((MEM_SIZE - 0x1000) / 1024) as u8);
+        // Ports 0 and 1 MII, ports 2 and 3 not implemented.
+        self.set_u8(reg::PORT_DESCRIPTOR, 0x0F);
+        // Bit-oriented FMMUs, no DC, LRW and read/write commands supported.
+        self.set_u16(reg::FEATURES, 0x0000);
+        let alias = self.sii_word(4);
+        self.set_u16(reg::STATION_ALIAS, alias);
+        let pdi = self.sii_word(0);
+        self.set_u8(reg::PDI_CONTROL, (pdi & 0xFF) as u8);
+        self.set_u8(reg::ESC_CONFIG, (pdi >> 8) as u8);
+        let pdi_cfg = self.sii_word(1);
+        self.set_u16(reg::PDI_CONFIG, pdi_cfg);
+        self.set_u16(reg::AL_STATUS, 0x0001);
+        self.set_u16(reg::WATCHDOG_DIVIDER, 2498);
+        self.set_u16(reg::WATCHDOG_TIME_PDI, 1000);
+        self.set_u16(reg::WATCHDOG_TIME_PD, 1000);
+        self.set_u16(reg::WATCHDOG_STATUS_PD, 0x0001);
+        // 8-byte EEPROM reads.
+        self.set_u16(reg::SII_CONTROL, 0x0040);
+        self.set_port1_link(false);
+    }
+
+    /// Sets whether port 1 has a link (a slave that is not last in a chain
+    /// has one). Updates DL status 0x0110 accordingly.
+    pub fn set_port1_link(&mut self, link: bool) {
+        // Bit 0 PDI operational, bit 1 PDI watchdog ok, bit 4 link port 0,
+        // bit 9 communication port 0.
+        let mut dl = 0x0203u16 | 0x0010;
+        if link {
+            dl |= 0x0020 | 0x0800;
+        } else {
+            // Loop port 1 closed.
+            dl |= 0x0400;
+        }
+        let keep = self.mem_u16(reg::DL_STATUS) & 0x0002;
+        self.set_u16(reg::DL_STATUS, (dl & !0x0002) | keep | 0x0002);
+    }
+
+    /// Sets or clears DL status bit 1, "PDI watchdog not expired".
+    pub fn set_pdi_watchdog_ok(&mut self, ok: bool) {
+        let dl = self.mem_u16(reg::DL_STATUS);
+        self.set_u16(reg::DL_STATUS, if ok { dl | 0x0002 } else { dl & !0x0002 });
+    }
+
+    /// The SII image as the EEPROM holds it (including master writes).
+    pub fn sii(&self) -> &[u8] {
+        &self.sii
+    }
+
+    /// Returns and clears the set of output SyncManagers whose buffer the
+    /// master completed since the last call (bit n = SM n). Used by the
+    /// SyncManager watchdog.
+    pub fn take_sm_writes(&mut self) -> u16 {
+        core::mem::take(&mut self.sm_written)
+    }
+
+    // ----- frame processing (ECAT side) -------------------------------
+
+    /// Processes one Ethernet frame in place, as the frame passes through
+    /// this ESC. Non-EtherCAT and malformed frames are left untouched.
+    pub fn process_frame(&mut self, frame: &mut [u8]) -> FrameOutcome {
+        let Ok(mut eth) = EthernetFrame::new_checked(&mut *frame) else {
+            return FrameOutcome::Malformed;
+        };
+        if eth.ethertype() != ETHERTYPE_ETHERCAT {
+            return FrameOutcome::NotEthercat;
+        }
+        eth.mark_forwarded();
+        let Ok(mut ecat) = EcatFrame::new_checked(eth.payload_mut()) else {
+            return FrameOutcome::Malformed;
+        };
+        if ecat.frame_type() != FrameType::Pdu {
+            return FrameOutcome::Malformed;
+        }
+        let payload = ecat.payload_mut();
+        let mut count = 0;
+        let mut cursor = DatagramCursor::new();
+        while let Some(item) = cursor.next_range(payload) {
+            let Ok(range) = item else { break };
+            let Some(bytes) = payload.get_mut(range) else {
+                break;
+            };
+            let Ok(mut dg) = Datagram::new_checked(bytes) else {
+                break;
+            };
+            self.process_datagram(&mut dg);
+            count += 1;
+        }
+        FrameOutcome::Processed { datagrams: count }
+    }
+
+    /// Processes one datagram in place (addressing, data, working counter).
+    pub fn process_datagram<T: AsRef<[u8]> + AsMut<[u8]>>(&mut self, dg: &mut Datagram<T>) {
+        let cmd = dg.command();
+        let adp = dg.adp();
+        let ado = dg.ado();
+        let logical = dg.logical_address();
+        let mut wkc_add: u16 = 0;
+        match cmd {
+            Command::Aprd | Command::Apwr | Command::Aprw | Command::Armw => {
+                dg.set_adp(adp.wrapping_add(1));
+                let data = dg.data_mut();
+                wkc_add = match cmd {
+                    Command::Armw if adp == 0 => self.phys_read_count(ado, data, ReadMode::Copy),
+                    Command::Armw => self.phys_write_count(ado, data),
+                    _ if adp == 0 => self.phys_rw(cmd, ado, data, ReadMode::Copy),
+                    _ => 0,
+                };
+            }
+            Command::Fprd | Command::Fpwr | Command::Fprw | Command::Frmw => {
+                let station = self.mem_u16(reg::STATION_ADDRESS);
+                let alias = self.mem_u16(reg::STATION_ALIAS);
+                let me = adp == station || (alias != 0 && adp == alias);
+                let data = dg.data_mut();
+                wkc_add = match cmd {
+                    Command::Frmw if me => self.phys_read_count(ado, data, ReadMode::Copy),
+                    Command::Frmw => self.phys_write_count(ado, data),
+                    _ if me => self.phys_rw(cmd, ado, data, ReadMode::Copy),
+                    _ => 0,
+                };
+            }
+            Command::Brd | Command::Bwr | Command::Brw => {
+                dg.set_adp(adp.wrapping_add(1));
+                let data = dg.data_mut();
+                wkc_add = self.phys_rw(cmd, ado, data, ReadMode::Or);
+            }
+            Command::Lrd | Command::Lwr | Command::Lrw => {
+                let data = dg.data_mut();
+                wkc_add = self.logical(cmd, logical, data);
+            }
+            Command::Nop | Command::Unknown(_) => {}
+        }
+        if wkc_add != 0 {
+            dg.set_wkc(dg.wkc().wrapping_add(wkc_add));
+        }
+    }
+
+    /// A read, write or read-write on physical memory; returns the working
+    /// counter increment (read 1, write 1, read-write 3 / 1 / 2).
+    fn phys_rw(&mut self, cmd: Command, addr: u16, data: &mut [u8], mode: ReadMode) -> u16 {
+        match cmd {
+            Command::Aprd | Command::Fprd | Command::Brd => self.phys_read_count(addr, data, mode),
+            Command::Apwr | Command::Fpwr | Command::Bwr => self.phys_write_count(addr, data),
+            Command::Aprw | Command::Fprw | Command::Brw => {
+                let n = data.len().min(MAX_DATAGRAM);
+                let mut scratch = [0u8; MAX_DATAGRAM];
+                let (Some(tmp), Some(src)) = (scratch.get_mut(..n), data.get(..n)) else {
+                    return 0;
+                };
+                tmp.copy_from_slice(src);
+                let r = self.phys_read_count(addr, data, mode);
+                let w = self.phys_write_count(addr, tmp);
+                r + 2 * w
+            }
+            _ => 0,
+        }
+    }
+
+    fn phys_read_count(&mut self, addr: u16, data: &mut [u8], mode: ReadMode) -> u16 {
+        u16::from(self.ecat_read(addr, data, mode))
+    }
+
+    fn phys_write_count(&mut self, addr: u16, data: &[u8]) -> u16 {
+        u16::from(self.ecat_write(addr, data))
+    }
+
+    /// Logical addressing through the FMMUs; returns the working counter
+    /// increment (+1 for any read mapping hit, +2 for any write mapping hit
+    /// on LRW; +1 for LRD/LWR).
+    fn logical(&mut self, cmd: Command, addr: u32, data: &mut [u8]) -> u16 {
+        if self.fmmu_active == 0 || data.is_empty() {
+            return 0;
+        }
+        let start = u64::from(addr);
+        let end = start + data.len() as u64;
+        let want_read = matches!(cmd, Command::Lrd | Command::Lrw);
+        let want_write = matches!(cmd, Command::Lwr | Command::Lrw);
+        let mut read_hit = false;
+        let mut write_hit = false;
+        // Writes first, with the data as it arrived; then reads overwrite.
+        for pass_write in [true, false] {
+            for i in 0..FMMU_COUNT {
+                if self.fmmu_active & (1 << i) == 0 {
+                    continue;
+                }
+                let Some(f) = self.fmmus.get(i).copied() else {
+                    continue;
+                };
+                let hit_possible = if pass_write {
+                    want_write && f.write
+                } else {
+                    want_read && f.read
+                };
+                if !hit_possible || f.logical_end() <= start || u64::from(f.logical) >= end {
+                    continue;
+                }
+                let ok = if f.byte_aligned() {
+                    self.fmmu_bytes(&f, start, data, pass_write)
+                } else {
+                    self.fmmu_bits(&f, start, data, pass_write)
+                };
+                if ok {
+                    if pass_write {
+                        write_hit = true;
+                    } else {
+                        read_hit = true;
+                    }
+                }
+            }
+        }
+        match cmd {
+            Command::Lrw => u16::from(read_hit) + 2 * u16::from(write_hit),
+            _ => u16::from(read_hit || write_hit),
+        }
+    }
+
+    /// Byte-aligned FMMU transfer of the overlap between the datagram
+    /// `[start, start + data.len())` and the FMMU's logical window.
+    fn fmmu_bytes(&mut self, f: &FmmuConfig, start: u64, data: &mut [u8], write: bool) -> bool {
+        let lo = start.max(u64::from(f.logical));
+        let hi = (start + data.len() as u64).min(f.logical_end());
+        if lo >= hi {
+            return false;
+        }
+        let (Ok(dg_off), Ok(n)) = (usize::try_from(lo - start), usize::try_from(hi - lo)) else {
+            return false;
+        };
+        let Ok(phys_off) = u16::try_from(lo - u64::from(f.logical)) else {
+            return false;
+        };
+        let Some(phys) = f.physical.checked_add(phys_off) else {
+            return false;
+        };
+        let Some(window) = data.get_mut(dg_off..dg_off + n) else {
+            return false;
+        };
+        if write {
+            self.ecat_write(phys, window)
+        } else {
+            self.ecat_read(phys, window, ReadMode::Copy)
+        }
+    }
+
+    /// Bit-granular FMMU transfer (start/stop bits other than 0/7).
+    fn fmmu_bits(&mut self, f: &FmmuConfig, start: u64, data: &mut [u8], write: bool) -> bool {
+        // Logical bit range [lbit_start, lbit_end] inclusive.
+        let lbit_start = u64::from(f.logical) * 8 + u64::from(f.start_bit & 7);
+        let Some(last_byte) = f.logical_end().checked_sub(1) else {
+            return false;
+        };
+        let lbit_end = last_byte * 8 + u64::from(f.stop_bit & 7);
+        if lbit_end < lbit_start {
+            return false;
+        }
+        let dg_bit_start = start * 8;
+        let dg_bit_end = (start + data.len() as u64) * 8; // exclusive
+        let lo = lbit_start.max(dg_bit_start);
+        let hi = (lbit_end + 1).min(dg_bit_end);
+        if lo >= hi {
+            return false;
+        }
+        let phys_bit0 = u64::from(f.physical) * 8 + u64::from(f.physical_bit & 7);
+        // Physical byte range touched, for SyncManager checks.
+        let p_first = phys_bit0 + (lo - lbit_start);
+        let p_last = phys_bit0 + (hi - 1 - lbit_start);
+        let (Ok(pa), Ok(pb)) = (u16::try_from(p_first / 8), u16::try_from(p_last / 8)) else {
+            return false;
+        };
+        let plen = usize::from(pb - pa) + 1;
+        let mut buf = [0u8; MAX_DATAGRAM];
+        let Some(pbuf) = buf.get_mut(..plen) else {
+            return false;
+        };
+        // Read current physical bytes (directly: bit writes are read-modify-write).
+        if !self.mem_get(pa, pbuf) {
+            return false;
+        }
+        for bit in lo..hi {
+            let pbit = phys_bit0 + (bit - lbit_start) - u64::from(pa) * 8;
+            let dbit = bit - dg_bit_start;
+            let (Ok(pi), Ok(di)) = (usize::try_from(pbit / 8), usize::try_from(dbit / 8)) else {
+                return false;
+            };
+            let (pm, dm) = (1u8 << (pbit % 8), 1u8 << (dbit % 8));
+            if write {
+                let v = data.get(di).is_some_and(|b| b & dm != 0);
+                if let Some(p) = pbuf.get_mut(pi) {
+                    *p = if v { *p | pm } else { *p & !pm };
+                }
+            } else {
+                let v = pbuf.get(pi).is_some_and(|b| b & pm != 0);
+                if let Some(d) = data.get_mut(di) {
+                    *d = if v { *d | dm } else { *d & !dm };
+                }
+            }
+        }
+        if write {
+            let touched = buf.get(..plen).unwrap_or(&[]);
+            self.ecat_write(pa, touched)
+        } else {
+            // Run the SyncManager read rules on the touched bytes.
+            let mut sink = [0u8; MAX_DATAGRAM];
+            let touched = sink.get_mut(..plen).unwrap_or(&mut []);
+            self.ecat_read(pa, touched, ReadMode::Copy)
+        }
+    }
+
+    /// ECAT-side read of physical memory with SyncManager rules. Returns
+    /// whether the access happened (counts in the working counter).
+    fn ecat_read(&mut self, addr: u16, out: &mut [u8], mode: ReadMode) -> bool {
+        let a = u32::from(addr);
+        let b = a + out.len() as u32;
+        if b > 0x1_0000 {
+            return false;
+        }
+        // SyncManager checks.
+        let mut complete = 0u8;
+        for (n, sm) in self.sms.iter().enumerate() {
+            if !sm.overlaps(a, b) {
+                continue;
+            }
+            if sm.is_mailbox() {
+                if sm.ecat_writes() || !self.sm_status_bit(n, smr::STATUS_MAILBOX_FULL) {
+                    return false;
+                }
+            } else if sm.ecat_writes() {
+                // Reading back a buffered output area is allowed (memory).
+                continue;
+            }
+            if sm.covers_last(a, b) {
+                complete |= 1 << n;
+            }
+        }
+        // Copy out: bytes beyond the modelled memory read as zero.
+        let mem_end = (b as usize).min(MEM_SIZE);
+        let from = (a as usize).min(mem_end);
+        let src = self.mem.get(from..mem_end).unwrap_or(&[]);
+        for (i, d) in out.iter_mut().enumerate() {
+            let v = src.get(i).copied().unwrap_or(0);
+            *d = match mode {
+                ReadMode::Copy => v,
+                ReadMode::Or => *d | v,
+            };
+        }
+        for n in 0..SM_COUNT {
+            if complete & (1 << n) != 0 {
+                self.ecat_read_complete(n);
+            }
+        }
+        true
+    }
+
+    /// The master read the last byte of SM `n`'s buffer.
+    fn ecat_read_complete(&mut self, n: usize) {
+        let Some(sm) = self.sms.get(n).copied() else {
+            return;
+        };
+        let status = if sm.is_mailbox() {
+            // Mailbox emptied by the master.
+            (self.sm_status(n) & !smr::STATUS_MAILBOX_FULL) | smr::STATUS_READ_EVENT
+        } else {
+            self.sm_status(n) | smr::STATUS_READ_EVENT
+        };
+        self.set_sm_status(n, status);
+        self.raise_al_event(reg::al_event_sm(n as u8));
+    }
+
+    /// ECAT-side write of physical memory with SyncManager rules and
+    /// register write masks. Returns whether the access happened.
+    fn ecat_write(&mut self, addr: u16, data: &[u8]) -> bool {
+        let a = u32::from(addr);
+        let b = a + data.len() as u32;
+        if b > 0x1_0000 {
+            return false;
+        }
+        if a < u32::from(reg::PROCESS_RAM) {
+            self.register_write(addr, data);
+            return true;
+        }
+        let mut complete = 0u8;
+        for (n, sm) in self.sms.iter().enumerate() {
+            if !sm.overlaps(a, b) {
+                continue;
+            }
+            if !sm.ecat_writes() {
+                return false;
+            }
+            if sm.is_mailbox() && self.sm_status_bit(n, smr::STATUS_MAILBOX_FULL) {
+                return false;
+            }
+            if sm.covers_last(a, b) {
+                complete |= 1 << n;
+            }
+        }
+        let mem_end = (b as usize).min(MEM_SIZE);
+        let from = (a as usize).min(mem_end);
+        if let (Some(dst), Some(src)) = (
+            self.mem.get_mut(from..mem_end),
+            data.get(..mem_end.saturating_sub(from)),
+        ) {
+            dst.copy_from_slice(src);
+        }
+        for n in 0..SM_COUNT {
+            if complete & (1 << n) != 0 {
+                self.ecat_write_complete(n);
+            }
+        }
+        true
+    }
+
+    /// The master wrote the last byte of SM `n`'s buffer.
+    fn ecat_write_complete(&mut self, n: usize) {
+        let Some(sm) = self.sms.get(n).copied() else {
+            return;
+        };
+        let status = if sm.is_mailbox() {
+            self.sm_status(n) | smr::STATUS_MAILBOX_FULL | smr::STATUS_WRITE_EVENT
+        } else {
+            // Three-buffer mode: flip the "last buffer written" field.
+            let s = self.sm_status(n);
+            let next = ((s >> 4) & 0x03).wrapping_add(1) % 3;
+            (s & !0x30) | (next << 4) | smr::STATUS_WRITE_EVENT
+        };
+        self.set_sm_status(n, status);
+        if !sm.is_mailbox() {
+            self.sm_written |= 1 << n;
+        }
+        self.raise_al_event(reg::al_event_sm(n as u8));
+    }
+
+    /// Writes into the register area with the ECAT write masks and side
+    /// effects (AL control event, SII commands, SM/FMMU reconfiguration).
+    fn register_write(&mut self, addr: u16, data: &[u8]) {
+        let mut touched_sm = 0u16;
+        let mut touched_fmmu = 0u16;
+        let mut sii_command = false;
+        let mut al_control = false;
+        for (i, &v) in data.iter().enumerate() {
+            let Some(a) = addr.checked_add(i as u16) else {
+                break;
+            };
+            match a {
+                0x0010..=0x0011 | 0x0020..=0x0021 | 0x0030..=0x0031 | 0x0040 => self.set_u8(a, v),
+                0x0100..=0x0103 | 0x0108..=0x0109 | 0x0200..=0x0201 => self.set_u8(a, v),
+                0x0120..=0x0121 => {
+                    self.set_u8(a, v);
+                    al_control = true;
+                }
+                // Error counters: any write clears.
+                0x0300..=0x0313 | 0x0442..=0x0443 => self.set_u8(a, 0),
+                0x0400..=0x0401 | 0x0410..=0x0411 | 0x0420..=0x0421 => self.set_u8(a, v),
+                0x0500..=0x0501 => self.set_u8(a, v),
+                0x0502 => {
+                    // Bit 6 (read size) is read-only; bits 0 and 7 writable.
+                    let keep = self.mem_u8(a) & 0x40;
+                    self.set_u8(a, (v & 0x81) | keep);
+                }
+                0x0503 => {
+                    // Command bits 8-10; error and busy bits are status.
+                    self.set_u8(a, v & 0x07);
+                    sii_command = true;
+                }
+                0x0504..=0x050F | 0x0510..=0x0517 => self.set_u8(a, v),
+                0x0600..=0x06FF => {
+                    self.set_u8(a, v);
+                    touched_fmmu |= 1 << ((a - reg::FMMU_BASE) / reg::FMMU_LEN);
+                }
+                0x0800..=0x087F => {
+                    let off = (a - reg::SM_BASE) % reg::SM_LEN;
+                    if off != smr::STATUS && off != smr::PDI_CONTROL {
+                        self.set_u8(a, v);
+                        touched_sm |= 1 << ((a - reg::SM_BASE) / reg::SM_LEN);
+                    }
+                }
+                0x0900..=0x09FF | 0x0F00..=0x0F03 => self.set_u8(a, v),
+                _ => {}
+            }
+        }
+        if al_control {
+            self.raise_al_event(reg::AL_EVENT_AL_CONTROL);
+        }
+        if touched_fmmu != 0 {
+            self.reload_fmmus();
+        }
+        if touched_sm != 0 {
+            for n in 0..SM_COUNT {
+                if touched_sm & (1 << n) != 0 {
+                    self.reload_sm(n);
+                }
+            }
+        }
+        if sii_command {
+            self.sii_execute();
+        }
+    }
+
+    fn reload_fmmus(&mut self) {
+        self.fmmu_active = 0;
+        for n in 0..FMMU_COUNT {
+            let Some(base) = reg::fmmu(n as u8) else {
+                continue;
+            };
+            let f = FmmuConfig {
+                logical: self.mem_u32(base + reg::fmmu::LOGICAL_START),
+                len: self.mem_u16(base + reg::fmmu::LENGTH),
+                start_bit: self.mem_u8(base + reg::fmmu::LOGICAL_START_BIT),
+                stop_bit: self.mem_u8(base + reg::fmmu::LOGICAL_STOP_BIT),
+                physical: self.mem_u16(base + reg::fmmu::PHYSICAL_START),
+                physical_bit: self.mem_u8(base + reg::fmmu::PHYSICAL_START_BIT),
+                read: self.mem_u8(base + reg::fmmu::TYPE) & 0x01 != 0,
+                write: self.mem_u8(base + reg::fmmu::TYPE) & 0x02 != 0,
+                enabled: self.mem_u8(base + reg::fmmu::ACTIVATE) & 0x01 != 0,
+            };
+            if f.enabled && f.len > 0 {
+                self.fmmu_active |= 1 << n;
+            }
+            if let Some(slot) = self.fmmus.get_mut(n) {
+                *slot = f;
+            }
+        }
+    }
+
+    fn reload_sm(&mut self, n: usize) {
+        let Some(base) = reg::sm(n as u8) else {
+            return;
+        };
+        let new = SmConfig {
+            start: self.mem_u16(base + smr::START),
+            len: self.mem_u16(base + smr::LENGTH),
+            control: self.mem_u8(base + smr::CONTROL),
+            enabled: self.mem_u8(base + smr::ACTIVATE) & smr::ACTIVATE_ENABLE != 0,
+        };
+        let Some(slot) = self.sms.get_mut(n) else {
+            return;
+        };
+        let old = *slot;
+        *slot = new;
+        // (Re)configuring or enabling a SyncManager resets its buffer state.
+        if old.start != new.start
+            || old.len != new.len
+            || old.control != new.control
+            || old.enabled != new.enabled
+        {
+            self.set_sm_status(n, 0);
+        }
+    }
+
+    /// Executes the command written into SII control 0x0503.
+    fn sii_execute(&mut self) {
+        let ctrl = self.mem_u16(reg::SII_CONTROL);
+        let cmd = (ctrl >> 8) & 0x07;
+        // Error bits (11-14) and busy (15) are cleared by every command.
+        let mut status = ctrl & 0x00FF;
+        let word = self.mem_u32(reg::SII_ADDRESS);
+        match cmd {
+            0 => {}
+            1 => {
+                // Read: 8 bytes (bit 6) from the word address.
+                let mut data = [0xFFu8; 8];
+                if let Ok(w) = usize::try_from(word) {
+                    for (i, d) in data.iter_mut().enumerate() {
+                        if let Some(v) = w.checked_mul(2).and_then(|b| self.sii.get(b + i)) {
+                            *d = *v;
+                        }
+                    }
+                }
+                for (i, d) in data.iter().enumerate() {
+                    self.set_u8(reg::SII_DATA + i as u16, *d);
+                }
+            }
+            2 => {
+                // Write one word, only with write access enabled (bit 0).
+                let lo = self.mem_u8(reg::SII_DATA);
+                let hi = self.mem_u8(reg::SII_DATA + 1);
+                let slot = usize::try_from(word)
+                    .ok()
+                    .and_then(|w| w.checked_mul(2))
+                    .filter(|b| b + 1 < SII_SIZE);
+                match (ctrl & 0x0001 != 0, slot) {
+                    (true, Some(b)) => {
+                        if let Some(s) = self.sii.get_mut(b..b + 2) {
+                            s.copy_from_slice(&[lo, hi]);
+                        }
+                    }
+                    // Command error (bit 13).
+                    _ => status |= 0x2000,
+                }
+            }
+            4 => {
+                // Reload: refresh the alias from word 4.
+                let alias = self.sii_word(4);
+                self.set_u16(reg::STATION_ALIAS, alias);
+            }
+            _ => status |= 0x2000,
+        }
+        self.set_u16(reg::SII_CONTROL, status);
+    }
+
+    fn sii_word(&self, word: usize) -> u16 {
+        let lo = self.sii.get(word * 2).copied().unwrap_or(0xFF);
+        let hi = self.sii.get(word * 2 + 1).copied().unwrap_or(0xFF);
+        u16::from_le_bytes([lo, hi])
+    }
+
+    // ----- memory helpers ----------------------------------------------
+
+    fn raise_al_event(&mut self, bits: u32) {
+        let v = self.mem_u32(reg::AL_EVENT_REQUEST) | bits;
+        self.set_u32(reg::AL_EVENT_REQUEST, v);
+    }
+
+    fn clear_al_event(&mut self, bits: u32) {
+        let v = self.mem_u32(reg::AL_EVENT_REQUEST) & !bits;
+        self.set_u32(reg::AL_EVENT_REQUEST, v);
+    }
+
+    fn sm_status(&self, n: usize) -> u8 {
+        reg::sm(n as u8).map_or(0, |b| self.mem_u8(b + smr::STATUS))
+    }
+
+    fn sm_status_bit(&self, n: usize, bit: u8) -> bool {
+        self.sm_status(n) & bit != 0
+    }
+
+    fn set_sm_status(&mut self, n: usize, v: u8) {
+        if let Some(b) = reg::sm(n as u8) {
+            self.set_u8(b + smr::STATUS, v);
+        }
+    }
+
+    fn mem_get(&self, addr: u16, out: &mut [u8]) -> bool {
+        let a = usize::from(addr);
+        match self.mem.get(a..a + out.len()) {
+            Some(src) => {
+                out.copy_from_slice(src);
+                true
+            }
+            None => false,
+        }
+    }
+
+    fn mem_u8(&self, addr: u16) -> u8 {
+        self.mem.get(usize::from(addr)).copied().unwrap_or(0)
+    }
+
+    fn mem_u16(&self, addr: u16) -> u16 {
+        let mut b = [0u8; 2];
+        self.mem_get(addr, &mut b);
+        u16::from_le_bytes(b)
+    }
+
+    fn mem_u32(&self, addr: u16) -> u32 {
+        let mut b = [0u8; 4];
+        self.mem_get(addr, &mut b);
+        u32::from_le_bytes(b)
+    }
+
+    fn set_u8(&mut self, addr: u16, v: u8) {
+        if let Some(m) = self.mem.get_mut(usize::from(addr)) {
+            *m = v;
+        }
+    }
+
+    fn set_u16(&mut self, addr: u16, v: u16) {
+        let a = usize::from(addr);
+        if let Some(m) = self.mem.get_mut(a..a + 2) {
+            m.copy_from_slice(&v.to_le_bytes());
+        }
+    }
+
+    fn set_u32(&mut self, addr: u16, v: u32) {
+        let a = usize::from(addr);
+        if let Some(m) = self.mem.get_mut(a..a + 4) {
+            m.copy_from_slice(&v.to_le_bytes());
+        }
+    }
+
+    /// Which SyncManager (if any, enabled) holds `[a, b)` partly.
+    fn pdi_sm_checks(&self, a: u32, b: u32, write: bool) -> Result<(u8, u8), EscError> {
+        // Returns (bitmask of SMs whose last byte is covered, bitmask of
+        // SMs touched).
+        let mut complete = 0u8;
+        let mut touched = 0u8;
+        for (n, sm) in self.sms.iter().enumerate() {
+            if !sm.overlaps(a, b) {
+                continue;
+            }
+            touched |= 1 << n;
+            let full = self.sm_status_bit(n, smr::STATUS_MAILBOX_FULL);
+            if sm.is_mailbox() {
+                // The PDI reads what the master wrote, writes what it reads.
+                let ok = if write {
+                    !sm.ecat_writes() && !full
+                } else {
+                    sm.ecat_writes() && full
+                };
+                if !ok {
+                    return Err(EscError::SmBusy { sm: n as u8 });
+                }
+            }
+            if sm.covers_last(a, b) {
+                complete |= 1 << n;
+            }
+        }
+        Ok((complete, touched))
+    }
+}
+
+impl Esc for SoftEsc {
+    fn read(&mut self, addr: u16, buf: &mut [u8]) -> Result<(), EscError> {
+        let a = u32::from(addr);
+        let b = a + buf.len() as u32;
+        if b as usize > MEM_SIZE {
+            return Err(EscError::OutOfRange {
+                addr,
+                len: buf.len(),
+            });
+        }
+        let (complete, touched) = if a >= u32::from(reg::PROCESS_RAM) {
+            self.pdi_sm_checks(a, b, false)?
+        } else {
+            (0, 0)
+        };
+        self.mem_get(addr, buf);
+        // Reading AL control acknowledges its event.
+        if a <= u32::from(reg::AL_CONTROL) && u32::from(reg::AL_CONTROL) < b {
+            self.clear_al_event(reg::AL_EVENT_AL_CONTROL);
+        }
+        for n in 0..SM_COUNT {
+            if touched & (1 << n) != 0 {
+                self.clear_al_event(reg::al_event_sm(n as u8));
+            }
+            if complete & (1 << n) != 0 {
+                let is_mbx = self.sms.get(n).is_some_and(SmConfig::is_mailbox);
+                let s = self.sm_status(n) & !smr::STATUS_WRITE_EVENT;
+                let s = if is_mbx {
+                    s & !smr::STATUS_MAILBOX_FULL
+                } else {
+                    s
+                };
+                self.set_sm_status(n, s);
+            }
+        }
+        Ok(())
+    }
+
+    fn write(&mut self, addr: u16, data: &[u8]) -> Result<(), EscError> {
+        let a = u32::from(addr);
+        let b = a + data.len() as u32;
+        if b as usize > MEM_SIZE {
+            return Err(EscError::OutOfRange {
+                addr,
+                len: data.len(),
+            });
+        }
+        if a < u32::from(reg::PROCESS_RAM) {
+            // PDI-writable registers: AL status/code, alias, event mask,
+            // SM PDI control, LED overrides, watchdog counters; DL status
+            // and the rest stay as the ESC sets them.
+            for (i, &v) in data.iter().enumerate() {
+                let r = addr.wrapping_add(i as u16);
+                let writable = matches!(
+                    r,
+                    0x0012..=0x0013
+                        | 0x0130..=0x0131
+                        | 0x0134..=0x0135
+                        | 0x0138..=0x0139
+                        | 0x0204..=0x0207
+                        | 0x0440..=0x0443
+                ) || (r >= reg::SM_BASE
+                    && r < reg::SM_BASE + reg::SM_LEN * SM_COUNT as u16
+                    && (r - reg::SM_BASE) % reg::SM_LEN == smr::PDI_CONTROL);
+                if writable {
+                    self.set_u8(r, v);
+                }
+            }
+            return Ok(());
+        }
+        let (complete, _touched) = self.pdi_sm_checks(a, b, true)?;
+        if let Some(dst) = self.mem.get_mut(a as usize..b as usize) {
+            dst.copy_from_slice(data);
+        }
+        for n in 0..SM_COUNT {
+            if complete & (1 << n) != 0 {
+                let is_mbx = self.sms.get(n).is_some_and(SmConfig::is_mailbox);
+                if is_mbx {
+                    let s = self.sm_status(n) | smr::STATUS_MAILBOX_FULL;
+                    self.set_sm_status(n, s);
+                }
+            }
+        }
+        Ok(())
+    }
+}

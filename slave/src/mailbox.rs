@@ -1,0 +1,94 @@
+//! Mailbox layer (layer 3, ETG.1000.6 5.3): framing, counters, dispatch to
+//! the protocol servers, mailbox error replies.
+//!
+//! [`MailboxServer::handle`] takes the bytes the master wrote into the
+//! receive mailbox (SM0) and produces at most one reply for the send mailbox
+//! (SM1). It knows nothing of the ESC: the device moves the bytes.
+
+use crate::coe::{CoeServer, ObjectAccess};
+use crate::wire::mailbox::{Mailbox, MailboxErrorCode, MailboxRepr, MailboxType};
+
+/// The mailbox server of one slave.
+#[derive(Debug, Default)]
+pub struct MailboxServer {
+    coe: CoeServer,
+    /// Counter of the last request processed (1..7), to drop repeats.
+    last_counter: Option<u8>,
+    /// Counter of the last response sent (1..7).
+    tx_counter: u8,
+}
+
+impl MailboxServer {
+    /// A server in its initial state.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn next_counter(&mut self) -> u8 {
+        self.tx_counter = if self.tx_counter >= 7 {
+            1
+        } else {
+            self.tx_counter + 1
+        };
+        self.tx_counter
+    }
+
+    /// Handles one request (the whole SM0 buffer) and writes the reply into
+    /// `out` (the SM1 buffer size). Returns the reply length, or `None` when
+    /// nothing is to be sent.
+    pub fn handle(
+        &mut self,
+        request: &[u8],
+        out: &mut [u8],
+        od: &mut impl ObjectAccess,
+    ) -> Option<usize> {
+        let mbx = match Mailbox::new_checked(request) {
+            Ok(m) => m,
+            Err(_) if request.len() < MailboxRepr::HEADER_LEN => {
+                return self.error_reply(out, MailboxErrorCode::InvalidHeader);
+            }
+            Err(_) => return self.error_reply(out, MailboxErrorCode::InvalidSize),
+        };
+        let counter = mbx.counter();
+        if counter != 0 && self.last_counter == Some(counter) {
+            // A repeated counter: the master sent the same mailbox again;
+            // it is not executed twice.
+            return None;
+        }
+        self.last_counter = (counter != 0).then_some(counter);
+        let header_len = MailboxRepr::HEADER_LEN;
+        match mbx.mailbox_type() {
+            MailboxType::CoE => {
+                let Some(body) = out.get_mut(header_len..) else {
+                    return None;
+                };
+                match self.coe.handle(mbx.payload(), body, od) {
+                    Ok(Some(n)) => self.frame(out, MailboxType::CoE, n),
+                    Ok(None) => None,
+                    Err(code) => self.error_reply(out, code),
+                }
+            }
+            _ => self.error_reply(out, MailboxErrorCode::UnsupportedProtocol),
+        }
+    }
+
+    /// Writes the mailbox header for a `len`-byte payload already in place.
+    fn frame(&mut self, out: &mut [u8], kind: MailboxType, len: usize) -> Option<usize> {
+        let repr = MailboxRepr {
+            length: u16::try_from(len).ok()?,
+            address: 0,
+            channel: 0,
+            priority: 0,
+            mailbox_type: kind,
+            counter: self.next_counter(),
+        };
+        repr.emit_header(out).ok()?;
+        Some(MailboxRepr::HEADER_LEN + len)
+    }
+
+    fn error_reply(&mut self, out: &mut [u8], code: MailboxErrorCode) -> Option<usize> {
+        let body = out.get_mut(MailboxRepr::HEADER_LEN..)?;
+        let n = crate::wire::mailbox::emit_error(code, body).ok()?;
+        self.frame(out, MailboxType::Error, n)
+    }
+}

@@ -1,0 +1,249 @@
+//! Types of the static object-dictionary description (layer 2, `od`).
+//!
+//! These types describe objects; they hold no live values and know nothing
+//! of EtherCAT frames. The one description of the PAM-199 dictionary built
+//! from them lives in [`super::model`].
+
+/// CoE base data types used by the dictionary (ETG.1000.6 table 63 codes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DataType {
+    /// BOOL, 1 bit (0x0001).
+    Bool,
+    /// SINT / INTEGER8 (0x0002).
+    Int8,
+    /// INT / INTEGER16 (0x0003).
+    Int16,
+    /// DINT / INTEGER32 (0x0004).
+    Int32,
+    /// USINT / UNSIGNED8 (0x0005).
+    UInt8,
+    /// UINT / UNSIGNED16 (0x0006).
+    UInt16,
+    /// UDINT / UNSIGNED32 (0x0007).
+    UInt32,
+    /// VISIBLE_STRING (0x0009).
+    VisibleString,
+    /// LINT / INTEGER64 (0x0015).
+    Int64,
+    /// ULINT / UNSIGNED64 (0x001B).
+    UInt64,
+    /// BITn padding / bit field of n bits (0x0030 + n - 1, n in 1..=8).
+    Bits(u8),
+    /// A device-specific enumeration (data type index 0x0800.., see [`EnumDesc`]).
+    Enum(&'static EnumDesc),
+}
+
+impl DataType {
+    /// The CoE data type code as reported by SDO Information and the ESI.
+    pub const fn code(&self) -> u16 {
+        match self {
+            DataType::Bool => 0x0001,
+            DataType::Int8 => 0x0002,
+            DataType::Int16 => 0x0003,
+            DataType::Int32 => 0x0004,
+            DataType::UInt8 => 0x0005,
+            DataType::UInt16 => 0x0006,
+            DataType::UInt32 => 0x0007,
+            DataType::VisibleString => 0x0009,
+            DataType::Int64 => 0x0015,
+            DataType::UInt64 => 0x001B,
+            DataType::Bits(n) => 0x002F + *n as u16,
+            DataType::Enum(e) => e.index,
+        }
+    }
+
+    /// Whether values of this type are signed integers.
+    pub const fn is_signed(&self) -> bool {
+        matches!(
+            self,
+            DataType::Int8 | DataType::Int16 | DataType::Int32 | DataType::Int64
+        )
+    }
+
+    /// The ETG/IEC 61131 type name used in the ESI (`BOOL`, `UINT`, `BIT7`, ...).
+    /// Enumerations return their own name (`DT0800EN03`); strings return
+    /// `STRING` (the ESI appends the length: `STRING(13)`).
+    pub const fn etg_name(&self) -> &'static str {
+        match self {
+            DataType::Bool => "BOOL",
+            DataType::Int8 => "SINT",
+            DataType::Int16 => "INT",
+            DataType::Int32 => "DINT",
+            DataType::UInt8 => "USINT",
+            DataType::UInt16 => "UINT",
+            DataType::UInt32 => "UDINT",
+            DataType::VisibleString => "STRING",
+            DataType::Int64 => "LINT",
+            DataType::UInt64 => "ULINT",
+            DataType::Bits(1) => "BIT1",
+            DataType::Bits(2) => "BIT2",
+            DataType::Bits(3) => "BIT3",
+            DataType::Bits(4) => "BIT4",
+            DataType::Bits(5) => "BIT5",
+            DataType::Bits(6) => "BIT6",
+            DataType::Bits(7) => "BIT7",
+            DataType::Bits(_) => "BIT8",
+            DataType::Enum(e) => e.name,
+        }
+    }
+}
+
+/// An enumeration data type (manual 6.1.7, objects 0x0800..0x0805).
+#[derive(Debug, PartialEq, Eq)]
+pub struct EnumDesc {
+    /// Data type index, 0x0800..0x0FFF (ETG.1000.6 enumeration range).
+    pub index: u16,
+    /// Name as in the manual and the ESI, e.g. `DT0800EN03` (`ENnn` = bit size).
+    pub name: &'static str,
+    /// Bit size of a value of this type.
+    pub bit_len: u8,
+    /// `(value, text)` pairs in the manual's order.
+    pub values: &'static [(i64, &'static str)],
+}
+
+impl EnumDesc {
+    /// Whether `value` is one of the enumeration's values.
+    pub fn contains(&self, value: i64) -> bool {
+        self.values.iter().any(|(v, _)| *v == value)
+    }
+
+    /// The text of `value`, if it is defined.
+    pub fn text(&self, value: i64) -> Option<&'static str> {
+        self.values.iter().find(|(v, _)| *v == value).map(|(_, t)| *t)
+    }
+}
+
+/// Who may read or write an entry, and in which AL states (ETG.1000.6 5.6.3.5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Access {
+    /// Read-only in every state.
+    Ro,
+    /// Read/write in PRE-OP, SAFE-OP and OP.
+    Rw,
+    /// Readable always, writable only in PRE-OP (PDO assignment 0x1C12/0x1C13).
+    RwPreOp,
+    /// Write-only (reads abort 0x06010001).
+    Wo,
+}
+
+impl Access {
+    /// Whether an SDO upload of the entry is allowed at all.
+    pub const fn readable(&self) -> bool {
+        !matches!(self, Access::Wo)
+    }
+
+    /// Whether an SDO download of the entry is allowed in some state.
+    pub const fn writable(&self) -> bool {
+        !matches!(self, Access::Ro)
+    }
+
+    /// The ETG.1000.6 object access bits (bits 0-5: read PRE-OP/SAFE-OP/OP,
+    /// write PRE-OP/SAFE-OP/OP) as used by SDO Information.
+    pub const fn bits(&self) -> u16 {
+        match self {
+            Access::Ro => 0x0007,
+            Access::Rw => 0x003F,
+            Access::RwPreOp => 0x000F,
+            Access::Wo => 0x0038,
+        }
+    }
+}
+
+/// Whether an entry may be mapped into a PDO and in which direction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PdoMapping {
+    /// Not mappable.
+    None,
+    /// Mappable into an RxPDO (master outputs, 0x7000 range).
+    Rx,
+    /// Mappable into a TxPDO (master inputs, 0x6000/0xA000 range).
+    Tx,
+}
+
+/// CoE object code (ETG.1000.6 table 62).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ObjectCode {
+    /// A single variable (0x07).
+    Var,
+    /// An array: all subindices >= 1 share one type (0x08).
+    Array,
+    /// A record of differently typed entries (0x09).
+    Record,
+}
+
+impl ObjectCode {
+    /// The numeric object code.
+    pub const fn code(&self) -> u8 {
+        match self {
+            ObjectCode::Var => 0x07,
+            ObjectCode::Array => 0x08,
+            ObjectCode::Record => 0x09,
+        }
+    }
+}
+
+/// The default value of an entry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DefaultValue {
+    /// A number (integers, booleans as 0/1, enumerations by value).
+    Int(i64),
+    /// A visible string.
+    Str(&'static str),
+}
+
+/// One subindex of an object.
+#[derive(Debug, PartialEq, Eq)]
+pub struct Entry {
+    /// Subindex (0 = number of entries for arrays and records).
+    pub sub: u8,
+    /// Name as in the manual (`CURRENT`, `RA:UP:A`, ...); `SubIndex 002` for gaps.
+    pub name: &'static str,
+    /// Data type.
+    pub data_type: DataType,
+    /// Size in bits (strings: 8 x maximum length).
+    pub bit_len: u16,
+    /// Access rights.
+    pub access: Access,
+    /// PDO mappability.
+    pub pdo: PdoMapping,
+    /// Default value (process data: the power-on value).
+    pub default: DefaultValue,
+    /// Smallest allowed value, where the manual gives a range.
+    pub min: Option<i64>,
+    /// Largest allowed value, where the manual gives a range.
+    pub max: Option<i64>,
+    /// Unit text as the manual gives it (`ms`, `mA`, `Hz`, `0.01 %`), or "".
+    pub unit: &'static str,
+    /// Stored by SAVE and part of the backup (ETG.1000.6 access bit 8).
+    pub backup: bool,
+    /// A device setting (ETG.1000.6 access bit 9).
+    pub setting: bool,
+    /// A padding gap (blank subindex in the manual): not accessible by SDO,
+    /// packed as zero bits in complete access and PDOs.
+    pub gap: bool,
+}
+
+/// One object of the dictionary.
+#[derive(Debug, PartialEq, Eq)]
+pub struct Object {
+    /// Object index.
+    pub index: u16,
+    /// Name as in the manual's "Group" column (`POWER STAGE`, `DIR_IN`).
+    pub name: &'static str,
+    /// Object code.
+    pub code: ObjectCode,
+    /// Entries in ascending subindex order; for arrays/records entry 0 is subindex 0.
+    pub entries: &'static [Entry],
+}
+
+impl Object {
+    /// The entry with subindex `sub`, if present.
+    pub fn entry(&self, sub: u8) -> Option<&'static Entry> {
+        self.entries.iter().find(|e| e.sub == sub)
+    }
+
+    /// Highest subindex of the object (SDO Info "max subindex").
+    pub fn max_sub(&self) -> u8 {
+        self.entries.iter().map(|e| e.sub).max().unwrap_or(0)
+    }
+}

@@ -1,0 +1,77 @@
+//! Discovery and bring-up to OP, process data in both directions.
+
+use master_test::VirtualBus;
+use master_test::link::lock;
+
+async fn bring_up(n: usize) {
+    let bus = VirtualBus::new(n).expect("bus");
+    let md = &*bus.maindevice;
+    let group = bus.init().await.expect("init to PRE-OP");
+    assert_eq!(group.len(), n, "ethercrab finds every slave");
+    for sd in group.iter(md) {
+        let id = sd.identity();
+        assert_eq!(id.vendor_id, 0x0000_05AE);
+        assert_eq!(id.product_id, 0x00C7_03F3);
+        assert_eq!(id.revision, 7);
+        assert_eq!(sd.name(), "PAM-199-P-ETC");
+    }
+    let group = group.into_op(md).await.expect("into OP");
+    for sd in group.iter(md) {
+        let (state, _) = sd.status().await.expect("status");
+        assert_eq!(state, ethercrab::SubDeviceState::Op);
+    }
+    let resp = group.tx_rx(md).await.expect("tx_rx");
+    assert_eq!(resp.working_counter as usize, 3 * n, "LRW counts 3 per slave");
+}
+
+#[test]
+fn ethercrab_brings_one_slave_to_op_with_identity() {
+    smol::block_on(bring_up(1));
+}
+
+#[test]
+fn ethercrab_brings_eight_slaves_to_op_with_identity() {
+    smol::block_on(bring_up(8));
+}
+
+#[test]
+fn ethercrab_brings_sixty_four_slaves_to_op_with_identity() {
+    smol::block_on(bring_up(64));
+}
+
+#[test]
+fn outputs_reach_the_slave_and_inputs_reach_the_master_at_the_mapped_offset() {
+    smol::block_on(async {
+        let bus = VirtualBus::new(2).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let group = group.into_op(md).await.expect("op");
+        // Directional outputs (0x1600): ENABLE bit 0 of byte 0, 7 bits
+        // padding, COMMAND VALUE DINT at bytes 1..5.
+        for (i, sd) in group.iter(md).enumerate() {
+            let mut out = sd.outputs_raw_mut();
+            assert_eq!(out.len(), 5);
+            out[0] = 1;
+            let cmd = -1234 - i as i32;
+            out[1..5].copy_from_slice(&cmd.to_le_bytes());
+        }
+        // IA (0x6000:06) set inside the second slave.
+        lock(&bus.chain).slaves_mut()[1].slave_mut().store.set(0x6000, 6, 750);
+        for _ in 0..3 {
+            group.tx_rx(md).await.expect("tx_rx");
+        }
+        {
+            let chain = lock(&bus.chain);
+            for (i, s) in chain.slaves().iter().enumerate() {
+                assert_eq!(s.slave().store.get(0x7000, 1), Some(1), "ENABLE of slave {i}");
+                assert_eq!(s.slave().store.get(0x7000, 3), Some(-1234 - i as i64));
+            }
+        }
+        let sd = group.subdevice(md, 1).expect("slave 1");
+        let inp = sd.inputs_raw();
+        // 0x1A00 takes 4 bytes, then 0x1A02: W, C, U, IA, IB (INT/UINT):
+        // IA sits at byte 4 + 6 = 10.
+        assert_eq!(inp.len(), 14);
+        assert_eq!(u16::from_le_bytes([inp[10], inp[11]]), 750);
+    });
+}

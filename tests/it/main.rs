@@ -1,0 +1,8 @@
+//! Integration tests: the ethercrab master drives software PAM-199-P-ETC
+//! slaves over the virtual link, with real EtherCAT frames. One test binary;
+//! each area of the product is a module.
+
+mod bring_up;
+mod common;
+mod sdo;
+mod sii;
