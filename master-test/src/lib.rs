@@ -5,6 +5,7 @@
 //! sockets, no root. Integration tests and the demo CLI use it.
 
 pub mod link;
+pub mod mailbox;
 
 use ethercrab::{MainDevice, MainDeviceConfig, PduStorage, RetryBehaviour, Timeouts};
 use link::{Chain, Clock, Link, SharedChain};

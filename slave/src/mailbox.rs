@@ -6,7 +6,10 @@
 //! (SM1). It knows nothing of the ESC: the device moves the bytes.
 
 use crate::coe::{CoeServer, ObjectAccess};
-use crate::wire::mailbox::{Mailbox, MailboxErrorCode, MailboxRepr, MailboxType};
+use crate::wire::mailbox::{
+    HEADER_LEN, Mailbox, MailboxError, MailboxErrorCode, MailboxErrorRepr, MailboxRepr, MailboxType,
+    next_counter,
+};
 
 /// The mailbox server of one slave.
 #[derive(Debug, Default)]
@@ -25,11 +28,7 @@ impl MailboxServer {
     }
 
     fn next_counter(&mut self) -> u8 {
-        self.tx_counter = if self.tx_counter >= 7 {
-            1
-        } else {
-            self.tx_counter + 1
-        };
+        self.tx_counter = next_counter(self.tx_counter);
         self.tx_counter
     }
 
@@ -44,7 +43,7 @@ impl MailboxServer {
     ) -> Option<usize> {
         let mbx = match Mailbox::new_checked(request) {
             Ok(m) => m,
-            Err(_) if request.len() < MailboxRepr::HEADER_LEN => {
+            Err(_) if request.len() < HEADER_LEN => {
                 return self.error_reply(out, MailboxErrorCode::InvalidHeader);
             }
             Err(_) => return self.error_reply(out, MailboxErrorCode::InvalidSize),
@@ -56,7 +55,7 @@ impl MailboxServer {
             return None;
         }
         self.last_counter = (counter != 0).then_some(counter);
-        let header_len = MailboxRepr::HEADER_LEN;
+        let header_len = HEADER_LEN;
         match mbx.mailbox_type() {
             MailboxType::CoE => {
                 let Some(body) = out.get_mut(header_len..) else {
@@ -82,13 +81,14 @@ impl MailboxServer {
             mailbox_type: kind,
             counter: self.next_counter(),
         };
-        repr.emit_header(out).ok()?;
-        Some(MailboxRepr::HEADER_LEN + len)
+        repr.emit(&mut Mailbox::new_unchecked(&mut *out)).ok()?;
+        Some(HEADER_LEN + len)
     }
 
     fn error_reply(&mut self, out: &mut [u8], code: MailboxErrorCode) -> Option<usize> {
-        let body = out.get_mut(MailboxRepr::HEADER_LEN..)?;
-        let n = crate::wire::mailbox::emit_error(code, body).ok()?;
-        self.frame(out, MailboxType::Error, n)
+        let body = out.get_mut(HEADER_LEN..)?;
+        let repr = MailboxErrorRepr { code };
+        repr.emit(&mut MailboxError::new_unchecked(body)).ok()?;
+        self.frame(out, MailboxType::Error, repr.buffer_len())
     }
 }

@@ -622,7 +622,7 @@ impl SoftEsc {
                     self.set_u8(a, v & 0x07);
                     sii_command = true;
                 }
-                0x0504..=0x050F | 0x0510..=0x0517 => self.set_u8(a, v),
+                0x0504..=0x0517 => self.set_u8(a, v),
                 0x0600..=0x06FF => {
                     self.set_u8(a, v);
                     touched_fmmu |= 1 << ((a - reg::FMMU_BASE) / reg::FMMU_LEN);
@@ -952,5 +952,342 @@ impl Esc for SoftEsc {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::wire::builder::FrameBuilder;
+
+    const SRC: [u8; 6] = [0x10, 0x10, 0x10, 0x10, 0x10, 0x10];
+
+    fn esc() -> SoftEsc {
+        // A minimal SII: alias 0x0000, the rest 0xFF.
+        let mut sii = [0xFFu8; 128];
+        sii[..16].fill(0);
+        SoftEsc::new(&sii)
+    }
+
+    /// Builds a frame of `(command, address, data)` datagrams.
+    fn frame(dgs: &[(Command, u32, &[u8])]) -> (Vec<u8>, Vec<core::ops::Range<usize>>) {
+        let mut buf = vec![0u8; 1600];
+        let mut b = FrameBuilder::new(&mut buf, SRC).unwrap();
+        let ranges = dgs.iter().map(|(c, a, d)| b.push(*c, *a, d).unwrap()).collect();
+        let len = b.finish();
+        buf.truncate(len);
+        (buf, ranges)
+    }
+
+    fn wkc(frame: &[u8], data: &core::ops::Range<usize>) -> u16 {
+        u16::from_le_bytes([frame[data.end], frame[data.end + 1]])
+    }
+
+    fn phys(adp: u16, ado: u16) -> u32 {
+        u32::from(adp) | (u32::from(ado) << 16)
+    }
+
+    #[test]
+    fn brd_counts_every_slave_and_ors_register_data() {
+        let mut line = [esc(), esc()];
+        let (mut f, r) = frame(&[(Command::Brd, 0, &[0])]);
+        for e in &mut line {
+            assert_eq!(e.process_frame(&mut f), FrameOutcome::Processed { datagrams: 1 });
+        }
+        assert_eq!(wkc(&f, &r[0]), 2);
+        assert_eq!(f[r[0].start], 0x11, "ESC type read");
+        // ADP incremented by each slave.
+        assert_eq!(u16::from_le_bytes([f[r[0].start - 8], f[r[0].start - 7]]), 2);
+    }
+
+    #[test]
+    fn reply_source_mac_has_the_locally_administered_bit() {
+        let mut e = esc();
+        let (mut f, _) = frame(&[(Command::Brd, 0, &[0])]);
+        e.process_frame(&mut f);
+        assert_eq!(f[6], 0x12);
+    }
+
+    #[test]
+    fn auto_increment_write_addresses_position_zero_only() {
+        let mut line = [esc(), esc(), esc()];
+        // ADP 0xFFFF (-1) addresses the second slave.
+        let (mut f, r) = frame(&[(Command::Apwr, phys(0xFFFF, 0x0010), &[0x34, 0x12])]);
+        for e in &mut line {
+            e.process_frame(&mut f);
+        }
+        assert_eq!(wkc(&f, &r[0]), 1);
+        assert_eq!(line[0].mem_u16(reg::STATION_ADDRESS), 0);
+        assert_eq!(line[1].mem_u16(reg::STATION_ADDRESS), 0x1234);
+        // Then configured addressing reaches it.
+        let (mut f, r) = frame(&[(Command::Fprd, phys(0x1234, 0x0130), &[0, 0])]);
+        for e in &mut line {
+            e.process_frame(&mut f);
+        }
+        assert_eq!(wkc(&f, &r[0]), 1);
+        assert_eq!(&f[r[0].clone()], &[0x01, 0x00], "AL status INIT");
+    }
+
+    #[test]
+    fn read_write_commands_count_three_and_return_old_data() {
+        let mut e = esc();
+        let (mut f, r) = frame(&[(Command::Aprw, phys(0, 0x0010), &[0x01, 0x10])]);
+        e.process_frame(&mut f);
+        assert_eq!(wkc(&f, &r[0]), 3);
+        assert_eq!(&f[r[0].clone()], &[0, 0], "old station address returned");
+        assert_eq!(e.mem_u16(reg::STATION_ADDRESS), 0x1001);
+    }
+
+    #[test]
+    fn access_wrapping_past_ffff_is_not_executed_or_counted() {
+        let mut e = esc();
+        let before = e.mem;
+        let (mut f, r) = frame(&[(Command::Apwr, phys(0, 0xFFFE), &[1, 2, 3, 4])]);
+        e.process_frame(&mut f);
+        assert_eq!(wkc(&f, &r[0]), 0);
+        assert!(e.mem == before, "memory unchanged");
+        let (mut f, r) = frame(&[(Command::Aprd, phys(0, 0xFFFF), &[9, 9])]);
+        e.process_frame(&mut f);
+        assert_eq!(wkc(&f, &r[0]), 0);
+        assert_eq!(&f[r[0].clone()], &[9, 9]);
+    }
+
+    #[test]
+    fn read_only_registers_ignore_master_writes() {
+        let mut e = esc();
+        let (mut f, r) = frame(&[(Command::Apwr, phys(0, reg::AL_STATUS), &[0x08, 0x00])]);
+        e.process_frame(&mut f);
+        assert_eq!(wkc(&f, &r[0]), 1, "the write is counted, as on silicon");
+        assert_eq!(e.mem_u16(reg::AL_STATUS), 0x0001);
+    }
+
+    #[test]
+    fn al_control_write_raises_an_event_that_a_pdi_read_clears() {
+        let mut e = esc();
+        let (mut f, _) = frame(&[(Command::Bwr, phys(0, reg::AL_CONTROL), &[0x02, 0x00])]);
+        e.process_frame(&mut f);
+        assert_eq!(e.read_u32(reg::AL_EVENT_REQUEST).unwrap() & 1, 1);
+        assert_eq!(e.read_u16(reg::AL_CONTROL).unwrap(), 0x0002);
+        assert_eq!(e.read_u32(reg::AL_EVENT_REQUEST).unwrap() & 1, 0);
+    }
+
+    #[test]
+    fn sii_read_command_loads_eight_bytes_and_is_never_busy() {
+        let mut sii = [0u8; 256];
+        for (i, b) in sii.iter_mut().enumerate() {
+            *b = i as u8;
+        }
+        let mut e = SoftEsc::new(&sii);
+        // Command read (0x0100) of word 8, as ethercrab writes it.
+        let (mut f, _) = frame(&[(
+            Command::Apwr,
+            phys(0, reg::SII_CONTROL),
+            &[0x00, 0x01, 0x08, 0x00, 0x00, 0x00],
+        )]);
+        e.process_frame(&mut f);
+        let (mut f, r) = frame(&[
+            (Command::Aprd, phys(0, reg::SII_CONTROL), &[0, 0]),
+            (Command::Aprd, phys(0, reg::SII_DATA), &[0; 8]),
+        ]);
+        e.process_frame(&mut f);
+        let ctrl = u16::from_le_bytes([f[r[0].start], f[r[0].start + 1]]);
+        assert_eq!(ctrl & 0x8000, 0, "not busy");
+        assert_eq!(ctrl & 0x0040, 0x0040, "8-byte reads");
+        assert_eq!(ctrl & 0x7800, 0, "no error bits");
+        assert_eq!(&f[r[1].clone()], &[16, 17, 18, 19, 20, 21, 22, 23]);
+    }
+
+    #[test]
+    fn sii_write_without_write_enable_sets_command_error_once() {
+        let mut e = esc();
+        let (mut f, _) = frame(&[(Command::Apwr, phys(0, reg::SII_CONTROL), &[0x00, 0x02])]);
+        e.process_frame(&mut f);
+        assert_ne!(e.mem_u16(reg::SII_CONTROL) & 0x2000, 0);
+        // The next command clears it: errors do not latch.
+        let (mut f, _) = frame(&[(Command::Apwr, phys(0, reg::SII_CONTROL), &[0x00, 0x01])]);
+        e.process_frame(&mut f);
+        assert_eq!(e.mem_u16(reg::SII_CONTROL) & 0x7800, 0);
+    }
+
+    fn configure_mailbox(e: &mut SoftEsc) {
+        let sm0 = [0x00, 0x10, 0x08, 0x00, 0x26, 0x00, 0x01, 0x00];
+        let sm1 = [0x80, 0x10, 0x08, 0x00, 0x22, 0x00, 0x01, 0x00];
+        let (mut f, _) = frame(&[
+            (Command::Apwr, phys(0, 0x0800), &sm0),
+            (Command::Apwr, phys(0, 0x0808), &sm1),
+        ]);
+        e.process_frame(&mut f);
+    }
+
+    #[test]
+    fn mailbox_write_fills_sm0_and_a_second_write_is_refused() {
+        let mut e = esc();
+        configure_mailbox(&mut e);
+        let (mut f, r) = frame(&[(Command::Apwr, phys(0, 0x1000), &[1; 8])]);
+        e.process_frame(&mut f);
+        assert_eq!(wkc(&f, &r[0]), 1);
+        assert_ne!(e.mem_u8(0x0805) & 0x08, 0, "SM0 full");
+        assert_ne!(e.read_u32(reg::AL_EVENT_REQUEST).unwrap() & reg::al_event_sm(0), 0);
+        let (mut f, r) = frame(&[(Command::Apwr, phys(0, 0x1000), &[2; 8])]);
+        e.process_frame(&mut f);
+        assert_eq!(wkc(&f, &r[0]), 0, "full mailbox refuses");
+        let mut got = [0u8; 8];
+        e.read(0x1000, &mut got).unwrap();
+        assert_eq!(got, [1; 8]);
+        assert_eq!(e.mem_u8(0x0805) & 0x08, 0, "PDI read empties it");
+    }
+
+    #[test]
+    fn empty_read_mailbox_is_not_counted_and_full_one_empties_on_read() {
+        let mut e = esc();
+        configure_mailbox(&mut e);
+        let (mut f, r) = frame(&[(Command::Aprd, phys(0, 0x1080), &[0; 8])]);
+        e.process_frame(&mut f);
+        assert_eq!(wkc(&f, &r[0]), 0);
+        e.write(0x1080, &[7; 8]).unwrap();
+        assert_eq!(e.write(0x1080, &[8; 8]), Err(EscError::SmBusy { sm: 1 }));
+        let (mut f, r) = frame(&[(Command::Aprd, phys(0, 0x1080), &[0; 8])]);
+        e.process_frame(&mut f);
+        assert_eq!(wkc(&f, &r[0]), 1);
+        assert_eq!(&f[r[0].clone()], &[7; 8]);
+        assert_eq!(e.mem_u8(0x080D) & 0x08, 0, "emptied");
+    }
+
+    fn configure_process_data(e: &mut SoftEsc) {
+        let sm2 = [0x00, 0x11, 0x02, 0x00, 0x64, 0x00, 0x01, 0x00];
+        let sm3 = [0x80, 0x11, 0x02, 0x00, 0x20, 0x00, 0x01, 0x00];
+        let mut f0 = [0u8; 16];
+        f0[4] = 2;
+        f0[7] = 7;
+        f0[8..10].copy_from_slice(&0x1100u16.to_le_bytes());
+        f0[11] = 2;
+        f0[12] = 1;
+        let mut f1 = f0;
+        f1[0] = 2;
+        f1[8..10].copy_from_slice(&0x1180u16.to_le_bytes());
+        f1[11] = 1;
+        let (mut f, _) = frame(&[
+            (Command::Apwr, phys(0, 0x0810), &sm2),
+            (Command::Apwr, phys(0, 0x0818), &sm3),
+            (Command::Apwr, phys(0, 0x0600), &f0),
+            (Command::Apwr, phys(0, 0x0610), &f1),
+        ]);
+        e.process_frame(&mut f);
+    }
+
+    #[test]
+    fn lrw_through_two_fmmus_counts_three_and_moves_both_ways() {
+        let mut e = esc();
+        configure_process_data(&mut e);
+        e.write(0x1180, &[0xAB, 0xCD]).unwrap();
+        let (mut f, r) = frame(&[(Command::Lrw, 0, &[0x11, 0x22, 0, 0])]);
+        e.process_frame(&mut f);
+        assert_eq!(wkc(&f, &r[0]), 3);
+        assert_eq!(&f[r[0].clone()], &[0x11, 0x22, 0xAB, 0xCD]);
+        let mut out = [0u8; 2];
+        e.read(0x1100, &mut out).unwrap();
+        assert_eq!(out, [0x11, 0x22]);
+        assert_eq!(e.take_sm_writes(), 1 << 2, "SM2 buffer completed");
+        assert_eq!(e.take_sm_writes(), 0);
+    }
+
+    #[test]
+    fn logical_access_outside_every_fmmu_is_not_counted() {
+        let mut e = esc();
+        configure_process_data(&mut e);
+        let (mut f, r) = frame(&[(Command::Lrd, 0x100, &[0; 4])]);
+        e.process_frame(&mut f);
+        assert_eq!(wkc(&f, &r[0]), 0);
+        let (mut f, r) = frame(&[(Command::Lwr, 0, &[5, 6])]);
+        e.process_frame(&mut f);
+        assert_eq!(wkc(&f, &r[0]), 1);
+    }
+
+    #[test]
+    fn bit_granular_fmmu_maps_single_bits() {
+        let mut e = esc();
+        // FMMU0: logical 0x10 bit 3..bit 4 (2 bits) -> physical 0x1200 bit 0.
+        let mut f0 = [0u8; 16];
+        f0[0] = 0x10;
+        f0[4] = 1;
+        f0[6] = 3;
+        f0[7] = 4;
+        f0[8..10].copy_from_slice(&0x1200u16.to_le_bytes());
+        f0[11] = 2;
+        f0[12] = 1;
+        let (mut f, _) = frame(&[(Command::Apwr, phys(0, 0x0600), &f0)]);
+        e.process_frame(&mut f);
+        let (mut f, r) = frame(&[(Command::Lwr, 0x10, &[0b0001_1000])]);
+        e.process_frame(&mut f);
+        assert_eq!(wkc(&f, &r[0]), 1);
+        assert_eq!(e.mem_u8(0x1200), 0b11);
+    }
+
+    #[test]
+    fn frames_that_are_not_ethercat_or_are_broken_are_left_untouched() {
+        let mut e = esc();
+        let mut ip = vec![0u8; 60];
+        ip[12] = 0x08;
+        assert_eq!(e.process_frame(&mut ip), FrameOutcome::NotEthercat);
+        assert!(ip[6..12].iter().all(|b| *b == 0));
+        let mut short = vec![0u8; 10];
+        assert_eq!(e.process_frame(&mut short), FrameOutcome::Malformed);
+        // EtherCAT header claiming more payload than the frame holds.
+        let (mut f, _) = frame(&[(Command::Brd, 0, &[0])]);
+        f[14] = 0xFF;
+        f[15] = 0x17;
+        assert_eq!(e.process_frame(&mut f), FrameOutcome::Malformed);
+    }
+
+    #[test]
+    fn datagram_length_beyond_the_frame_stops_processing_without_damage() {
+        let mut e = esc();
+        let (mut f, r) = frame(&[(Command::Bwr, phys(0, 0x0010), &[1, 2])]);
+        // Claim 0x200 data bytes in the datagram header.
+        f[r[0].start - 4] = 0x00;
+        f[r[0].start - 3] = 0x02;
+        let outcome = e.process_frame(&mut f);
+        assert_eq!(outcome, FrameOutcome::Processed { datagrams: 0 });
+        assert_eq!(e.mem_u16(reg::STATION_ADDRESS), 0);
+    }
+
+    #[test]
+    fn unknown_commands_are_passed_on_unchanged() {
+        let mut e = esc();
+        let (mut f, r) = frame(&[(Command::Unknown(0x33), 0, &[1, 2, 3])]);
+        let before = f.clone();
+        e.process_frame(&mut f);
+        assert_eq!(wkc(&f, &r[0]), 0);
+        assert_eq!(f[14..], before[14..]);
+    }
+
+    #[test]
+    fn random_frames_never_panic() {
+        // A deterministic xorshift generator: 20 000 frames of EtherType
+        // 0x88A4 with random headers and datagrams, against one ESC with
+        // mailbox and process data configured.
+        let mut e = esc();
+        configure_mailbox(&mut e);
+        configure_process_data(&mut e);
+        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        for _ in 0..20_000 {
+            let len = 14 + (next() % 200) as usize;
+            let mut f: Vec<u8> = (0..len).map(|_| next() as u8).collect();
+            f[12] = 0x88;
+            f[13] = 0xA4;
+            if len > 16 && next() % 2 == 0 {
+                // Plausible EtherCAT header so datagrams are reached.
+                let pl = (len - 16) as u16;
+                f[14] = pl as u8;
+                f[15] = 0x10 | ((pl >> 8) as u8 & 0x07);
+            }
+            e.process_frame(&mut f);
+        }
     }
 }

@@ -56,7 +56,10 @@ impl<'a> FrameBuilder<'a> {
             let bytes = self.buf.get_mut(prev..).ok_or(WireError::Truncated)?;
             Datagram::new_unchecked(bytes).set_more_follows(true);
         }
-        let bytes = self.buf.get_mut(self.len..end).ok_or(WireError::Truncated)?;
+        let bytes = self
+            .buf
+            .get_mut(self.len..end)
+            .ok_or(WireError::Truncated)?;
         bytes.fill(0);
         let mut dg = Datagram::new_unchecked(bytes);
         dg.set_command(command);

@@ -424,26 +424,43 @@ impl Command {
 /// A read/write view of one datagram (DLPDU) (ETG.1000.4, "EtherCAT DLPDU"
 /// structure: command, index, address, length/C/M, IRQ, data, WKC).
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Datagram<T: AsRef<[u8]>> {
+///
+/// The struct itself carries no bound so that the length helpers on
+/// `Datagram<()>` ([`Datagram::HEADER_LEN`], [`Datagram::total_len_for`])
+/// can be used without a buffer.
+pub struct Datagram<T> {
     buffer: T,
 }
 
 impl Datagram<()> {
-    /// Length of the datagram header (before the data).
-    pub const HEADER_LEN: usize = 10;
-    /// Length of the working counter (after the data).
-    pub const WKC_LEN: usize = 2;
-    /// Smallest possible datagram (header and WKC, no data).
-    pub const MIN_LEN: usize = Self::HEADER_LEN + Self::WKC_LEN;
+    /// Length of the datagram header ([`DATAGRAM_HEADER_LEN`]).
+    pub const HEADER_LEN: usize = DATAGRAM_HEADER_LEN;
+    /// Length of the working counter ([`WKC_LEN`]).
+    pub const WKC_LEN: usize = WKC_LEN;
+    /// Smallest possible datagram ([`DATAGRAM_MIN_LEN`]).
+    pub const MIN_LEN: usize = DATAGRAM_MIN_LEN;
 
-    /// Total wire length of a datagram carrying `data_len` data bytes.
+    /// Total wire length of a datagram carrying `data_len` data bytes
+    /// (same as [`datagram_len`]).
     pub const fn total_len_for(data_len: usize) -> usize {
-        Self::HEADER_LEN + data_len + Self::WKC_LEN
+        datagram_len(data_len)
     }
 }
 
-/// Length of the datagram header (before the data).
-pub const DATAGRAM_HEADER_LEN: usize = Datagram::<()>::HEADER_LEN;
+/// Length of the datagram header (command .. IRQ, before the data).
+pub const DATAGRAM_HEADER_LEN: usize = field::DG_DATA.start;
+
+/// Length of the working counter following the datagram data.
+pub const WKC_LEN: usize = 2;
+
+/// Smallest possible datagram: header and WKC, no data.
+pub const DATAGRAM_MIN_LEN: usize = DATAGRAM_HEADER_LEN + WKC_LEN;
+
+/// Total wire length of a datagram carrying `data_len` data bytes
+/// (`10 + data_len + 2`).
+pub const fn datagram_len(data_len: usize) -> usize {
+    DATAGRAM_HEADER_LEN + data_len + WKC_LEN
+}
 
 const DG_LEN_MASK: u16 = 0x07FF;
 const DG_CIRCULATING: u16 = 0x4000;
@@ -487,7 +504,7 @@ impl<T: AsRef<[u8]>> Datagram<T> {
     /// Total wire length (header + data + WKC) according to the length
     /// field.
     pub fn total_len(&self) -> usize {
-        Datagram::total_len_for(usize::from(self.data_len()))
+        datagram_len(usize::from(self.data_len()))
     }
 
     /// The command.
@@ -547,7 +564,7 @@ impl<T: AsRef<[u8]>> Datagram<T> {
 
     fn wkc_range(&self) -> Field {
         let end = self.data_range().end;
-        end..end + Datagram::WKC_LEN
+        end..end + WKC_LEN
     }
 
     /// The data bytes (empty if the buffer does not hold them).
@@ -681,9 +698,12 @@ impl<'a> DatagramRepr<'a> {
     }
 
     /// Parses a datagram, checking its length.
-    pub fn parse<T: AsRef<[u8]> + ?Sized>(dg: &'a Datagram<&'a T>) -> Result<Self, WireError> {
+    ///
+    /// The returned `data` borrows from the datagram's underlying buffer.
+    pub fn parse<T: AsRef<[u8]> + ?Sized>(dg: &Datagram<&'a T>) -> Result<Self, WireError> {
         dg.check_len()?;
-        let data = super::slice(dg.buffer.as_ref(), dg.data_range());
+        let buf: &'a T = dg.buffer;
+        let data = super::slice(buf.as_ref(), dg.data_range());
         Ok(Self {
             command: dg.command(),
             index: dg.index(),
@@ -698,7 +718,7 @@ impl<'a> DatagramRepr<'a> {
 
     /// Wire length: header + data + WKC.
     pub const fn buffer_len(&self) -> usize {
-        Datagram::total_len_for(self.data.len())
+        datagram_len(self.data.len())
     }
 
     /// Writes the datagram.
@@ -870,9 +890,9 @@ mod tests {
     /// (2 bytes, last), with 4 bytes of Ethernet padding after them.
     static TWO_DATAGRAMS_BYTES: [u8; 34] = [
         0x1c, 0x10, // header: length 28, type 1
-        0x04, 0x01, 0x01, 0x10, 0x30, 0x01, 0x02, 0x80, 0x00, 0x00, 0x08, 0x00, 0x01, 0x00,
-        0x02, 0x02, 0xff, 0xff, 0x20, 0x01, 0x02, 0x00, 0x00, 0x00, 0x02, 0x00, 0x00, 0x00,
-        0x00, 0x00, 0x00, 0x00, // padding
+        0x04, 0x01, 0x01, 0x10, 0x30, 0x01, 0x02, 0x80, 0x00, 0x00, 0x08, 0x00, 0x01, 0x00, 0x02,
+        0x02, 0xff, 0xff, 0x20, 0x01, 0x02, 0x00, 0x00, 0x00, 0x02, 0x00, 0x00, 0x00, 0x00, 0x00,
+        0x00, 0x00, // padding
     ];
 
     #[test]
@@ -962,7 +982,8 @@ mod tests {
         );
         assert_eq!(repr.buffer_len(), LRW_BYTES.len());
         let mut out = [0u8; 16];
-        repr.emit(&mut Datagram::new_unchecked(&mut out[..])).unwrap();
+        repr.emit(&mut Datagram::new_unchecked(&mut out[..]))
+            .unwrap();
         assert_eq!(out, LRW_BYTES);
     }
 
@@ -1007,13 +1028,14 @@ mod tests {
             circulating: false,
             more_follows: true,
             irq: 0,
-            data: &[0, 0],
-            wkc: 0,
+            data: &[0x08, 0x00],
+            wkc: 1,
         };
         assert_eq!(repr.adp(), 0x1001);
         assert_eq!(repr.ado(), 0x0130);
         let mut out = [0u8; 14];
-        repr.emit(&mut Datagram::new_unchecked(&mut out[..])).unwrap();
+        repr.emit(&mut Datagram::new_unchecked(&mut out[..]))
+            .unwrap();
         assert_eq!(&out[..], &TWO_DATAGRAMS_BYTES[2..16]);
     }
 
@@ -1254,6 +1276,15 @@ mod tests {
     }
 
     #[test]
+    fn length_helpers_agree() {
+        assert_eq!(Datagram::<()>::HEADER_LEN, 10);
+        assert_eq!(Datagram::<()>::WKC_LEN, 2);
+        assert_eq!(Datagram::<()>::MIN_LEN, 12);
+        assert_eq!(Datagram::<()>::total_len_for(4), LRW_BYTES.len());
+        assert_eq!(datagram_len(1), 13);
+    }
+
+    #[test]
     fn unchecked_empty_datagram_accessors_do_not_panic() {
         let mut bytes = [0u8; 3];
         let mut dg = Datagram::new_unchecked(&mut bytes[..]);
@@ -1263,6 +1294,6 @@ mod tests {
         dg.set_wkc(1);
         dg.add_wkc(1);
         assert!(dg.data_mut().is_empty());
-        assert_eq!(dg.total_len(), Datagram::MIN_LEN);
+        assert_eq!(dg.total_len(), DATAGRAM_MIN_LEN);
     }
 }

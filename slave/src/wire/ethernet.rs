@@ -187,10 +187,18 @@ impl EthernetRepr {
     }
 
     /// Writes the header into a frame; the payload is left untouched.
-    pub fn emit<T: AsRef<[u8]> + AsMut<[u8]>>(&self, frame: &mut EthernetFrame<T>) {
+    ///
+    /// Fails with [`WireError::BufferTooSmall`] if the frame is shorter than
+    /// [`HEADER_LEN`].
+    pub fn emit<T: AsRef<[u8]> + AsMut<[u8]>>(
+        &self,
+        frame: &mut EthernetFrame<T>,
+    ) -> Result<(), WireError> {
+        frame.check_len().map_err(|_| WireError::BufferTooSmall)?;
         frame.set_dst_addr(self.dst_addr);
         frame.set_src_addr(self.src_addr);
         frame.set_ethertype(self.ethertype);
+        Ok(())
     }
 }
 
@@ -255,8 +263,14 @@ mod tests {
         let mut bytes = FRAME_BYTES;
         bytes[..14].fill(0);
         let mut out = EthernetFrame::new_unchecked(&mut bytes[..]);
-        repr.emit(&mut out);
+        repr.emit(&mut out).unwrap();
         assert_eq!(bytes, FRAME_BYTES);
+
+        let mut short = [0u8; 13];
+        assert_eq!(
+            repr.emit(&mut EthernetFrame::new_unchecked(&mut short[..])),
+            Err(WireError::BufferTooSmall)
+        );
     }
 
     #[test]

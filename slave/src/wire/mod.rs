@@ -25,10 +25,16 @@
 //! All multi-byte fields are little-endian, except the Ethernet ethertype,
 //! which is big-endian as in every Ethernet II frame.
 //!
+//! Modules: [`ethernet`] (Ethernet II framing), [`ecat`] (EtherCAT header,
+//! datagrams, datagram iteration), [`mailbox`] (mailbox header, mailbox error
+//! reply), [`coe`] (CoE header, SDO, SDO abort codes, SDO information header,
+//! emergency) and [`builder`] (building request frames for tests and tools).
+//!
 //! References: ETG.1000.4 (data link layer: EtherCAT frame header, datagrams,
 //! mailbox header) and ETG.1000.6 (application layer: mailbox, CoE, SDO, SDO
 //! information, emergency).
 
+pub mod builder;
 pub mod coe;
 pub mod ecat;
 pub mod ethernet;
@@ -87,10 +93,8 @@ fn get_array<const N: usize>(buf: &[u8], field: Field) -> [u8; N] {
 
 /// Writes a fixed-size array; out-of-range writes are dropped.
 fn set_array<const N: usize>(buf: &mut [u8], field: Field, value: [u8; N]) {
-    if let Some(b) = buf.get_mut(field) {
-        if b.len() == N {
-            b.copy_from_slice(&value);
-        }
+    if let Some(b) = buf.get_mut(field).filter(|b| b.len() == N) {
+        b.copy_from_slice(&value);
     }
 }
 
@@ -114,6 +118,14 @@ fn set_u32_le(buf: &mut [u8], field: Field, value: u32) {
     set_array(buf, field, value.to_le_bytes());
 }
 
+/// Copies `data` into `buf` at `start`; dropped if it does not fit.
+fn set_bytes(buf: &mut [u8], start: usize, data: &[u8]) {
+    let end = start.saturating_add(data.len());
+    if let Some(dst) = buf.get_mut(start..end) {
+        dst.copy_from_slice(data);
+    }
+}
+
 /// Sub-slice `range` of `buf`, or an empty slice if out of range.
 fn slice(buf: &[u8], range: Field) -> &[u8] {
     buf.get(range).unwrap_or(&[])
@@ -135,6 +147,12 @@ fn tail_mut(buf: &mut [u8], rest: Rest) -> &mut [u8] {
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
 mod tests {
     use super::*;
 
