@@ -69,6 +69,16 @@ impl VirtualBus {
 
     /// `n` slaves whose firmware sees `clock`.
     pub fn with_clock(n: usize, clock: Clock) -> Result<Self, BusError> {
+        Self::with_options(n, clock, None)
+    }
+
+    /// `n` slaves on `clock`, capturing every frame to the pcap file `pcap`.
+    pub fn with_options(
+        n: usize,
+        clock: Clock,
+        pcap: Option<&std::path::Path>,
+    ) -> Result<Self, BusError> {
+        let pcap = pcap.map(pam_slave::host::pcap::PcapWriter::create).transpose()?;
         // Each bus owns its storage for the life of the process; tests
         // create a handful, so leaking is the simple, safe choice.
         let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
@@ -83,7 +93,7 @@ impl VirtualBus {
             },
         ));
         let chain = Arc::new(Mutex::new(Chain::new(n)));
-        let link = Link::spawn(tx, rx, chain.clone(), clock.clone())?;
+        let link = Link::spawn(tx, rx, chain.clone(), clock.clone(), pcap)?;
         Ok(VirtualBus {
             maindevice,
             chain,

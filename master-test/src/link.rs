@@ -7,7 +7,8 @@
 //! every millisecond, with time from a [`Clock`] the test controls.
 
 use ethercrab::{PduRx, PduTx};
-use pam_slave::device::SoftSlave;
+pub use pam_slave::host::chain::Chain;
+use pam_slave::host::pcap::PcapWriter;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::task::{Wake, Waker};
@@ -51,57 +52,6 @@ impl Clock {
     }
 }
 
-/// A line of software slaves, first to last.
-pub struct Chain {
-    slaves: Vec<SoftSlave>,
-    frames: u64,
-}
-
-impl Chain {
-    /// `n` PAM-199 slaves in their power-on state.
-    pub fn new(n: usize) -> Self {
-        let mut slaves: Vec<SoftSlave> = (0..n).map(|_| SoftSlave::new()).collect();
-        let last = slaves.len().saturating_sub(1);
-        for (i, s) in slaves.iter_mut().enumerate() {
-            s.set_port1_link(i != last);
-        }
-        Chain { slaves, frames: 0 }
-    }
-
-    /// Passes one Ethernet frame through every slave in order (as the
-    /// frame travels down the line and back), then lets each slave's
-    /// firmware run.
-    pub fn process(&mut self, frame: &mut [u8], now_ns: u64) {
-        for s in &mut self.slaves {
-            s.process_frame(frame);
-        }
-        self.frames += 1;
-        self.poll(now_ns);
-    }
-
-    /// Runs every slave's firmware once.
-    pub fn poll(&mut self, now_ns: u64) {
-        for s in &mut self.slaves {
-            s.poll(now_ns);
-        }
-    }
-
-    /// The slaves.
-    pub fn slaves(&self) -> &[SoftSlave] {
-        &self.slaves
-    }
-
-    /// The slaves, mutably (to set inputs, inject faults).
-    pub fn slaves_mut(&mut self) -> &mut [SoftSlave] {
-        &mut self.slaves
-    }
-
-    /// Number of frames processed so far.
-    pub fn frames(&self) -> u64 {
-        self.frames
-    }
-}
-
 /// A chain shared between the link thread and the test.
 pub type SharedChain = Arc<Mutex<Chain>>;
 
@@ -128,12 +78,14 @@ pub struct Link {
 }
 
 impl Link {
-    /// Starts the link thread between ethercrab's `tx`/`rx` and `chain`.
+    /// Starts the link thread between ethercrab's `tx`/`rx` and `chain`;
+    /// with `pcap`, every frame is captured in both directions.
     pub fn spawn(
         mut tx: PduTx<'static>,
         mut rx: PduRx<'static>,
         chain: SharedChain,
         clock: Clock,
+        mut pcap: Option<PcapWriter<std::io::BufWriter<std::fs::File>>>,
     ) -> std::io::Result<Self> {
         let stop = Arc::new(AtomicBool::new(false));
         let stop2 = stop.clone();
@@ -154,7 +106,13 @@ impl Link {
                         if res.is_err() {
                             continue;
                         }
+                        if let Some(p) = pcap.as_mut() {
+                            let _ = p.write_frame(&buf);
+                        }
                         lock(&chain).process(&mut buf, clock.now_ns());
+                        if let Some(p) = pcap.as_mut() {
+                            let _ = p.write_frame(&buf);
+                        }
                         // A frame ethercrab no longer waits for is dropped,
                         // as on a real wire.
                         let _ = rx.receive_frame(&buf);
@@ -164,6 +122,9 @@ impl Link {
                         lock(&chain).poll(clock.now_ns());
                         thread::park_timeout(Duration::from_millis(1));
                     }
+                }
+                if let Some(p) = pcap.as_mut() {
+                    let _ = p.flush();
                 }
             })?;
         Ok(Link {

@@ -6,6 +6,8 @@
 //! per frame; divide by the slave count for ns per slave per frame (the
 //! benchmark names carry the count).
 
+#![allow(missing_docs)] // criterion_group! generates an undocumented function.
+
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use pam_slave::device::sii_image;
 use pam_slave::esc::soft::SoftEsc;

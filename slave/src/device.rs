@@ -446,30 +446,43 @@ impl<E: Esc> Slave<E> {
         }
     }
 
-    fn serve_mailbox(&mut self) -> Result<(), EscError> {
-        let (out, inp) = if self.al.state == AlState::Boot {
+    fn mailbox_layout(&self) -> ((u16, u16), (u16, u16)) {
+        if self.al.state == AlState::Boot {
             (LAYOUT.boot_out, LAYOUT.boot_in)
         } else {
             (LAYOUT.mbx_out, LAYOUT.mbx_in)
-        };
-        // Deliver a waiting response first.
-        if let Some((len, buf)) = &self.pending {
-            if self.sm_full(1)? {
-                return Ok(());
-            }
-            let mut frame = [0u8; MAX_MAILBOX];
+        }
+    }
+
+    /// Writes the waiting response into SM1 if SM1 is free. The whole
+    /// buffer is written so that the ESC sees its last byte and marks the
+    /// mailbox full.
+    fn deliver_pending(&mut self) -> Result<(), EscError> {
+        if self.pending.is_none() || self.sm_full(1)? {
+            return Ok(());
+        }
+        let (_, inp) = self.mailbox_layout();
+        if let Some((len, buf)) = self.pending.take() {
             let n = usize::from(inp.1).min(MAX_MAILBOX);
-            if let (Some(dst), Some(src)) = (frame.get_mut(..*len), buf.get(..*len)) {
+            let mut frame = [0u8; MAX_MAILBOX];
+            if let (Some(dst), Some(src)) = (frame.get_mut(..len), buf.get(..len)) {
                 dst.copy_from_slice(src);
             }
             if let Some(f) = frame.get(..n) {
                 self.esc.write(inp.0, f)?;
             }
-            self.pending = None;
         }
-        if !self.sm_full(0)? {
+        Ok(())
+    }
+
+    fn serve_mailbox(&mut self) -> Result<(), EscError> {
+        self.deliver_pending()?;
+        // One request at a time: a new request waits in SM0 until the
+        // previous response has left.
+        if self.pending.is_some() || !self.sm_full(0)? {
             return Ok(());
         }
+        let (out, inp) = self.mailbox_layout();
         let mut request = [0u8; MAX_MAILBOX];
         let n = usize::from(out.1).min(MAX_MAILBOX);
         let Some(req) = request.get_mut(..n) else {
@@ -480,25 +493,14 @@ impl<E: Esc> Slave<E> {
         let max = usize::from(inp.1).min(MAX_MAILBOX);
         let state = self.al.state;
         let mut mailbox = core::mem::take(&mut self.mailbox);
-        let produced = {
-            let resp = response.get_mut(..max).unwrap_or(&mut []);
-            mailbox.handle(req, resp, &mut OdAccess { slave: self, state })
+        let produced = match response.get_mut(..max) {
+            Some(resp) => mailbox.handle(req, resp, &mut OdAccess { slave: self, state }),
+            None => None,
         };
         self.mailbox = mailbox;
         if let Some(len) = produced {
             self.pending = Some((len, response));
-            // Try to deliver right away.
-            if !self.sm_full(1)? {
-                if let Some((len, buf)) = self.pending.take() {
-                    let mut frame = [0u8; MAX_MAILBOX];
-                    if let (Some(dst), Some(src)) = (frame.get_mut(..len), buf.get(..len)) {
-                        dst.copy_from_slice(src);
-                    }
-                    if let Some(f) = frame.get(..max) {
-                        self.esc.write(inp.0, f)?;
-                    }
-                }
-            }
+            self.deliver_pending()?;
         }
         Ok(())
     }

@@ -22,9 +22,12 @@
 )]
 
 pub mod al;
+pub mod app;
 pub mod coe;
 pub mod device;
 pub mod esc;
+#[cfg(feature = "std")]
+pub mod host;
 pub mod mailbox;
 pub mod od;
 pub mod pdo;

@@ -6,3 +6,4 @@ mod bring_up;
 mod common;
 mod sdo;
 mod sii;
+mod veth;

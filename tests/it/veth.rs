@@ -1,0 +1,150 @@
+//! The raw-socket runner on a veth pair: ethercrab's standard raw-socket
+//! `tx_rx_task` brings a slave served by `pam-slave` to OP.
+//!
+//! Needs root and `ip` (iproute2); skipped with a message otherwise. The
+//! namespace (and with it the veth pair) is removed even when the test
+//! fails.
+
+use ethercrab::{MainDevice, MainDeviceConfig, PduStorage, RetryBehaviour};
+use master_test::{MAX_FRAMES, MAX_PDU_DATA, MAX_SUBDEVICES, PDI_LEN};
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+struct Netns {
+    name: String,
+    runner: Option<Child>,
+}
+
+impl Drop for Netns {
+    fn drop(&mut self) {
+        if let Some(mut c) = self.runner.take() {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+        let _ = Command::new("ip").args(["netns", "del", &self.name]).status();
+    }
+}
+
+fn ip(args: &[&str]) -> Result<(), String> {
+    let out = Command::new("ip")
+        .args(args)
+        .output()
+        .map_err(|e| format!("ip: {e}"))?;
+    if out.status.success() {
+        Ok(())
+    } else {
+        Err(format!(
+            "ip {}: {}",
+            args.join(" "),
+            String::from_utf8_lossy(&out.stderr).trim()
+        ))
+    }
+}
+
+/// The `pam-slave` binary next to this test binary, built on demand
+/// (`cargo test` builds other packages' binaries only as test harnesses).
+fn runner_binary() -> Option<PathBuf> {
+    let exe = std::env::current_exe().ok()?;
+    let dir = exe.parent()?.parent()?;
+    let bin = dir.join("pam-slave");
+    if !bin.exists() {
+        let profile_release = dir.file_name().is_some_and(|n| n == "release");
+        let mut cmd = Command::new(env!("CARGO"));
+        cmd.args(["build", "-p", "pam-slave", "--bin", "pam-slave"]);
+        if profile_release {
+            cmd.arg("--release");
+        }
+        let _ = cmd.status();
+    }
+    bin.exists().then_some(bin)
+}
+
+/// Creates namespace + veth, or explains why the test cannot run here.
+fn setup(tag: &str) -> Result<(Netns, String, String), String> {
+    let pid = std::process::id();
+    let ns = format!("pam{tag}{pid}");
+    let host_if = format!("pm{pid}m");
+    let slave_if = format!("pm{pid}s");
+    ip(&["netns", "add", &ns])?;
+    let guard = Netns {
+        name: ns.clone(),
+        runner: None,
+    };
+    ip(&[
+        "link", "add", &host_if, "type", "veth", "peer", "name", &slave_if, "netns", &ns,
+    ])?;
+    ip(&["link", "set", &host_if, "up"])?;
+    ip(&["-n", &ns, "link", "set", &slave_if, "up"])?;
+    ip(&["-n", &ns, "link", "set", "lo", "up"])?;
+    Ok((guard, host_if, slave_if))
+}
+
+#[test]
+fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
+    let Some(bin) = runner_binary() else {
+        eprintln!("SKIPPED: pam-slave binary not built next to the test binary");
+        return;
+    };
+    let (mut guard, host_if, slave_if) = match setup("v") {
+        Ok(x) => x,
+        Err(e) => {
+            eprintln!("SKIPPED: cannot create a network namespace and veth pair here ({e}); needs root and iproute2");
+            return;
+        }
+    };
+    let child = Command::new("ip")
+        .args(["netns", "exec", &guard.name])
+        .arg(&bin)
+        .args(["--iface", &slave_if, "--count", "2"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .expect("start pam-slave in the namespace");
+    guard.runner = Some(child);
+    // Give the runner time to open its socket.
+    std::thread::sleep(Duration::from_millis(300));
+
+    let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
+        Box::leak(Box::new(PduStorage::new()));
+    let (tx, rx, pdu_loop) = storage.try_split().expect("split");
+    let md: &'static MainDevice<'static> = Box::leak(Box::new(MainDevice::new(
+        pdu_loop,
+        master_test::timeouts(),
+        MainDeviceConfig {
+            dc_static_sync_iterations: 0,
+            retry_behaviour: RetryBehaviour::None,
+        },
+    )));
+    let task = ethercrab::std::tx_rx_task(&host_if, tx, rx).expect("raw socket on the host end");
+    std::thread::spawn(move || {
+        let _ = smol::block_on(task);
+    });
+    smol::block_on(async {
+        let group = md
+            .init_single_group::<MAX_SUBDEVICES, PDI_LEN>(ethercrab::std::ethercat_now)
+            .await
+            .expect("ethercrab finds the slaves over the veth pair");
+        assert_eq!(group.len(), 2);
+        let sd = group.subdevice(md, 1).expect("second slave");
+        assert_eq!(sd.name(), "PAM-199-P-ETC");
+        sd.sdo_write(0x800D, 2, 2500u16).await.expect("SDO write over raw Ethernet");
+        let v: u16 = sd.sdo_read(0x800D, 2).await.expect("SDO read");
+        assert_eq!(v, 2500);
+        let group = group.into_op(md).await.expect("OP over raw Ethernet");
+        for sd in group.iter(md) {
+            let mut out = sd.outputs_raw_mut();
+            out[0] = 1;
+            out[1..5].copy_from_slice(&7000i32.to_le_bytes());
+        }
+        let resp = group.tx_rx(md).await.expect("process data");
+        assert_eq!(resp.working_counter, 6);
+        let v: i32 = group
+            .subdevice(md, 0)
+            .expect("slave 0")
+            .sdo_read(0x7000, 3)
+            .await
+            .expect("command value arrived");
+        assert_eq!(v, 7000);
+    });
+}
