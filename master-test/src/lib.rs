@@ -22,7 +22,7 @@ pub const MAX_PDU_DATA: usize = PduStorage::element_size(1100);
 pub const PDI_LEN: usize = 2048;
 
 /// The group type used throughout the tests.
-pub type Group<S> = ethercrab::SubDeviceGroup<MAX_SUBDEVICES, PDI_LEN, S>;
+pub type Group<S> = ethercrab::SubDeviceGroup<MAX_SUBDEVICES, PDI_LEN, ethercrab::DefaultLock, S>;
 
 /// Errors of setting up a virtual bus.
 #[derive(Debug, thiserror::Error)]
@@ -78,7 +78,9 @@ impl VirtualBus {
         clock: Clock,
         pcap: Option<&std::path::Path>,
     ) -> Result<Self, BusError> {
-        let pcap = pcap.map(pam_slave::host::pcap::PcapWriter::create).transpose()?;
+        let pcap = pcap
+            .map(pam_slave::host::pcap::PcapWriter::create)
+            .transpose()?;
         // Each bus owns its storage for the life of the process; tests
         // create a handful, so leaking is the simple, safe choice.
         let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =

@@ -8,7 +8,9 @@
 //! the slave uses; the SDO state machine on each side is separate code.
 
 use ethercrab::{Command, MainDevice};
-use pam_slave::wire::coe::{CoeHeader, CoeService, DownloadKind, SdoAbortCode, SdoRequest, SdoResponse};
+use pam_slave::wire::coe::{
+    CoeHeader, CoeService, DownloadKind, SdoAbortCode, SdoRequest, SdoResponse,
+};
 use pam_slave::wire::mailbox::{
     HEADER_LEN, Mailbox, MailboxError as WireMailboxError, MailboxErrorCode, MailboxRepr,
     MailboxType, next_counter,
@@ -28,7 +30,7 @@ pub enum ClientError {
     #[error("the slave's receive mailbox stays full")]
     MailboxFull,
     /// The slave answered with a mailbox error reply.
-    #[error("mailbox error {0:?}: {}", .0.description())]
+    #[error("mailbox error reply: {0}")]
     Mailbox(MailboxErrorCode),
     /// The slave aborted an SDO transfer.
     #[error("SDO {index:#06x}:{sub:02x} aborted with {code}")]
@@ -121,7 +123,12 @@ impl<'a> MailboxClient<'a> {
     }
 
     /// Sends a message with an explicit counter (to test repeats).
-    pub async fn send_raw(&mut self, kind: MailboxType, counter: u8, payload: &[u8]) -> Result<(), ClientError> {
+    pub async fn send_raw(
+        &mut self,
+        kind: MailboxType,
+        counter: u8,
+        payload: &[u8],
+    ) -> Result<(), ClientError> {
         let size = usize::from(self.geometry.out.1);
         if payload.len() + HEADER_LEN > size {
             return Err(ClientError::TooLong(payload.len()));
@@ -145,12 +152,15 @@ impl<'a> MailboxClient<'a> {
     pub async fn write_buffer(&mut self, buf: &[u8]) -> Result<(), ClientError> {
         let start = Instant::now();
         loop {
-            let res = Command::fpwr(self.station, self.geometry.out.0)
-                .ignore_wkc()
-                .send_receive_slice(self.md, buf)
-                .await?;
-            if res.working_counter == 1 {
-                return Ok(());
+            match Command::fpwr(self.station, self.geometry.out.0)
+                .with_wkc(1)
+                .send(self.md, buf)
+                .await
+            {
+                Ok(()) => return Ok(()),
+                // A full mailbox refuses the write: working counter 0.
+                Err(ethercrab::error::Error::WorkingCounter { .. }) => {}
+                Err(e) => return Err(e.into()),
             }
             if start.elapsed() > self.timeout {
                 return Err(ClientError::MailboxFull);
@@ -164,7 +174,9 @@ impl<'a> MailboxClient<'a> {
         let start = Instant::now();
         let status_reg = 0x0808 + 5;
         loop {
-            let status: u8 = Command::fprd(self.station, status_reg).receive(self.md).await?;
+            let status: u8 = Command::fprd(self.station, status_reg)
+                .receive(self.md)
+                .await?;
             if status & 0x08 != 0 {
                 break;
             }
@@ -176,7 +188,8 @@ impl<'a> MailboxClient<'a> {
         let data = Command::fprd(self.station, self.geometry.inp.0)
             .receive_slice(self.md, self.geometry.inp.1)
             .await?;
-        let mbx = Mailbox::new_checked(&data[..]).map_err(|e| ClientError::Protocol(e.to_string()))?;
+        let mbx =
+            Mailbox::new_checked(&data[..]).map_err(|e| ClientError::Protocol(e.to_string()))?;
         Ok(Message {
             kind: mbx.mailbox_type(),
             counter: mbx.counter(),
@@ -189,12 +202,18 @@ impl<'a> MailboxClient<'a> {
     pub async fn repeat(&mut self) -> Result<Message, ClientError> {
         let activate_reg = 0x0808 + 6;
         let pdi_reg = 0x0808 + 7;
-        let act: u8 = Command::fprd(self.station, activate_reg).receive(self.md).await?;
+        let act: u8 = Command::fprd(self.station, activate_reg)
+            .receive(self.md)
+            .await?;
         let want = (act & 0x02) ^ 0x02;
-        Command::fpwr(self.station, activate_reg).send(self.md, act ^ 0x02).await?;
+        Command::fpwr(self.station, activate_reg)
+            .send(self.md, act ^ 0x02)
+            .await?;
         let start = Instant::now();
         loop {
-            let pdi: u8 = Command::fprd(self.station, pdi_reg).receive(self.md).await?;
+            let pdi: u8 = Command::fprd(self.station, pdi_reg)
+                .receive(self.md)
+                .await?;
             if pdi & 0x02 == want {
                 break;
             }
@@ -252,7 +271,12 @@ impl<'a> MailboxClient<'a> {
     /// Uploads `index:sub` (whole object with `complete_access`), using
     /// whatever transfer type the slave chooses (expedited, normal,
     /// segmented).
-    pub async fn sdo_upload(&mut self, index: u16, sub: u8, complete_access: bool) -> Result<Vec<u8>, ClientError> {
+    pub async fn sdo_upload(
+        &mut self,
+        index: u16,
+        sub: u8,
+        complete_access: bool,
+    ) -> Result<Vec<u8>, ClientError> {
         let raw = self
             .sdo_exchange(&SdoRequest::InitiateUpload {
                 index,
@@ -263,16 +287,23 @@ impl<'a> MailboxClient<'a> {
         let resp = SdoResponse::parse(&raw).map_err(|e| ClientError::Protocol(e.to_string()))?;
         Self::check_abort(&resp)?;
         let (total, mut data) = match resp {
-            SdoResponse::UploadExpedited { data, len, .. } => return Ok(data[..usize::from(len)].to_vec()),
+            SdoResponse::UploadExpedited { data, len, .. } => {
+                return Ok(data[..usize::from(len)].to_vec());
+            }
             SdoResponse::UploadNormal {
-                complete_size, data, ..
+                complete_size,
+                data,
+                ..
             } => (complete_size as usize, data.to_vec()),
             other => return Err(ClientError::Protocol(format!("{other:?}"))),
         };
         let mut toggle = false;
         while data.len() < total {
-            let raw = self.sdo_exchange(&SdoRequest::UploadSegment { toggle }).await?;
-            let resp = SdoResponse::parse(&raw).map_err(|e| ClientError::Protocol(e.to_string()))?;
+            let raw = self
+                .sdo_exchange(&SdoRequest::UploadSegment { toggle })
+                .await?;
+            let resp =
+                SdoResponse::parse(&raw).map_err(|e| ClientError::Protocol(e.to_string()))?;
             Self::check_abort(&resp)?;
             let SdoResponse::UploadSegment {
                 toggle: t,
@@ -322,7 +353,11 @@ impl<'a> MailboxClient<'a> {
         let first = if force_normal || data.len() > 4 {
             // Put at most one byte in the initiate request when forcing the
             // segmented path, so short data is segmented too.
-            let n = if force_normal && data.len() <= 4 { 0 } else { data.len().min(room) };
+            let n = if force_normal && data.len() <= 4 {
+                0
+            } else {
+                data.len().min(room)
+            };
             DownloadKind::Normal {
                 complete_size: data.len() as u32,
                 data: &data[..n],
@@ -354,7 +389,8 @@ impl<'a> MailboxClient<'a> {
         while sent < data.len() {
             let n = (data.len() - sent).min(seg_room);
             let last = sent + n == data.len();
-            self.download_segment(toggle, last, &data[sent..sent + n]).await?;
+            self.download_segment(toggle, last, &data[sent..sent + n])
+                .await?;
             sent += n;
             toggle = !toggle;
         }
@@ -363,7 +399,12 @@ impl<'a> MailboxClient<'a> {
 
     /// Sends one download segment and checks the acknowledge (exposed so
     /// tests can interrupt a transfer midway or send a wrong toggle).
-    pub async fn download_segment(&mut self, toggle: bool, last: bool, data: &[u8]) -> Result<(), ClientError> {
+    pub async fn download_segment(
+        &mut self,
+        toggle: bool,
+        last: bool,
+        data: &[u8],
+    ) -> Result<(), ClientError> {
         let raw = self
             .sdo_exchange(&SdoRequest::DownloadSegment { toggle, last, data })
             .await?;
@@ -377,7 +418,13 @@ impl<'a> MailboxClient<'a> {
 
     /// Starts a segmented download announcing `total` bytes and sending
     /// `first` with the initiate request (for interruption tests).
-    pub async fn begin_download(&mut self, index: u16, sub: u8, total: u32, first: &[u8]) -> Result<(), ClientError> {
+    pub async fn begin_download(
+        &mut self,
+        index: u16,
+        sub: u8,
+        total: u32,
+        first: &[u8],
+    ) -> Result<(), ClientError> {
         let raw = self
             .sdo_exchange(&SdoRequest::InitiateDownload {
                 index,

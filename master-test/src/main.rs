@@ -98,8 +98,14 @@ async fn demo(
             sd.configured_address()
         );
         match sd.sdo_write(0x800D, 2, 5000u16).await {
-            Err(e) => println!("{:#06x}: CURRENT = 5000 mA refused: {e}", sd.configured_address()),
-            Ok(()) => println!("{:#06x}: CURRENT = 5000 mA was accepted (unexpected)", sd.configured_address()),
+            Err(e) => println!(
+                "{:#06x}: CURRENT = 5000 mA refused: {e}",
+                sd.configured_address()
+            ),
+            Ok(()) => println!(
+                "{:#06x}: CURRENT = 5000 mA was accepted (unexpected)",
+                sd.configured_address()
+            ),
         }
     }
     let group = group.into_op(md).await?;
@@ -117,7 +123,11 @@ async fn demo(
             println!("cycle {cycle:>3}: working counter {}", resp.working_counter);
             for sd in group.iter(md) {
                 let inp = sd.inputs_raw();
-                println!("  {:#06x} inputs {}", sd.configured_address(), describe_inputs(&inp));
+                println!(
+                    "  {:#06x} inputs {}",
+                    sd.configured_address(),
+                    describe_inputs(&inp)
+                );
             }
         }
         smol::Timer::after(Duration::from_millis(1)).await;

@@ -32,11 +32,14 @@ fn configure(line: &mut [SoftEsc]) {
         let mut b = FrameBuilder::new(&mut buf, [0x10; 6]).expect("buffer");
         let station = 0x1000 + i;
         let adp = 0u16.wrapping_sub(i) as u32;
-        b.push(Command::Apwr, adp | (0x0010 << 16), &station.to_le_bytes()).expect("fits");
+        b.push(Command::Apwr, adp | (0x0010 << 16), &station.to_le_bytes())
+            .expect("fits");
         let sm2 = [0x00, 0x11, OUT as u8, 0, 0x64, 0, 1, 0];
         let sm3 = [0x80, 0x11, IN as u8, 0, 0x20, 0, 1, 0];
-        b.push(Command::Apwr, adp | (0x0810 << 16), &sm2).expect("fits");
-        b.push(Command::Apwr, adp | (0x0818 << 16), &sm3).expect("fits");
+        b.push(Command::Apwr, adp | (0x0810 << 16), &sm2)
+            .expect("fits");
+        b.push(Command::Apwr, adp | (0x0818 << 16), &sm3)
+            .expect("fits");
         let log_out = u32::from(i) * u32::from(OUT);
         let log_in = 0x8000 + u32::from(i) * u32::from(IN);
         let mut f0 = [0u8; 16];
@@ -51,8 +54,10 @@ fn configure(line: &mut [SoftEsc]) {
         f1[4..6].copy_from_slice(&IN.to_le_bytes());
         f1[8..10].copy_from_slice(&0x1180u16.to_le_bytes());
         f1[11] = 1;
-        b.push(Command::Apwr, adp | (0x0600 << 16), &f0).expect("fits");
-        b.push(Command::Apwr, adp | (0x0610 << 16), &f1).expect("fits");
+        b.push(Command::Apwr, adp | (0x0600 << 16), &f0)
+            .expect("fits");
+        b.push(Command::Apwr, adp | (0x0610 << 16), &f1)
+            .expect("fits");
         let len = b.finish();
         pass(line, &mut buf[..len]);
     }
@@ -63,10 +68,13 @@ fn cyclic_frame(n: usize) -> Vec<u8> {
     let mut buf = vec![0u8; 16 + 12 + n * 19 * 2 + n * 14 + 64];
     let mut b = FrameBuilder::new(&mut buf, [0x10; 6]).expect("buffer");
     // Outputs at 0.., inputs at 0x8000..: two LRWs keep each contiguous.
-    b.push(Command::Lrw, 0, &vec![0x5A; n * OUT as usize]).expect("fits");
-    b.push(Command::Lrw, 0x8000, &vec![0; n * IN as usize]).expect("fits");
+    b.push(Command::Lrw, 0, &vec![0x5A; n * OUT as usize])
+        .expect("fits");
+    b.push(Command::Lrw, 0x8000, &vec![0; n * IN as usize])
+        .expect("fits");
     for i in 0..n as u32 {
-        b.push(Command::Fprd, (0x1000 + i) | (0x0130 << 16), &[0, 0]).expect("fits");
+        b.push(Command::Fprd, (0x1000 + i) | (0x0130 << 16), &[0, 0])
+            .expect("fits");
     }
     let len = b.finish();
     buf.truncate(len);

@@ -312,19 +312,28 @@ mod tests {
     #[test]
     fn unknown_requested_state_answers_0012() {
         let s = transition(at(AlState::PreOp), 0x05, &mut { OK });
-        assert_eq!((s.state, s.error, s.code.code()), (AlState::PreOp, true, 0x12));
+        assert_eq!(
+            (s.state, s.error, s.code.code()),
+            (AlState::PreOp, true, 0x12)
+        );
     }
 
     #[test]
     fn unknown_state_in_op_drops_to_safeop() {
         let s = transition(at(AlState::Op), 0x06, &mut { OK });
-        assert_eq!((s.state, s.error, s.code.code()), (AlState::SafeOp, true, 0x12));
+        assert_eq!(
+            (s.state, s.error, s.code.code()),
+            (AlState::SafeOp, true, 0x12)
+        );
     }
 
     #[test]
     fn skipping_states_upwards_answers_0011() {
         let s = transition(AlStatus::INIT, 0x08, &mut { OK });
-        assert_eq!((s.state, s.error, s.code.code()), (AlState::Init, true, 0x11));
+        assert_eq!(
+            (s.state, s.error, s.code.code()),
+            (AlState::Init, true, 0x11)
+        );
         let s = transition(at(AlState::PreOp), 0x03, &mut { OK });
         assert_eq!(s.code, AlStatusCode::InvalidStateChange);
     }
@@ -354,12 +363,21 @@ mod tests {
             pd: Err(AlStatusCode::InvalidOutputConfig),
         };
         let s = transition(at(AlState::PreOp), 0x04, &mut c);
-        assert_eq!((s.state, s.error, s.code.code()), (AlState::PreOp, true, 0x1D));
+        assert_eq!(
+            (s.state, s.error, s.code.code()),
+            (AlState::PreOp, true, 0x1D)
+        );
     }
 
     #[test]
     fn state_bits_round_trip_and_reject_unknown() {
-        for s in [AlState::Init, AlState::PreOp, AlState::Boot, AlState::SafeOp, AlState::Op] {
+        for s in [
+            AlState::Init,
+            AlState::PreOp,
+            AlState::Boot,
+            AlState::SafeOp,
+            AlState::Op,
+        ] {
             assert_eq!(AlState::from_bits(s.bits()), Some(s));
         }
         assert_eq!(AlState::from_bits(0), None);

@@ -7,8 +7,8 @@
 
 use crate::coe::{CoeServer, ObjectAccess};
 use crate::wire::mailbox::{
-    HEADER_LEN, Mailbox, MailboxError, MailboxErrorCode, MailboxErrorRepr, MailboxRepr, MailboxType,
-    next_counter,
+    HEADER_LEN, Mailbox, MailboxError, MailboxErrorCode, MailboxErrorRepr, MailboxRepr,
+    MailboxType, next_counter,
 };
 
 /// The mailbox server of one slave.
@@ -58,9 +58,7 @@ impl MailboxServer {
         let header_len = HEADER_LEN;
         match mbx.mailbox_type() {
             MailboxType::CoE => {
-                let Some(body) = out.get_mut(header_len..) else {
-                    return None;
-                };
+                let body = out.get_mut(header_len..)?;
                 match self.coe.handle(mbx.payload(), body, od) {
                     Ok(Some(n)) => self.frame(out, MailboxType::CoE, n),
                     Ok(None) => None,

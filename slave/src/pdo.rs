@@ -297,7 +297,8 @@ mod tests {
     #[test]
     fn mixed_mode_assignment_is_refused() {
         let mut s = ObjectStore::new();
-        s.download(0x1C13, 2, &0x1A03u16.to_le_bytes(), AlState::PreOp).unwrap();
+        s.download(0x1C13, 2, &0x1A03u16.to_le_bytes(), AlState::PreOp)
+            .unwrap();
         assert_eq!(
             ProcessImage::build(&s, Direction::Inputs),
             Err(PdoError::MixedModes(0x1A00, 0x1A03))

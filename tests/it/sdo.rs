@@ -14,19 +14,30 @@ fn sdo_reads_identity_and_writes_current_with_range_checks() {
         let product: u32 = sd.sdo_read(0x1018, 2).await.expect("0x1018:02");
         assert_eq!(product, 0x00C7_03F3);
 
-        sd.sdo_write(0x800D, 2, 2000u16).await.expect("CURRENT = 2000");
+        sd.sdo_write(0x800D, 2, 2000u16)
+            .await
+            .expect("CURRENT = 2000");
         let current: u16 = sd.sdo_read(0x800D, 2).await.expect("read CURRENT");
         assert_eq!(current, 2000);
 
-        let e = sd.sdo_write(0x800D, 2, 5000u16).await.expect_err("5000 mA is above 3000");
+        let e = sd
+            .sdo_write(0x800D, 2, 5000u16)
+            .await
+            .expect_err("5000 mA is above 3000");
         assert_eq!(abort_code(&e), Some(0x0609_0031));
         let current: u16 = sd.sdo_read(0x800D, 2).await.expect("read CURRENT");
         assert_eq!(current, 2000, "a refused write leaves the value");
 
-        let e = sd.sdo_write(0x1018, 1, 1u32).await.expect_err("identity is read-only");
+        let e = sd
+            .sdo_write(0x1018, 1, 1u32)
+            .await
+            .expect_err("identity is read-only");
         assert_eq!(abort_code(&e), Some(0x0601_0002));
 
-        let e = sd.sdo_read::<u32>(0x1234, 0).await.expect_err("no such object");
+        let e = sd
+            .sdo_read::<u32>(0x1234, 0)
+            .await
+            .expect_err("no such object");
         assert_eq!(abort_code(&e), Some(0x0602_0000));
     });
 }
@@ -39,17 +50,35 @@ fn sdo_length_and_access_errors_carry_their_abort_codes() {
         let group = bus.init().await.expect("init");
         let sd = group.subdevice(md, 0).expect("slave");
 
-        let e = sd.sdo_write(0x800D, 2, 1000u32).await.expect_err("4 bytes into a UINT");
+        let e = sd
+            .sdo_write(0x800D, 2, 1000u32)
+            .await
+            .expect_err("4 bytes into a UINT");
         assert_eq!(abort_code(&e), Some(0x0607_0012));
-        let e = sd.sdo_write(0x8002, 2, 100u16).await.expect_err("2 bytes into a UDINT");
+        let e = sd
+            .sdo_write(0x8002, 2, 100u16)
+            .await
+            .expect_err("2 bytes into a UDINT");
         assert_eq!(abort_code(&e), Some(0x0607_0013));
-        let e = sd.sdo_write(0x800D, 2, 100u16).await.expect_err("below 500 mA");
+        let e = sd
+            .sdo_write(0x800D, 2, 100u16)
+            .await
+            .expect_err("below 500 mA");
         assert_eq!(abort_code(&e), Some(0x0609_0032));
-        let e = sd.sdo_write(0xF800, 2, 9u8).await.expect_err("not a FUNCTION value");
+        let e = sd
+            .sdo_write(0xF800, 2, 9u8)
+            .await
+            .expect_err("not a FUNCTION value");
         assert_eq!(abort_code(&e), Some(0x0609_0030));
-        let e = sd.sdo_read::<u32>(0xF801, 1).await.expect_err("PASSWORD is write-only");
+        let e = sd
+            .sdo_read::<u32>(0xF801, 1)
+            .await
+            .expect_err("PASSWORD is write-only");
         assert_eq!(abort_code(&e), Some(0x0601_0001));
-        let e = sd.sdo_read::<u16>(0x1018, 7).await.expect_err("no subindex 7");
+        let e = sd
+            .sdo_read::<u16>(0x1018, 7)
+            .await
+            .expect_err("no subindex 7");
         assert_eq!(abort_code(&e), Some(0x0609_0011));
         let name: heapless::String<32> = sd.sdo_read(0x1008, 0).await.expect("device name");
         assert_eq!(name.as_str(), "PAM-199-P-ETC");

@@ -22,7 +22,9 @@ impl Drop for Netns {
             let _ = c.kill();
             let _ = c.wait();
         }
-        let _ = Command::new("ip").args(["netns", "del", &self.name]).status();
+        let _ = Command::new("ip")
+            .args(["netns", "del", &self.name])
+            .status();
     }
 }
 
@@ -89,7 +91,9 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
     let (mut guard, host_if, slave_if) = match setup("v") {
         Ok(x) => x,
         Err(e) => {
-            eprintln!("SKIPPED: cannot create a network namespace and veth pair here ({e}); needs root and iproute2");
+            eprintln!(
+                "SKIPPED: cannot create a network namespace and veth pair here ({e}); needs root and iproute2"
+            );
             return;
         }
     };
@@ -128,7 +132,9 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
         assert_eq!(group.len(), 2);
         let sd = group.subdevice(md, 1).expect("second slave");
         assert_eq!(sd.name(), "PAM-199-P-ETC");
-        sd.sdo_write(0x800D, 2, 2500u16).await.expect("SDO write over raw Ethernet");
+        sd.sdo_write(0x800D, 2, 2500u16)
+            .await
+            .expect("SDO write over raw Ethernet");
         let v: u16 = sd.sdo_read(0x800D, 2).await.expect("SDO read");
         assert_eq!(v, 2500);
         let group = group.into_op(md).await.expect("OP over raw Ethernet");

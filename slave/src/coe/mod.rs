@@ -58,7 +58,8 @@ impl CoeServer {
         let body = request.get(CoeHeader::<&[u8]>::HEADER_LEN..).unwrap_or(&[]);
         match header.service() {
             CoeService::SdoRequest => {
-                let (head, rest) = out.split_at_mut_checked(CoeHeader::<&[u8]>::HEADER_LEN)
+                let (head, rest) = out
+                    .split_at_mut_checked(CoeHeader::<&[u8]>::HEADER_LEN)
                     .ok_or(MailboxErrorCode::NoMoreMemory)?;
                 let Some(n) = self.sdo.handle(body, rest, od)? else {
                     return Ok(None);

@@ -973,7 +973,10 @@ mod tests {
     fn frame(dgs: &[(Command, u32, &[u8])]) -> (Vec<u8>, Vec<core::ops::Range<usize>>) {
         let mut buf = vec![0u8; 1600];
         let mut b = FrameBuilder::new(&mut buf, SRC).unwrap();
-        let ranges = dgs.iter().map(|(c, a, d)| b.push(*c, *a, d).unwrap()).collect();
+        let ranges = dgs
+            .iter()
+            .map(|(c, a, d)| b.push(*c, *a, d).unwrap())
+            .collect();
         let len = b.finish();
         buf.truncate(len);
         (buf, ranges)
@@ -992,12 +995,18 @@ mod tests {
         let mut line = [esc(), esc()];
         let (mut f, r) = frame(&[(Command::Brd, 0, &[0])]);
         for e in &mut line {
-            assert_eq!(e.process_frame(&mut f), FrameOutcome::Processed { datagrams: 1 });
+            assert_eq!(
+                e.process_frame(&mut f),
+                FrameOutcome::Processed { datagrams: 1 }
+            );
         }
         assert_eq!(wkc(&f, &r[0]), 2);
         assert_eq!(f[r[0].start], 0x11, "ESC type read");
         // ADP incremented by each slave.
-        assert_eq!(u16::from_le_bytes([f[r[0].start - 8], f[r[0].start - 7]]), 2);
+        assert_eq!(
+            u16::from_le_bytes([f[r[0].start - 8], f[r[0].start - 7]]),
+            2
+        );
     }
 
     #[test]
@@ -1127,7 +1136,10 @@ mod tests {
         e.process_frame(&mut f);
         assert_eq!(wkc(&f, &r[0]), 1);
         assert_ne!(e.mem_u8(0x0805) & 0x08, 0, "SM0 full");
-        assert_ne!(e.read_u32(reg::AL_EVENT_REQUEST).unwrap() & reg::al_event_sm(0), 0);
+        assert_ne!(
+            e.read_u32(reg::AL_EVENT_REQUEST).unwrap() & reg::al_event_sm(0),
+            0
+        );
         let (mut f, r) = frame(&[(Command::Apwr, phys(0, 0x1000), &[2; 8])]);
         e.process_frame(&mut f);
         assert_eq!(wkc(&f, &r[0]), 0, "full mailbox refuses");

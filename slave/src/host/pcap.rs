@@ -40,7 +40,9 @@ impl<W: Write> PcapWriter<W> {
 
     /// Appends one frame stamped with the current wall-clock time.
     pub fn write_frame(&mut self, frame: &[u8]) -> io::Result<()> {
-        let now = SystemTime::now().duration_since(UNIX_EPOCH).unwrap_or_default();
+        let now = SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .unwrap_or_default();
         self.write_frame_at(frame, now.as_secs() as u32, now.subsec_micros())
     }
 
@@ -52,7 +54,8 @@ impl<W: Write> PcapWriter<W> {
         self.out.write_all(&micros.to_le_bytes())?;
         self.out.write_all(&incl.to_le_bytes())?;
         self.out.write_all(&len.to_le_bytes())?;
-        self.out.write_all(frame.get(..incl as usize).unwrap_or(frame))
+        self.out
+            .write_all(frame.get(..incl as usize).unwrap_or(frame))
     }
 
     /// Flushes buffered frames.
@@ -96,7 +99,8 @@ pub fn read_all(bytes: &[u8]) -> Result<Vec<Record>, PcapError> {
     let u32_at = |o: usize| -> Result<u32, PcapError> {
         bytes
             .get(o..o + 4)
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .and_then(|b| <[u8; 4]>::try_from(b).ok())
+            .map(u32::from_le_bytes)
             .ok_or(PcapError::Truncated(o))
     };
     let magic = u32_at(0)?;
@@ -137,7 +141,14 @@ mod tests {
         assert_eq!(bytes.len(), 24 + 16 + 3 + 16 + 60);
         let recs = read_all(&bytes).unwrap();
         assert_eq!(recs.len(), 2);
-        assert_eq!(recs[0], Record { secs: 10, micros: 20, data: vec![1, 2, 3] });
+        assert_eq!(
+            recs[0],
+            Record {
+                secs: 10,
+                micros: 20,
+                data: vec![1, 2, 3]
+            }
+        );
         assert_eq!(recs[1].data.len(), 60);
     }
 

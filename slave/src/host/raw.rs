@@ -75,7 +75,11 @@ pub fn run(config: &RunnerConfig, stop: &AtomicBool) -> Result<RunStats, RunnerE
     let Some(iface) = all.iter().find(|i| i.name == config.iface).cloned() else {
         return Err(RunnerError::NoSuchInterface {
             name: config.iface.clone(),
-            available: all.iter().map(|i| i.name.as_str()).collect::<Vec<_>>().join(", "),
+            available: all
+                .iter()
+                .map(|i| i.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
         });
     };
     if let Some(dir) = &config.state_dir {
@@ -121,7 +125,12 @@ pub fn run(config: &RunnerConfig, stop: &AtomicBool) -> Result<RunStats, RunnerE
                 }
                 stats.answered += 1;
             }
-            Err(e) if matches!(e.kind(), io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock) => {
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock
+                ) =>
+            {
                 chain.poll(now);
             }
             Err(e) if e.kind() == io::ErrorKind::Interrupted => {}

@@ -117,7 +117,11 @@ impl ObjectStore {
         let Some((flat, _)) = model::find_entry(index, sub) else {
             return false;
         };
-        let Some((_, s)) = self.strings.iter_mut().find(|(f, _)| usize::from(*f) == flat) else {
+        let Some((_, s)) = self
+            .strings
+            .iter_mut()
+            .find(|(f, _)| usize::from(*f) == flat)
+        else {
             return false;
         };
         let mut new = heapless::String::new();
@@ -130,12 +134,15 @@ impl ObjectStore {
 
     /// Encodes the value of an entry into `out` (little-endian, the entry's
     /// byte size; strings as their bytes). Returns the number of bytes.
-    pub fn encode(&self, flat: usize, entry: &Entry, out: &mut [u8]) -> Result<usize, SdoAbortCode> {
+    pub fn encode(
+        &self,
+        flat: usize,
+        entry: &Entry,
+        out: &mut [u8],
+    ) -> Result<usize, SdoAbortCode> {
         if entry.data_type == DataType::VisibleString {
             let s = self.string(flat).unwrap_or("");
-            let dst = out
-                .get_mut(..s.len())
-                .ok_or(SdoAbortCode::ObjectTooLong)?;
+            let dst = out.get_mut(..s.len()).ok_or(SdoAbortCode::ObjectTooLong)?;
             dst.copy_from_slice(s.as_bytes());
             return Ok(s.len());
         }
@@ -188,14 +195,18 @@ impl ObjectStore {
         } else {
             unsigned as i64
         };
-        // Bits above the entry's bit size must be zero (unsigned types).
+        // Enumerations and booleans accept their members only (0x06090030),
+        // whatever the bit pattern; other unsigned types must have no bits
+        // set above their bit size.
+        match entry.data_type {
+            DataType::Bool if unsigned > 1 => return Err(SdoAbortCode::ValueRange),
+            DataType::Enum(e) if !e.contains(value) || unsigned >> bits != 0 => {
+                return Err(SdoAbortCode::ValueRange);
+            }
+            _ => {}
+        }
         if !entry.data_type.is_signed() && bits < 64 && unsigned >> bits != 0 {
             return Err(SdoAbortCode::ValueTooHigh);
-        }
-        match entry.data_type {
-            DataType::Bool if value > 1 => return Err(SdoAbortCode::ValueRange),
-            DataType::Enum(e) if !e.contains(value) => return Err(SdoAbortCode::ValueRange),
-            _ => {}
         }
         if let Some(max) = entry.max {
             if value > max {
@@ -316,6 +327,11 @@ mod tests {
             s.download(0xF800, 2, &[7], AlState::PreOp),
             Err(SdoAbortCode::ValueRange)
         );
+        assert_eq!(
+            s.download(0xF800, 2, &[9], AlState::PreOp),
+            Err(SdoAbortCode::ValueRange),
+            "high bits set in a 3-bit enum"
+        );
         assert_eq!(s.download(0xF800, 2, &[2], AlState::PreOp), Ok(2));
     }
 
@@ -326,7 +342,10 @@ mod tests {
             s.download(0x1C12, 1, &0x1600u16.to_le_bytes(), AlState::SafeOp),
             Err(SdoAbortCode::InvalidState)
         );
-        assert!(s.download(0x1C12, 1, &0x1600u16.to_le_bytes(), AlState::PreOp).is_ok());
+        assert!(
+            s.download(0x1C12, 1, &0x1600u16.to_le_bytes(), AlState::PreOp)
+                .is_ok()
+        );
     }
 
     #[test]

@@ -109,7 +109,10 @@ impl EnumDesc {
 
     /// The text of `value`, if it is defined.
     pub fn text(&self, value: i64) -> Option<&'static str> {
-        self.values.iter().find(|(v, _)| *v == value).map(|(_, t)| *t)
+        self.values
+            .iter()
+            .find(|(v, _)| *v == value)
+            .map(|(_, t)| *t)
     }
 }
 
