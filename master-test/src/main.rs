@@ -30,8 +30,8 @@ enum Cmd {
         /// Command value (0x7000:03) in IO_BASE units (10000 = 100 %).
         #[arg(long, default_value_t = 5000, allow_hyphen_values = true)]
         command: i32,
-        /// Process data cycles to run.
-        #[arg(long, default_value_t = 20)]
+        /// Process data cycles to run (about 1 ms each).
+        #[arg(long, default_value_t = 250)]
         cycles: u32,
     },
 }
@@ -42,7 +42,7 @@ fn main() -> ExitCode {
         slaves: 1,
         current: 1500,
         command: 5000,
-        cycles: 20,
+        cycles: 250,
     });
     let result = match cmd {
         Cmd::Demo {
@@ -110,6 +110,16 @@ async fn demo(
     }
     let group = group.into_op(md).await?;
     println!("state: OP");
+    println!(
+        "driving ENABLE=1, COMMAND VALUE={command} ({:.1} % of IO_BASE 10000) for {cycles} ms",
+        f64::from(command) / 100.0
+    );
+    println!("  W = command in IO_BASE units, C = after the ramp (RA 100 ms), U = after");
+    println!("  deadband compensation (TRIGGER 200), IA/IB = simulated solenoid currents");
+    println!("  (dither 5 % at 120 Hz rides on IA: 0x800D:03/04).");
+    println!("  t/ms  READY       W       C       U   IA/mA   IB/mA   (slave 0x1000)");
+    let start = std::time::Instant::now();
+    let mut next_print = 0u128;
     for cycle in 0..cycles {
         for sd in group.iter(md) {
             let mut out = sd.outputs_raw_mut();
@@ -119,14 +129,16 @@ async fn demo(
             }
         }
         let resp = group.tx_rx(md).await?;
-        if cycle == 0 || cycle + 1 == cycles {
-            println!("cycle {cycle:>3}: working counter {}", resp.working_counter);
-            for sd in group.iter(md) {
+        let t = start.elapsed().as_millis();
+        if t >= next_print || cycle + 1 == cycles {
+            next_print = t + 20;
+            if let Some(sd) = group.iter(md).next() {
                 let inp = sd.inputs_raw();
                 println!(
-                    "  {:#06x} inputs {}",
-                    sd.configured_address(),
-                    describe_inputs(&inp)
+                    "{:>6}  {}   wkc {}",
+                    t,
+                    describe_inputs(&inp),
+                    resp.working_counter
                 );
             }
         }
@@ -137,9 +149,10 @@ async fn demo(
         for (i, s) in chain.slaves().iter().enumerate() {
             let st = &s.slave().store;
             println!(
-                "slave {i}: 0x7000:01 ENABLE = {}, 0x7000:03 COMMAND VALUE = {}, AL {}",
+                "slave {i}: 0x7000:01 ENABLE = {}, 0x7000:03 COMMAND VALUE = {}, IA = {} mA, AL {}",
                 st.get(0x7000, 1).unwrap_or(0),
                 st.get(0x7000, 3).unwrap_or(0),
+                st.get(0x6000, 6).unwrap_or(0),
                 s.slave().al_status().state
             );
         }
@@ -151,19 +164,21 @@ async fn demo(
     Ok(())
 }
 
-/// Decodes the directional input image (0x1A00 + 0x1A02).
+/// Decodes the directional input image (0x1A00 + 0x1A02) as one line.
 fn describe_inputs(b: &[u8]) -> String {
     if b.len() < 14 {
         return format!("{b:02x?}");
     }
     let i16_at = |o: usize| i16::from_le_bytes([b[o], b[o + 1]]);
     let u16_at = |o: usize| u16::from_le_bytes([b[o], b[o + 1]]);
+    let diag = if b[1] | b[2] | b[3] != 0 {
+        format!(" diag {:#04x}/{:#04x}/{:#04x}", b[1], b[2], b[3])
+    } else {
+        String::new()
+    };
     format!(
-        "READY={} diag={:#04x}/{:#04x}/{:#04x} W={} C={} U={} IA={} mA IB={} mA",
+        "{:>5} {:>7} {:>7} {:>7} {:>7} {:>7}{diag}",
         b[0] & 1,
-        b[1],
-        b[2],
-        b[3],
         i16_at(4),
         i16_at(6),
         i16_at(8),

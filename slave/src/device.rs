@@ -8,6 +8,8 @@
 //! the same model.
 
 use crate::al::{self, AlState, AlStatus, AlStatusCode, TransitionChecks};
+use crate::app::amplifier::Amplifier;
+use crate::app::power_stage::{PowerStage, SimPowerStage};
 use crate::coe::ObjectAccess;
 use crate::esc::registers::{self as reg, sm as smr};
 use crate::esc::soft::{FrameOutcome, SII_SIZE, SoftEsc};
@@ -241,9 +243,12 @@ fn encode_sii(out: &mut [u8]) -> Result<usize, sii::SiiError> {
     sii::encode(&cfg, out)
 }
 
-/// The PAM-199 firmware on an ESC reached through the PDI.
-pub struct Slave<E: Esc> {
+/// The PAM-199 firmware on an ESC reached through the PDI, driving the
+/// solenoids through a [`PowerStage`].
+pub struct Slave<E: Esc, P: PowerStage = SimPowerStage> {
     esc: E,
+    stage: P,
+    amplifier: Amplifier,
     /// The live object dictionary.
     pub store: ObjectStore,
     al: AlStatus,
@@ -255,7 +260,7 @@ pub struct Slave<E: Esc> {
     now_ns: u64,
 }
 
-impl<E: Esc> core::fmt::Debug for Slave<E> {
+impl<E: Esc, P: PowerStage> core::fmt::Debug for Slave<E, P> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Slave")
             .field("al", &self.al)
@@ -354,12 +359,14 @@ impl<E: Esc> TransitionChecks for Checks<'_, E> {
     }
 }
 
-impl<E: Esc> Slave<E> {
-    /// The firmware in its power-on state on `esc`.
-    pub fn new(esc: E) -> Self {
+impl<E: Esc, P: PowerStage> Slave<E, P> {
+    /// The firmware in its power-on state on `esc`, driving `stage`.
+    pub fn new(esc: E, stage: P) -> Self {
         let store = ObjectStore::new();
         Slave {
             esc,
+            stage,
+            amplifier: Amplifier::new(),
             store,
             al: AlStatus::INIT,
             outputs: ProcessImage::default(),
@@ -385,6 +392,21 @@ impl<E: Esc> Slave<E> {
         self.al
     }
 
+    /// The power stage.
+    pub fn stage(&self) -> &P {
+        &self.stage
+    }
+
+    /// The power stage, mutably (fault injection on the simulation).
+    pub fn stage_mut(&mut self) -> &mut P {
+        &mut self.stage
+    }
+
+    /// The application state.
+    pub fn amplifier(&self) -> &Amplifier {
+        &self.amplifier
+    }
+
     /// Runs the firmware once at time `now_ns`: AL control, mailbox,
     /// process data. Returns an error only if the PDI itself fails.
     pub fn poll(&mut self, now_ns: u64) -> Result<(), EscError> {
@@ -401,8 +423,15 @@ impl<E: Esc> Slave<E> {
         ) {
             self.serve_mailbox()?;
         }
-        if matches!(self.al.state, AlState::SafeOp | AlState::Op) {
-            self.exchange_process_data(events)?;
+        let pd = matches!(self.al.state, AlState::SafeOp | AlState::Op);
+        if pd {
+            self.read_outputs(events)?;
+        }
+        let outputs_valid = self.al.state == AlState::Op;
+        self.amplifier
+            .run_until(&mut self.store, &mut self.stage, now_ns, outputs_valid);
+        if pd {
+            self.write_inputs()?;
         }
         Ok(())
     }
@@ -510,7 +539,7 @@ impl<E: Esc> Slave<E> {
         Ok(self.esc.read_u8(base + smr::STATUS)? & smr::STATUS_MAILBOX_FULL != 0)
     }
 
-    fn exchange_process_data(&mut self, events: u32) -> Result<(), EscError> {
+    fn read_outputs(&mut self, events: u32) -> Result<(), EscError> {
         let mut buf = [0u8; MAX_IMAGE];
         if events & reg::al_event_sm(2) != 0 && self.outputs.byte_len() > 0 {
             let n = self.outputs.byte_len();
@@ -521,6 +550,10 @@ impl<E: Esc> Slave<E> {
                 }
             }
         }
+        Ok(())
+    }
+
+    fn write_inputs(&mut self) -> Result<(), EscError> {
         let n = self.inputs.byte_len();
         if n > 0 {
             let mut inb = [0u8; MAX_IMAGE];
@@ -535,12 +568,12 @@ impl<E: Esc> Slave<E> {
 
 /// The object dictionary as the CoE server sees it: the store plus the
 /// device's rules (state-dependent access, assignment consistency).
-struct OdAccess<'a, E: Esc> {
-    slave: &'a mut Slave<E>,
+struct OdAccess<'a, E: Esc, P: PowerStage> {
+    slave: &'a mut Slave<E, P>,
     state: AlState,
 }
 
-impl<E: Esc> ObjectAccess for OdAccess<'_, E> {
+impl<E: Esc, P: PowerStage> ObjectAccess for OdAccess<'_, E, P> {
     fn sdo_upload(
         &mut self,
         index: u16,
@@ -566,6 +599,14 @@ impl<E: Esc> ObjectAccess for OdAccess<'_, E> {
         }
         let (flat, entry) = store::lookup(index, sub)?;
         let value = ObjectStore::check(entry, data, self.state)?;
+        // Manual 6.4.5: with ACC = ON the controller gains follow the PWM
+        // frequency and cannot be set by the user.
+        if matches!(index, 0x800D | 0x801D | 0x802D)
+            && matches!(sub, 9 | 10)
+            && self.slave.store.get(index, 7) == Some(1)
+        {
+            return Err(SdoAbortCode::LocalControl);
+        }
         // The assignment may only name PDOs of its own direction.
         if (index == 0x1C12 || index == 0x1C13) && sub != 0 {
             let dir = if index == 0x1C12 {
@@ -595,7 +636,7 @@ pub type ImageError = PdoError;
 
 /// The PAM-199 on the software ESC: takes EtherCAT frames.
 pub struct SoftSlave {
-    inner: Slave<SoftEsc>,
+    inner: Slave<SoftEsc, SimPowerStage>,
 }
 
 impl core::fmt::Debug for SoftSlave {
@@ -615,7 +656,7 @@ impl SoftSlave {
     pub fn new() -> Self {
         let sii = sii_image();
         SoftSlave {
-            inner: Slave::new(SoftEsc::new(&sii)),
+            inner: Slave::new(SoftEsc::new(&sii), SimPowerStage::new()),
         }
     }
 
@@ -636,12 +677,12 @@ impl SoftSlave {
     }
 
     /// The firmware.
-    pub fn slave(&self) -> &Slave<SoftEsc> {
+    pub fn slave(&self) -> &Slave<SoftEsc, SimPowerStage> {
         &self.inner
     }
 
     /// The firmware, mutably.
-    pub fn slave_mut(&mut self) -> &mut Slave<SoftEsc> {
+    pub fn slave_mut(&mut self) -> &mut Slave<SoftEsc, SimPowerStage> {
         &mut self.inner
     }
 }

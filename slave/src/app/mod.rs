@@ -24,6 +24,7 @@
 //!         U * CURRENT / 10000 --> current setpoint [mA] --> PowerStage --> IA / IB
 //! ```
 
+pub mod amplifier;
 pub mod chain;
 pub mod curve;
 pub mod deadband;

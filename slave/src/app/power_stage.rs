@@ -8,7 +8,7 @@
 //!
 //! ## Simulation model (`f32`, it is a simulation)
 //!
-//! * Per solenoid an R-L coil (default R = 20 Ω, L = 0.1 H) on a supply of
+//! * Per solenoid an R-L coil (default R = 6 Ω, L = 30 mH: a 24 V valve coil that can carry the 3 A maximum) on a supply of
 //!   24 V, `L di/dt = v − R i`, integrated with backward Euler (stable for any
 //!   R, L) at a fixed internal step of [`SUB_STEP_US`] = 50 µs (the manual's
 //!   current-control sample time is 0.053 ms). `step(dt_us)` runs
@@ -68,9 +68,9 @@ pub const DEFAULT_SUPPLY_V: f32 = 24.0;
 /// Default stage temperature.
 pub const DEFAULT_TEMPERATURE_C: f32 = 25.0;
 /// Default coil resistance.
-pub const DEFAULT_R_OHM: f32 = 20.0;
+pub const DEFAULT_R_OHM: f32 = 6.0;
 /// Default coil inductance.
-pub const DEFAULT_L_H: f32 = 0.1;
+pub const DEFAULT_L_H: f32 = 0.03;
 
 /// PWM frequency table DT0803EN05: (frequency in Hz, enum code).
 pub const PWM_TABLE: [(u16, u8); 20] = [
@@ -433,7 +433,7 @@ impl Default for SimPowerStage {
 }
 
 impl SimPowerStage {
-    /// A stage with the default coil (20 Ω, 0.1 H), 24 V, 25 °C, outputs off.
+    /// A stage with the default coil (6 Ω, 30 mH), 24 V, 25 °C, outputs off.
     pub fn new() -> Self {
         Self::with_coil(DEFAULT_R_OHM, DEFAULT_L_H)
     }
@@ -614,8 +614,8 @@ mod tests {
             let m = ps.measured_ma(Solenoid::A);
             assert!((735..=765).contains(&m), "measured {m} mA");
         }
-        // Duty = R * I / U = 20 * 0.75 / 24 = 0.625.
-        assert!((ps.duty(Solenoid::A) - 0.625).abs() < 0.01);
+        // Duty = R * I / U = 6 * 0.75 / 24 = 0.1875.
+        assert!((ps.duty(Solenoid::A) - 0.1875).abs() < 0.01);
         assert_eq!(ps.measured_ma(Solenoid::B), 0);
         assert!(!ps.faults().any());
     }
@@ -713,12 +713,12 @@ mod tests {
         assert!(ps.faults().overtemperature);
         ps.clear_faults();
         assert!(!ps.faults().any());
-        // At 10 V the 20 Ω coil cannot carry more than 500 mA.
+        // At 10 V the 6 Ω coil cannot carry more than 1667 mA.
         ps.inject(Fault::SupplyVoltage(10.0));
-        ps.set_current(Solenoid::A, 750, Dither::OFF, 2_500, PiGains::default());
+        ps.set_current(Solenoid::A, 2000, Dither::OFF, 2_500, PiGains::default());
         run(&mut ps, 200);
         let m = ps.measured_ma(Solenoid::A);
-        assert!((495..=500).contains(&m), "{m} mA");
+        assert!((1650..=1667).contains(&m), "{m} mA");
     }
 
     #[test]

@@ -49,7 +49,8 @@ impl<'a> FrameBuilder<'a> {
         let total = Datagram::<()>::total_len_for(data.len());
         let end = self.len.checked_add(total).ok_or(WireError::Truncated)?;
         let data_len = u16::try_from(data.len()).map_err(|_| WireError::Truncated)?;
-        if end > self.buf.len() || data_len > 0x07FF {
+        // The EtherCAT header's 11-bit length bounds the whole payload.
+        if end > self.buf.len() || end - FIRST_DATAGRAM > usize::from(super::ecat::MAX_LENGTH) {
             return Err(WireError::Truncated);
         }
         if let Some(prev) = self.last {
@@ -114,6 +115,13 @@ mod tests {
         let mut buf = [0u8; 30];
         let mut b = FrameBuilder::new(&mut buf, [0; 6]).unwrap();
         assert!(b.push(Command::Lrw, 0, &[0; 20]).is_err());
+        let mut big = [0u8; 4096];
+        let mut b = FrameBuilder::new(&mut big, [0; 6]).unwrap();
+        assert!(b.push(Command::Lrw, 0, &[0; 2000]).is_ok());
+        assert!(
+            b.push(Command::Lrw, 0, &[0; 100]).is_err(),
+            "payload over 2047 bytes"
+        );
         let mut small = [0u8; 4];
         assert!(FrameBuilder::new(&mut small, [0; 6]).is_err());
     }

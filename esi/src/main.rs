@@ -1,0 +1,2 @@
+//! `esi` CLI.
+fn main() {}

@@ -1,0 +1,554 @@
+//! The amplifier as a periodic task (manual 4.5: 1 ms internal signal
+//! processing): reads outputs and parameters from the object dictionary,
+//! runs the directional or the two independent signal chains, drives the
+//! power stage and writes process inputs and diagnosis back.
+//!
+//! Failure monitoring (manual 6.2.5, 8.1), decided here:
+//! - SENS = ON: a fault (open wire, short circuit, supply under/over
+//!   voltage, over temperature, EEPROM data error) latches, the power stage
+//!   of the affected channel is switched off and READY drops. The latch is
+//!   reset while ENABLE is off.
+//! - SENS = AUTO: as ON, but the latch is re-checked every second and
+//!   cleared when the fault has gone, so the channel resumes by itself. (An
+//!   open wire is only seen while current is demanded, so a persistent one
+//!   shows READY for a moment each second, as the manual describes.)
+//! - SENS = OFF: no monitoring; diagnosis objects stay false.
+//! - Diagnosis objects (0xA000/0xA010/0xA020) and their TxPDO bits are
+//!   `true` while a fault is present or latched.
+//! - No valid outputs (not in OP, watchdog expired) disables the power stage.
+
+use super::chain::{DirectionalChain, DirectionalParams, IndependentChain, IndependentParams};
+use super::curve::{DirectionalCurve, IndependentCurve};
+use super::deadband::{Deadband, DirectionalDeadband, MmType};
+use super::power_stage::{Faults, PowerStage, Solenoid, StageParams, acc_gains, pwm_from_code};
+use crate::od::store::ObjectStore;
+
+/// Tick period of the application in microseconds.
+pub const TICK_US: u32 = 1_000;
+const TICK_NS: u64 = TICK_US as u64 * 1_000;
+/// Interval of the SENS = AUTO re-check.
+const AUTO_RECHECK_NS: u64 = 1_000_000_000;
+/// Most ticks caught up in one call (a longer gap restarts the schedule).
+const MAX_CATCH_UP: u64 = 100_000;
+
+/// FUNCTION values (DT0800EN03).
+const FUNCTION_IND: i64 = 2;
+/// SENS values (DT0801EN03).
+const SENS_OFF: i64 = 1;
+const SENS_AUTO: i64 = 3;
+
+/// Which faults concern a channel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ChannelKind {
+    Directional,
+    Independent(Solenoid),
+}
+
+fn relevant(f: &Faults, kind: ChannelKind) -> Faults {
+    let common = Faults {
+        undervoltage: f.undervoltage,
+        overvoltage: f.overvoltage,
+        overtemperature: f.overtemperature,
+        ..Faults::default()
+    };
+    match kind {
+        ChannelKind::Directional => *f,
+        ChannelKind::Independent(Solenoid::A) => Faults {
+            open_a: f.open_a,
+            short_a: f.short_a,
+            ..common
+        },
+        ChannelKind::Independent(Solenoid::B) => Faults {
+            open_b: f.open_b,
+            short_b: f.short_b,
+            ..common
+        },
+    }
+}
+
+fn or(a: Faults, b: Faults) -> Faults {
+    Faults {
+        open_a: a.open_a || b.open_a,
+        short_a: a.short_a || b.short_a,
+        open_b: a.open_b || b.open_b,
+        short_b: a.short_b || b.short_b,
+        undervoltage: a.undervoltage || b.undervoltage,
+        overvoltage: a.overvoltage || b.overvoltage,
+        overtemperature: a.overtemperature || b.overtemperature,
+    }
+}
+
+/// Latch of one channel's monitored faults.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+struct Monitor {
+    latched: bool,
+    flags: Faults,
+}
+
+impl Monitor {
+    /// Updates the latch; returns whether the channel may run.
+    fn update(
+        &mut self,
+        sens: i64,
+        enable: bool,
+        now: Faults,
+        eeprom: bool,
+        recheck: bool,
+    ) -> bool {
+        if sens == SENS_OFF {
+            *self = Monitor::default();
+            return true;
+        }
+        let fault = now.any() || eeprom;
+        if fault {
+            self.latched = true;
+            self.flags = or(self.flags, now);
+        }
+        if !enable && sens != SENS_AUTO && !fault {
+            // SENS = ON: deactivating ENABLE resets the failure.
+            *self = Monitor::default();
+        } else if !enable && sens != SENS_AUTO {
+            self.flags = now;
+        }
+        if sens == SENS_AUTO && recheck && !fault {
+            *self = Monitor::default();
+        }
+        !self.latched
+    }
+}
+
+/// The PAM-199 application state.
+#[derive(Debug, Clone)]
+pub struct Amplifier {
+    dir: DirectionalChain,
+    ind: [IndependentChain; 2],
+    monitors: [Monitor; 3],
+    last_ns: Option<u64>,
+    next_recheck_ns: u64,
+    /// Parameters in the EEPROM were invalid at power-on: the power stage
+    /// stays off until parameters are saved (manual 8.1).
+    pub eeprom_error: bool,
+}
+
+impl Default for Amplifier {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+fn get(store: &ObjectStore, index: u16, sub: u8) -> i64 {
+    store.get(index, sub).unwrap_or(0)
+}
+
+fn u16_of(v: i64) -> u16 {
+    v.clamp(0, i64::from(u16::MAX)) as u16
+}
+
+fn stage_params(store: &ObjectStore, base: u16) -> StageParams {
+    let pwm_hz = pwm_from_code(get(store, base, 5).clamp(0, 255) as u8).unwrap_or(2500);
+    StageParams {
+        current_ma: u16_of(get(store, base, 2)),
+        dampl: u16_of(get(store, base, 3)),
+        dfreq: u16_of(get(store, base, 4)),
+        pwm_hz,
+        acc: get(store, base, 7) == 1,
+        ppwm: u16_of(get(store, base, 9)),
+        ipwm: u16_of(get(store, base, 10)),
+    }
+}
+
+fn mmtype(v: i64) -> MmType {
+    if v == 1 { MmType::Lin } else { MmType::Jmp }
+}
+
+fn directional_params(store: &ObjectStore) -> DirectionalParams {
+    let mut curve = DirectionalCurve::default();
+    for sub in 1..=42u8 {
+        curve.od_set(sub, get(store, 0x8006, sub).clamp(-10_000, 10_000) as i16);
+    }
+    DirectionalParams {
+        ramp_up_a_ms: get(store, 0x8002, 2).clamp(1, 120_000) as u32,
+        ramp_down_a_ms: get(store, 0x8002, 3).clamp(1, 120_000) as u32,
+        ramp_up_b_ms: get(store, 0x8002, 4).clamp(1, 120_000) as u32,
+        ramp_down_b_ms: get(store, 0x8002, 5).clamp(1, 120_000) as u32,
+        cc_enabled: get(store, 0x800A, 1) == 1,
+        curve,
+        deadband: DirectionalDeadband {
+            mmtype: mmtype(get(store, 0x800A, 3)),
+            trigger: u16_of(get(store, 0x800A, 5)),
+            min_a: u16_of(get(store, 0x800A, 6)),
+            max_a: u16_of(get(store, 0x800A, 7)),
+            min_b: u16_of(get(store, 0x800A, 8)),
+            max_b: u16_of(get(store, 0x800A, 9)),
+        },
+        io_base: u16_of(get(store, 0xF800, 1)).max(1),
+        current_ma: u16_of(get(store, 0x800D, 2)),
+    }
+}
+
+fn independent_params(store: &ObjectStore, ch: u16) -> IndependentParams {
+    let off = ch * 0x10;
+    let mut curve = IndependentCurve::default();
+    for sub in 1..=22u8 {
+        curve.od_set(sub, get(store, 0x8006 + off, sub).clamp(0, 10_000) as i16);
+    }
+    IndependentParams {
+        ramp_up_ms: get(store, 0x8002 + off, 2).clamp(1, 120_000) as u32,
+        ramp_down_ms: get(store, 0x8002 + off, 3).clamp(1, 120_000) as u32,
+        cc_enabled: get(store, 0x800A + off, 1) == 1,
+        curve,
+        deadband: Deadband {
+            mmtype: mmtype(get(store, 0x800A + off, 3)),
+            trigger: u16_of(get(store, 0x800A + off, 5)),
+            min: u16_of(get(store, 0x800A + off, 6)),
+            max: u16_of(get(store, 0x800A + off, 7)),
+        },
+        io_base: u16_of(get(store, 0xF800, 1)).max(1),
+        current_ma: u16_of(get(store, 0x800D + off, 2)),
+    }
+}
+
+/// While ACC is on, PPWM/IPWM show the gains adapted to the PWM frequency.
+fn publish_acc_gains(store: &mut ObjectStore, base: u16) {
+    let p = stage_params(store, base);
+    if p.acc {
+        let g = acc_gains(p.pwm_hz);
+        store.set(base, 9, i64::from(g.ppwm));
+        store.set(base, 10, i64::from(g.ipwm));
+    }
+}
+
+impl Amplifier {
+    /// An amplifier with every channel at rest.
+    pub fn new() -> Self {
+        Amplifier {
+            dir: DirectionalChain::new(DirectionalParams::default()),
+            ind: [
+                IndependentChain::new(IndependentParams::default()),
+                IndependentChain::new(IndependentParams::default()),
+            ],
+            monitors: [Monitor::default(); 3],
+            last_ns: None,
+            next_recheck_ns: AUTO_RECHECK_NS,
+            eeprom_error: false,
+        }
+    }
+
+    /// Runs every 1 ms tick due up to `now_ns`. `outputs_valid` is false
+    /// when the master's outputs must not act (not OP, watchdog expired):
+    /// the power stage is then off.
+    pub fn run_until<P: PowerStage>(
+        &mut self,
+        store: &mut ObjectStore,
+        stage: &mut P,
+        now_ns: u64,
+        outputs_valid: bool,
+    ) {
+        let last = match self.last_ns {
+            Some(l) if now_ns >= l => l,
+            _ => {
+                self.last_ns = Some(now_ns);
+                self.next_recheck_ns = now_ns + AUTO_RECHECK_NS;
+                self.tick(store, stage, now_ns, outputs_valid);
+                return;
+            }
+        };
+        let due = (now_ns - last) / TICK_NS;
+        if due > MAX_CATCH_UP {
+            self.last_ns = Some(now_ns);
+            self.tick(store, stage, now_ns, outputs_valid);
+            return;
+        }
+        for i in 1..=due {
+            self.tick(store, stage, last + i * TICK_NS, outputs_valid);
+        }
+        self.last_ns = Some(last + due * TICK_NS);
+    }
+
+    /// One 1 ms tick at time `now_ns`.
+    pub fn tick<P: PowerStage>(
+        &mut self,
+        store: &mut ObjectStore,
+        stage: &mut P,
+        now_ns: u64,
+        outputs_valid: bool,
+    ) {
+        let recheck = now_ns >= self.next_recheck_ns;
+        if recheck {
+            self.next_recheck_ns = now_ns + AUTO_RECHECK_NS;
+        }
+        let sens = get(store, 0xF800, 3);
+        let faults = stage.faults();
+        let eeprom = self.eeprom_error;
+        let mut shown = Faults::default();
+        if get(store, 0xF800, 2) == FUNCTION_IND {
+            let mut outs = [None, None];
+            for (i, sol) in [Solenoid::A, Solenoid::B].into_iter().enumerate() {
+                let ch = i as u16 + 1;
+                let base_out = 0x7000 + ch * 0x10;
+                let enable = get(store, base_out, 1) != 0 && outputs_valid;
+                let rel = relevant(&faults, ChannelKind::Independent(sol));
+                let Some(mon) = self.monitors.get_mut(i + 1) else {
+                    continue;
+                };
+                let ok = mon.update(sens, enable, rel, eeprom, recheck);
+                shown = or(shown, mon.flags);
+                let ready = enable && ok && !eeprom;
+                let Some(chain) = self.ind.get_mut(i) else {
+                    continue;
+                };
+                chain.set_params(independent_params(store, ch));
+                let out = chain.step(get(store, base_out, 3) as i32, ready, TICK_US);
+                publish_acc_gains(store, 0x800D + ch * 0x10);
+                let sp = stage_params(store, 0x800D + ch * 0x10);
+                if ready {
+                    let ma = u16_of(i64::from(out.current_setpoint_ma));
+                    stage.set_current(sol, ma, sp.dither(), sp.pwm_hz, sp.gains());
+                } else {
+                    stage.set_current(sol, 0, sp.dither(), sp.pwm_hz, sp.gains());
+                }
+                outs[i] = Some((ready, out));
+            }
+            stage.step(TICK_US);
+            for (i, sol) in [Solenoid::A, Solenoid::B].into_iter().enumerate() {
+                let base_in = 0x6000 + (i as u16 + 1) * 0x10;
+                if let Some(Some((ready, out))) = outs.get(i) {
+                    store.set(base_in, 1, i64::from(*ready));
+                    store.set(base_in, 3, i64::from(out.w.max(0)));
+                    store.set(base_in, 4, i64::from(out.c.max(0)));
+                    store.set(base_in, 5, i64::from(out.u.max(0)));
+                    store.set(base_in, 6, i64::from(stage.measured_ma(sol)));
+                }
+            }
+            for sub in 1..=7 {
+                store.set(0x6000, sub, 0);
+            }
+            self.dir.reset();
+        } else {
+            let enable = get(store, 0x7000, 1) != 0 && outputs_valid;
+            let rel = relevant(&faults, ChannelKind::Directional);
+            let mon = &mut self.monitors[0];
+            let ok = mon.update(sens, enable, rel, eeprom, recheck);
+            shown = mon.flags;
+            let ready = enable && ok && !eeprom;
+            self.dir.set_params(directional_params(store));
+            let out = self.dir.step(get(store, 0x7000, 3) as i32, ready, TICK_US);
+            publish_acc_gains(store, 0x800D);
+            let sp = stage_params(store, 0x800D);
+            let setpoint = if ready { out.current_setpoint_ma } else { 0 };
+            let a = u16_of(i64::from(setpoint.max(0)));
+            let b = u16_of(i64::from((-setpoint).max(0)));
+            stage.set_current(Solenoid::A, a, sp.dither(), sp.pwm_hz, sp.gains());
+            stage.set_current(Solenoid::B, b, sp.dither(), sp.pwm_hz, sp.gains());
+            stage.step(TICK_US);
+            store.set(0x6000, 1, i64::from(ready));
+            store.set(0x6000, 3, i64::from(out.w));
+            store.set(0x6000, 4, i64::from(out.c));
+            store.set(0x6000, 5, i64::from(out.u));
+            store.set(0x6000, 6, i64::from(stage.measured_ma(Solenoid::A)));
+            store.set(0x6000, 7, i64::from(stage.measured_ma(Solenoid::B)));
+            for base in [0x6010u16, 0x6020] {
+                for sub in 1..=6 {
+                    store.set(base, sub, 0);
+                }
+            }
+            for c in &mut self.ind {
+                c.reset();
+            }
+        }
+        let show = sens != SENS_OFF;
+        store.set(0xA000, 1, i64::from(show && eeprom));
+        store.set(
+            0xA000,
+            2,
+            i64::from(show && (shown.undervoltage || faults.undervoltage)),
+        );
+        store.set(
+            0xA000,
+            3,
+            i64::from(show && (shown.overvoltage || faults.overvoltage)),
+        );
+        store.set(
+            0xA000,
+            4,
+            i64::from(show && (shown.overtemperature || faults.overtemperature)),
+        );
+        store.set(
+            0xA010,
+            1,
+            i64::from(show && (shown.short_a || faults.short_a)),
+        );
+        store.set(
+            0xA010,
+            2,
+            i64::from(show && (shown.open_a || faults.open_a)),
+        );
+        store.set(
+            0xA020,
+            1,
+            i64::from(show && (shown.short_b || faults.short_b)),
+        );
+        store.set(
+            0xA020,
+            2,
+            i64::from(show && (shown.open_b || faults.open_b)),
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::app::power_stage::{Fault, SimPowerStage};
+
+    fn run(
+        amp: &mut Amplifier,
+        s: &mut ObjectStore,
+        st: &mut SimPowerStage,
+        from: u64,
+        ms: u64,
+    ) -> u64 {
+        let to = from + ms * 1_000_000;
+        amp.run_until(s, st, to, true);
+        to
+    }
+
+    fn setup() -> (Amplifier, ObjectStore, SimPowerStage, u64) {
+        let mut s = ObjectStore::new();
+        s.set(0x800D, 2, 1500);
+        s.set(0x800A, 5, 0); // TRIGGER 0: U = C exactly
+        s.set(0x800D, 3, 0); // no dither: a steady current
+        let mut amp = Amplifier::new();
+        let mut st = SimPowerStage::new();
+        amp.run_until(&mut s, &mut st, 0, true);
+        (amp, s, st, 0)
+    }
+
+    #[test]
+    fn half_command_settles_ia_at_half_current_after_the_ramp() {
+        let (mut amp, mut s, mut st, t) = setup();
+        s.set(0x7000, 1, 1);
+        s.set(0x7000, 3, 5000);
+        let t = run(&mut amp, &mut s, &mut st, t, 50);
+        assert_eq!(
+            s.get(0x6000, 4),
+            Some(5000),
+            "C reached W after the 100 ms ramp's half"
+        );
+        let _ = run(&mut amp, &mut s, &mut st, t, 150);
+        assert_eq!(s.get(0x6000, 1), Some(1), "READY");
+        assert_eq!(s.get(0x6000, 3), Some(5000));
+        let ia = s.get(0x6000, 6).unwrap();
+        assert!((735..=765).contains(&ia), "IA {ia} mA within 2 % of 750");
+        assert_eq!(s.get(0x6000, 7), Some(0), "IB off");
+    }
+
+    #[test]
+    fn negative_command_drives_solenoid_b() {
+        let (mut amp, mut s, mut st, t) = setup();
+        s.set(0x7000, 1, 1);
+        s.set(0x7000, 3, -10_000);
+        run(&mut amp, &mut s, &mut st, t, 300);
+        let ib = s.get(0x6000, 7).unwrap();
+        assert!((1470..=1530).contains(&ib), "IB {ib}");
+        assert_eq!(s.get(0x6000, 6), Some(0));
+    }
+
+    #[test]
+    fn open_wire_with_sens_on_latches_until_enable_is_cycled() {
+        let (mut amp, mut s, mut st, t) = setup();
+        s.set(0x7000, 1, 1);
+        s.set(0x7000, 3, 5000);
+        let t = run(&mut amp, &mut s, &mut st, t, 200);
+        st.inject(Fault::OpenWire(Solenoid::A));
+        let t = run(&mut amp, &mut s, &mut st, t, 20);
+        assert_eq!(s.get(0x6000, 1), Some(0), "READY dropped");
+        assert_eq!(s.get(0xA010, 2), Some(1), "open circuit shown");
+        st.clear_faults();
+        let t = run(&mut amp, &mut s, &mut st, t, 2000);
+        assert_eq!(
+            s.get(0x6000, 1),
+            Some(0),
+            "SENS=ON stays off after the fault went"
+        );
+        assert_eq!(s.get(0x6000, 6), Some(0), "current zero");
+        s.set(0x7000, 1, 0);
+        let t = run(&mut amp, &mut s, &mut st, t, 5);
+        s.set(0x7000, 1, 1);
+        run(&mut amp, &mut s, &mut st, t, 300);
+        assert_eq!(s.get(0x6000, 1), Some(1), "ENABLE off/on resets");
+        assert_eq!(s.get(0xA010, 2), Some(0));
+    }
+
+    #[test]
+    fn sens_auto_resumes_once_the_fault_has_gone() {
+        let (mut amp, mut s, mut st, t) = setup();
+        s.set(0xF800, 3, 3);
+        s.set(0x7000, 1, 1);
+        s.set(0x7000, 3, 5000);
+        let t = run(&mut amp, &mut s, &mut st, t, 200);
+        st.inject(Fault::ShortCircuit(Solenoid::A));
+        let t = run(&mut amp, &mut s, &mut st, t, 20);
+        assert_eq!(s.get(0x6000, 1), Some(0));
+        assert_eq!(s.get(0xA010, 1), Some(1));
+        st.clear_faults();
+        run(&mut amp, &mut s, &mut st, t, 1500);
+        assert_eq!(s.get(0x6000, 1), Some(1), "AUTO resumed within a second");
+    }
+
+    #[test]
+    fn sens_off_ignores_faults() {
+        let (mut amp, mut s, mut st, t) = setup();
+        s.set(0xF800, 3, 1);
+        s.set(0x7000, 1, 1);
+        s.set(0x7000, 3, 5000);
+        st.inject(Fault::SupplyVoltage(10.0));
+        run(&mut amp, &mut s, &mut st, t, 50);
+        assert_eq!(s.get(0x6000, 1), Some(1));
+        assert_eq!(s.get(0xA000, 2), Some(0));
+    }
+
+    #[test]
+    fn independent_channels_run_separately() {
+        let (mut amp, mut s, mut st, t) = setup();
+        s.set(0xF800, 2, 2);
+        s.set(0x801D, 2, 2000);
+        s.set(0x802D, 2, 1000);
+        s.set(0x801A, 5, 0);
+        s.set(0x802A, 5, 0);
+        s.set(0x801D, 3, 0);
+        s.set(0x802D, 3, 0);
+        s.set(0x7010, 1, 1);
+        s.set(0x7010, 3, 10_000);
+        s.set(0x7020, 1, 0);
+        s.set(0x7020, 3, 10_000);
+        run(&mut amp, &mut s, &mut st, t, 300);
+        assert_eq!(s.get(0x6010, 1), Some(1));
+        assert_eq!(s.get(0x6020, 1), Some(0), "channel 2 not enabled");
+        let i1 = s.get(0x6010, 6).unwrap();
+        assert!((1960..=2040).contains(&i1), "I1 {i1}");
+        assert_eq!(s.get(0x6020, 6), Some(0));
+        assert_eq!(s.get(0x6000, 1), Some(0), "directional inputs idle in IND");
+    }
+
+    #[test]
+    fn invalid_outputs_switch_the_stage_off() {
+        let (mut amp, mut s, mut st, t) = setup();
+        s.set(0x7000, 1, 1);
+        s.set(0x7000, 3, 5000);
+        let t = run(&mut amp, &mut s, &mut st, t, 200);
+        amp.run_until(&mut s, &mut st, t + 20_000_000, false);
+        assert_eq!(s.get(0x6000, 1), Some(0));
+        assert_eq!(s.get(0x6000, 6), Some(0));
+    }
+
+    #[test]
+    fn acc_on_publishes_gains_for_the_pwm_frequency() {
+        let (mut amp, mut s, mut st, t) = setup();
+        s.set(0x800D, 5, 0x08); // 100 Hz
+        run(&mut amp, &mut s, &mut st, t, 2);
+        let g = acc_gains(100);
+        assert_eq!(s.get(0x800D, 9), Some(i64::from(g.ppwm)));
+        assert_eq!(s.get(0x800D, 10), Some(i64::from(g.ipwm)));
+    }
+}
