@@ -1,8 +1,31 @@
-//! ESI XML and SII image generation from the `pam-slave` device model.
+//! ESI XML and SII image tooling for the PAM-199-P-ETC (host tools).
 //!
-//! The SII image is produced by the slave's own encoder
-//! ([`pam_slave::device::sii_image`]) so the soft ESC and the generated file
-//! cannot disagree. ESI XML generation is not implemented yet.
+//! Everything is generated from the `pam-slave` device model, so the
+//! EtherCAT master's view (ESI), the EEPROM (SII) and the firmware cannot
+//! disagree:
+//!
+//! - [`sii_image`] is the SII EEPROM image as the slave's own encoder
+//!   ([`pam_slave::device::sii_image`]) produces it; [`ihex`] writes it as
+//!   Intel HEX.
+//! - [`esi::generate`] writes the ETG.2000 v1.17 ESI XML (dictionary, PDOs,
+//!   SyncManagers, mailbox, EEPROM, alternative PDO assignments) with
+//!   quick-xml's writer; [`esi::Capabilities`] states the CoE services.
+//! - [`inspect::inspect`] decodes any SII image (ours or a vendor's dump)
+//!   into a listing or JSON, reporting broken images instead of failing.
+//! - [`check::check`] cross-checks an ESI file against an SII image.
+//!
+//! The `esi` binary (`src/main.rs`) puts these behind a command line. This
+//! crate is a host tool: it may allocate and use `std`, but it never
+//! restates device data by hand.
+
+pub mod check;
+pub mod esi;
+pub mod ihex;
+pub mod inspect;
+pub mod json;
+pub mod xml;
+
+pub use esi::{Capabilities, generate};
 
 /// The SII EEPROM image of the PAM-199-P-ETC, as the software ESC serves it.
 pub fn sii_image() -> Vec<u8> {

@@ -1,2 +1,153 @@
-//! `esi` CLI.
-fn main() {}
+//! `esi`: generate the PAM-199-P-ETC's ESI XML and SII image, inspect SII
+//! images and cross-check an ESI against an SII.
+//!
+//! Exit codes: 0 success, 1 `check` found mismatches, 2 an input or output
+//! file could not be read, parsed or written.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use pam_esi::{Capabilities, check, esi, ihex, inspect};
+
+/// ESI and SII tooling for the PAM-199-P-ETC.
+#[derive(Debug, Parser)]
+#[command(name = "esi", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Write the ESI XML (stdout without -o).
+    Generate {
+        /// Output file, e.g. PAM-199-P-ETC.xml.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
+    /// Write the SII EEPROM image (binary; Intel HEX with --hex).
+    Sii {
+        /// Output file, e.g. eeprom.bin (stdout without -o).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Write Intel HEX instead of binary.
+        #[arg(long)]
+        hex: bool,
+    },
+    /// Decode an SII image (binary, or Intel HEX starting with ':').
+    Inspect {
+        /// The image file.
+        file: PathBuf,
+        /// Print JSON instead of the listing.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Cross-check an ESI file against an SII image; exit 1 on mismatch.
+    Check {
+        /// The ESI XML file.
+        esi: PathBuf,
+        /// The SII image (binary or Intel HEX).
+        sii: PathBuf,
+    },
+}
+
+/// A failure that ends the program with exit code 2.
+struct Failure(String);
+
+fn read(path: &Path) -> Result<Vec<u8>, Failure> {
+    std::fs::read(path).map_err(|e| Failure(format!("cannot read {}: {e}", path.display())))
+}
+
+/// Reads an SII image: Intel HEX if the file starts with ':', else binary.
+fn read_image(path: &Path) -> Result<Vec<u8>, Failure> {
+    let bytes = read(path)?;
+    if bytes.first() == Some(&b':') {
+        let text = String::from_utf8(bytes)
+            .map_err(|_| Failure(format!("{}: Intel HEX is not text", path.display())))?;
+        ihex::decode(&text)
+            .map_err(|e| Failure(format!("{}: invalid Intel HEX: {e}", path.display())))
+    } else {
+        Ok(bytes)
+    }
+}
+
+fn write(path: Option<&Path>, data: &[u8]) -> Result<(), Failure> {
+    match path {
+        Some(p) => std::fs::write(p, data)
+            .map_err(|e| Failure(format!("cannot write {}: {e}", p.display()))),
+        None => {
+            use std::io::Write;
+            let mut out = std::io::stdout().lock();
+            out.write_all(data)
+                .and_then(|()| out.flush())
+                .map_err(|e| Failure(format!("cannot write to stdout: {e}")))
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<ExitCode, Failure> {
+    match cli.command {
+        Command::Generate { output } => {
+            let xml = esi::generate(&Capabilities::default())
+                .map_err(|e| Failure(format!("cannot generate the ESI: {e}")))?;
+            write(output.as_deref(), &xml)?;
+        }
+        Command::Sii { output, hex } => {
+            let image = pam_esi::sii_image();
+            let data = if hex {
+                ihex::encode(&image).into_bytes()
+            } else {
+                image
+            };
+            write(output.as_deref(), &data)?;
+        }
+        Command::Inspect { file, json } => {
+            let image = read_image(&file)?;
+            let report = inspect::inspect(&image)
+                .map_err(|e| Failure(format!("{}: not an SII image: {e}", file.display())))?;
+            let text = if json {
+                report.to_json().to_pretty() + "\n"
+            } else {
+                report.to_text()
+            };
+            write(None, text.as_bytes())?;
+        }
+        Command::Check { esi, sii } => {
+            let xml = String::from_utf8(read(&esi)?).map_err(|_| {
+                Failure(format!(
+                    "{}: not an ESI XML file (not UTF-8 text)",
+                    esi.display()
+                ))
+            })?;
+            let image = read_image(&sii)?;
+            let mismatches = check::check(&xml, &image).map_err(|e| {
+                Failure(format!(
+                    "cannot check {} against {}: {e}",
+                    esi.display(),
+                    sii.display()
+                ))
+            })?;
+            if mismatches.is_empty() {
+                println!("{} and {} agree", esi.display(), sii.display());
+            } else {
+                for m in &mismatches {
+                    println!("{m}");
+                }
+                println!("{} mismatch(es)", mismatches.len());
+                return Ok(ExitCode::from(1));
+            }
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(code) => code,
+        Err(Failure(msg)) => {
+            eprintln!("esi: {msg}");
+            ExitCode::from(2)
+        }
+    }
+}

@@ -1,18 +1,21 @@
 //! Software ESC throughput: one process-data cycle as ethercrab's `tx_rx`
 //! sends it (one LRW over the group's image plus FPRD 0x0130 AL status per
 //! slave; with 64 slaves that is 2 frames) through a line of 1 and of 64
-//! configured ESCs.
+//! configured ESCs, two ways: `serial` (each ESC processes the whole frame
+//! in turn) and `line` (the virtual link's `Chain`, which parses the frame
+//! once and hands each datagram to the slaves it addresses).
 //!
 //! Run: `cargo bench -p pam-slave --bench esc`. Criterion reports the time
 //! per cycle and, as throughput, slaves per second; ns per slave per cycle
 //! = time / slave count.
 
-// criterion_group! generates an undocumented function.
+// criterion's group macro generates an undocumented function.
 #![allow(missing_docs)]
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use pam_slave::device::sii_image;
 use pam_slave::esc::soft::SoftEsc;
+use pam_slave::host::chain::Chain;
 use pam_slave::wire::builder::FrameBuilder;
 use pam_slave::wire::ecat::Command;
 use std::hint::black_box;
@@ -119,27 +122,86 @@ fn wkc_sum(frame: &[u8]) -> u32 {
         .sum()
 }
 
+/// Configures a `Chain` (the virtual link's line) like `configure`, through
+/// the same frames.
+fn configure_chain(chain: &mut Chain, n: usize) {
+    let mut buf = vec![0u8; 2048];
+    for i in 0..n as u16 {
+        let mut b = FrameBuilder::new(&mut buf, [0x10; 6]).expect("buffer");
+        let station = 0x1000 + i;
+        let adp = 0u16.wrapping_sub(i) as u32;
+        b.push(Command::Apwr, adp | (0x0010 << 16), &station.to_le_bytes())
+            .expect("fits");
+        let sm2 = [0x00, 0x11, OUT as u8, 0, 0x64, 0, 1, 0];
+        let sm3 = [0x80, 0x11, IN as u8, 0, 0x20, 0, 1, 0];
+        b.push(Command::Apwr, adp | (0x0810 << 16), &sm2)
+            .expect("fits");
+        b.push(Command::Apwr, adp | (0x0818 << 16), &sm3)
+            .expect("fits");
+        let log_out = u32::from(i) * u32::from(OUT + IN);
+        let log_in = log_out + u32::from(OUT);
+        let mut f0 = [0u8; 16];
+        f0[0..4].copy_from_slice(&log_out.to_le_bytes());
+        f0[4..6].copy_from_slice(&OUT.to_le_bytes());
+        f0[7] = 7;
+        f0[8..10].copy_from_slice(&0x1100u16.to_le_bytes());
+        f0[11] = 2;
+        f0[12] = 1;
+        let mut f1 = f0;
+        f1[0..4].copy_from_slice(&log_in.to_le_bytes());
+        f1[4..6].copy_from_slice(&IN.to_le_bytes());
+        f1[8..10].copy_from_slice(&0x1180u16.to_le_bytes());
+        f1[11] = 1;
+        b.push(Command::Apwr, adp | (0x0600 << 16), &f0)
+            .expect("fits");
+        b.push(Command::Apwr, adp | (0x0610 << 16), &f1)
+            .expect("fits");
+        let len = b.finish();
+        chain.process_frame(&mut buf[..len]);
+    }
+}
+
 fn bench(c: &mut Criterion) {
     let sii = sii_image();
     let mut g = c.benchmark_group("soft_esc_cycle");
     for n in [1usize, 64] {
+        let (templates, expected_wkc) = cycle_frames(n);
+        g.throughput(Throughput::Elements(n as u64));
+
+        // Each ESC processes the whole frame in turn (the per-ESC path).
         let mut line: Vec<SoftEsc> = (0..n).map(|_| SoftEsc::new(&sii)).collect();
         configure(&mut line);
-        let (templates, expected_wkc) = cycle_frames(n);
         let mut frames = templates.clone();
-        // Sanity: the cycle is really processed by every slave.
         let mut wkc = 0;
         for f in &mut frames {
             pass(&mut line, f);
             wkc += wkc_sum(f);
         }
         assert_eq!(wkc, expected_wkc, "every slave answers the cycle");
-        g.throughput(Throughput::Elements(n as u64));
-        g.bench_with_input(BenchmarkId::new("slaves", n), &n, |bch, _| {
+        g.bench_with_input(BenchmarkId::new("serial", n), &n, |bch, _| {
             bch.iter(|| {
                 for (f, t) in frames.iter_mut().zip(&templates) {
                     f.copy_from_slice(t);
                     pass(black_box(&mut line), black_box(f));
+                }
+            })
+        });
+
+        // The virtual link's line.
+        let mut chain = Chain::new(n);
+        configure_chain(&mut chain, n);
+        let mut frames = templates.clone();
+        let mut wkc = 0;
+        for f in &mut frames {
+            chain.process_frame(f);
+            wkc += wkc_sum(f);
+        }
+        assert_eq!(wkc, expected_wkc, "every slave answers the cycle (line)");
+        g.bench_with_input(BenchmarkId::new("line", n), &n, |bch, _| {
+            bch.iter(|| {
+                for (f, t) in frames.iter_mut().zip(&templates) {
+                    f.copy_from_slice(t);
+                    black_box(&mut chain).process_frame(black_box(f));
                 }
             })
         });

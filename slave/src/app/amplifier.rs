@@ -307,7 +307,9 @@ impl Amplifier {
                 } else {
                     stage.set_current(sol, 0, sp.dither(), sp.pwm_hz, sp.gains());
                 }
-                outs[i] = Some((ready, out));
+                if let Some(slot) = outs.get_mut(i) {
+                    *slot = Some((ready, out));
+                }
             }
             stage.step(TICK_US);
             for (i, sol) in [Solenoid::A, Solenoid::B].into_iter().enumerate() {

@@ -113,9 +113,14 @@ pub struct SoftEsc {
     fmmus: [FmmuConfig; FMMU_COUNT],
     /// Bit n set: FMMU n enabled (fast skip in logical addressing).
     fmmu_active: u8,
+    /// Bit n set: SM n enabled with a non-zero length.
+    sm_active: u8,
     /// Bit n set: an ECAT write completed the buffer of output SM n since the
     /// last [`SoftEsc::take_sm_writes`].
     sm_written: u16,
+    /// Cached 0x0010 / 0x0012 for configured addressing (hot path).
+    station: u16,
+    alias: u16,
 }
 
 impl core::fmt::Debug for SoftEsc {
@@ -138,7 +143,10 @@ impl SoftEsc {
             sms: [SmConfig::default(); SM_COUNT],
             fmmus: [FmmuConfig::default(); FMMU_COUNT],
             fmmu_active: 0,
+            sm_active: 0,
             sm_written: 0,
+            station: 0,
+            alias: 0,
         };
         let n = sii.len().min(SII_SIZE);
         if let (Some(dst), Some(src)) = (esc.sii.get_mut(..n), sii.get(..n)) {
@@ -155,6 +163,7 @@ impl SoftEsc {
         self.sms = [SmConfig::default(); SM_COUNT];
         self.fmmus = [FmmuConfig::default(); FMMU_COUNT];
         self.fmmu_active = 0;
+        self.sm_active = 0;
         self.sm_written = 0;
         self.set_u8(reg::TYPE, 0x11);
         self.set_u8(reg::REVISION, 0x02);
@@ -167,6 +176,8 @@ impl SoftEsc {
         self.set_u16(reg::FEATURES, 0x0000);
         let alias = self.sii_word(4);
         self.set_u16(reg::STATION_ALIAS, alias);
+        self.station = 0;
+        self.alias = alias;
         let pdi = self.sii_word(0);
         self.set_u8(reg::PDI_CONTROL, (pdi & 0xFF) as u8);
         self.set_u8(reg::ESC_CONFIG, (pdi >> 8) as u8);
@@ -180,6 +191,16 @@ impl SoftEsc {
         // 8-byte EEPROM reads.
         self.set_u16(reg::SII_CONTROL, 0x0040);
         self.set_port1_link(false);
+    }
+
+    /// The configured station address (0x0010).
+    pub fn station_address(&self) -> u16 {
+        self.station
+    }
+
+    /// The configured station alias (0x0012).
+    pub fn station_alias(&self) -> u16 {
+        self.alias
     }
 
     /// Sets whether port 1 has a link (a slave that is not last in a chain
@@ -270,9 +291,10 @@ impl SoftEsc {
                 };
             }
             Command::Fprd | Command::Fpwr | Command::Fprw | Command::Frmw => {
-                let station = self.mem_u16(reg::STATION_ADDRESS);
-                let alias = self.mem_u16(reg::STATION_ALIAS);
-                let me = adp == station || (alias != 0 && adp == alias);
+                let me = adp == self.station || (self.alias != 0 && adp == self.alias);
+                if !me && cmd != Command::Frmw {
+                    return;
+                }
                 let data = dg.data_mut();
                 wkc_add = match cmd {
                     Command::Frmw if me => self.phys_read_count(ado, data, ReadMode::Copy),
@@ -341,10 +363,10 @@ impl SoftEsc {
         let mut write_hit = false;
         // Writes first, with the data as it arrived; then reads overwrite.
         for pass_write in [true, false] {
-            for i in 0..FMMU_COUNT {
-                if self.fmmu_active & (1 << i) == 0 {
-                    continue;
-                }
+            let mut bits = self.fmmu_active;
+            while bits != 0 {
+                let i = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
                 let Some(f) = self.fmmus.get(i).copied() else {
                     continue;
                 };
@@ -477,7 +499,11 @@ impl SoftEsc {
         }
         // SyncManager checks.
         let mut complete = 0u8;
-        for (n, sm) in self.sms.iter().enumerate() {
+        let mut bits = self.sm_active;
+        while bits != 0 {
+            let n = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let Some(sm) = self.sms.get(n) else { continue };
             if !sm.overlaps(a, b) {
                 continue;
             }
@@ -504,10 +530,10 @@ impl SoftEsc {
                 ReadMode::Or => *d | v,
             };
         }
-        for n in 0..SM_COUNT {
-            if complete & (1 << n) != 0 {
-                self.ecat_read_complete(n);
-            }
+        while complete != 0 {
+            let n = complete.trailing_zeros() as usize;
+            complete &= complete - 1;
+            self.ecat_read_complete(n);
         }
         true
     }
@@ -540,7 +566,11 @@ impl SoftEsc {
             return true;
         }
         let mut complete = 0u8;
-        for (n, sm) in self.sms.iter().enumerate() {
+        let mut bits = self.sm_active;
+        while bits != 0 {
+            let n = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let Some(sm) = self.sms.get(n) else { continue };
             if !sm.overlaps(a, b) {
                 continue;
             }
@@ -562,10 +592,10 @@ impl SoftEsc {
         ) {
             dst.copy_from_slice(src);
         }
-        for n in 0..SM_COUNT {
-            if complete & (1 << n) != 0 {
-                self.ecat_write_complete(n);
-            }
+        while complete != 0 {
+            let n = complete.trailing_zeros() as usize;
+            complete &= complete - 1;
+            self.ecat_write_complete(n);
         }
         true
     }
@@ -641,6 +671,8 @@ impl SoftEsc {
         if al_control {
             self.raise_al_event(reg::AL_EVENT_AL_CONTROL);
         }
+        self.station = self.mem_u16(reg::STATION_ADDRESS);
+        self.alias = self.mem_u16(reg::STATION_ALIAS);
         if touched_fmmu != 0 {
             self.reload_fmmus();
         }
@@ -697,6 +729,11 @@ impl SoftEsc {
         };
         let old = *slot;
         *slot = new;
+        if new.enabled && new.len > 0 {
+            self.sm_active |= 1 << n;
+        } else {
+            self.sm_active &= !(1 << n);
+        }
         // (Re)configuring or enabling a SyncManager resets its buffer state.
         if old.start != new.start
             || old.len != new.len
@@ -936,6 +973,7 @@ impl Esc for SoftEsc {
                     self.set_u8(r, v);
                 }
             }
+            self.alias = self.mem_u16(reg::STATION_ALIAS);
             return Ok(());
         }
         let (complete, _touched) = self.pdi_sm_checks(a, b, true)?;

@@ -1,0 +1,427 @@
+//! Cross-check of an ESI file against an SII image (host tool).
+//!
+//! Reads the ESI back with quick-xml's reader and compares what both
+//! describe: identity, device strings, mailbox layout and protocols, CoE
+//! details, SyncManagers, FMMUs, PDOs (index, default SyncManager — SII
+//! 0xFF is an ESI PDO without `Sm` — and entries), ConfigData, BootStrap and
+//! the EEPROM size. Every difference is one [`Mismatch`].
+
+use std::fmt;
+
+use pam_slave::sii::{FmmuUsage, PdoDirection, SiiError, SiiReader, SiiStrings, SmType, protocols};
+
+use crate::esi::bootstrap_bytes;
+use crate::xml::{self, Element, hex_binary, hex_dec};
+
+/// One difference between the ESI and the SII.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Mismatch {
+    /// What was compared (`identity product code`, `SM2 length`, ...).
+    pub what: String,
+    /// The ESI's value.
+    pub esi: String,
+    /// The SII's value.
+    pub sii: String,
+}
+
+impl fmt::Display for Mismatch {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: ESI {}, SII {}", self.what, self.esi, self.sii)
+    }
+}
+
+/// The inputs could not be compared at all.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckError {
+    /// The ESI is not well-formed XML.
+    #[error("ESI is not well-formed XML: {0}")]
+    Xml(#[from] xml::XmlError),
+    /// The ESI lacks a required element.
+    #[error("ESI has no {0}")]
+    Missing(&'static str),
+    /// The SII image cannot be read.
+    #[error("SII image cannot be read: {0}")]
+    Sii(#[from] SiiError),
+}
+
+struct Diff(Vec<Mismatch>);
+
+impl Diff {
+    fn cmp<T: PartialEq + fmt::Debug>(&mut self, what: impl Into<String>, esi: T, sii: T) {
+        if esi != sii {
+            self.0.push(Mismatch {
+                what: what.into(),
+                esi: format!("{esi:?}"),
+                sii: format!("{sii:?}"),
+            });
+        }
+    }
+
+    fn hex<T: Into<i64>>(&mut self, what: impl Into<String>, esi: Option<i64>, sii: T) {
+        let sii = sii.into();
+        if esi != Some(sii) {
+            self.0.push(Mismatch {
+                what: what.into(),
+                esi: esi.map_or_else(|| "missing".into(), |v| format!("{v:#x}")),
+                sii: format!("{sii:#x}"),
+            });
+        }
+    }
+}
+
+fn num(e: Option<&Element>) -> Option<i64> {
+    e.and_then(|e| hex_dec(&e.text))
+}
+
+fn num_attr(e: &Element, a: &str) -> Option<i64> {
+    e.attr(a).and_then(hex_dec)
+}
+
+fn string(strings: &SiiStrings<'_>, idx: u8) -> String {
+    strings
+        .get_bytes(idx)
+        .map(|b| String::from_utf8_lossy(b).into_owned())
+        .unwrap_or_default()
+}
+
+fn esi_sm_type(t: SmType) -> &'static str {
+    match t {
+        SmType::MailboxOut => "MBoxOut",
+        SmType::MailboxIn => "MBoxIn",
+        SmType::ProcessOut => "Outputs",
+        SmType::ProcessIn => "Inputs",
+        SmType::Unused | SmType::Unknown(_) => "",
+    }
+}
+
+fn esi_fmmu(u: FmmuUsage) -> Option<&'static str> {
+    match u {
+        FmmuUsage::Outputs => Some("Outputs"),
+        FmmuUsage::Inputs => Some("Inputs"),
+        FmmuUsage::SyncMStatus => Some("MBoxState"),
+        _ => None,
+    }
+}
+
+/// Compares the ESI text `esi` with the SII image `sii`; an empty list
+/// means they agree. Only the first `Device` of the ESI is checked.
+pub fn check(esi: &str, sii: &[u8]) -> Result<Vec<Mismatch>, CheckError> {
+    let root = xml::parse(esi)?;
+    if root.name != "EtherCATInfo" {
+        return Err(CheckError::Missing("EtherCATInfo root element"));
+    }
+    let dev = root
+        .path("Descriptions/Devices/Device")
+        .ok_or(CheckError::Missing("Descriptions/Devices/Device"))?;
+    let r = SiiReader::new(sii)?;
+    let strings = r.strings()?;
+    let general = r.general()?;
+    let mut d = Diff(Vec::new());
+
+    // Identity.
+    let id = r.identity();
+    d.hex("vendor id", num(root.path("Vendor/Id")), id.vendor_id);
+    let ty = dev
+        .child("Type")
+        .ok_or(CheckError::Missing("Device/Type"))?;
+    d.hex("product code", num_attr(ty, "ProductCode"), id.product_code);
+    d.hex("revision", num_attr(ty, "RevisionNo"), id.revision);
+
+    // Device strings and CoE details from the General category.
+    match general {
+        Some(g) => {
+            d.cmp(
+                "order code (Type)",
+                ty.text.clone(),
+                string(&strings, g.order_idx),
+            );
+            d.cmp(
+                "device name (Name)",
+                dev.text_at("Name").unwrap_or("").to_string(),
+                string(&strings, g.name_idx),
+            );
+            d.cmp(
+                "group (GroupType)",
+                dev.text_at("GroupType").unwrap_or("").to_string(),
+                string(&strings, g.group_idx),
+            );
+            let coe = dev.path("Mailbox/CoE");
+            let attr = |a: &str| {
+                coe.and_then(|c| c.attr(a))
+                    .is_some_and(|v| v == "1" || v == "true")
+            };
+            for (name, bit) in [
+                ("SdoInfo", 1),
+                ("PdoAssign", 2),
+                ("PdoConfig", 3),
+                ("CompleteAccess", 5),
+            ] {
+                d.cmp(
+                    format!("CoE {name} (General CoE details bit {bit})"),
+                    attr(name),
+                    g.coe_details & (1 << bit) != 0,
+                );
+            }
+        }
+        None => d.cmp("General category", "present", "missing"),
+    }
+
+    // Mailbox protocols.
+    let mbx = dev.child("Mailbox");
+    let mut esi_protocols = 0u16;
+    for (tag, bit) in [
+        ("AoE", protocols::AOE),
+        ("EoE", protocols::EOE),
+        ("CoE", protocols::COE),
+        ("FoE", protocols::FOE),
+        ("SoE", protocols::SOE),
+        ("VoE", protocols::VOE),
+    ] {
+        if mbx.and_then(|m| m.child(tag)).is_some() {
+            esi_protocols |= bit;
+        }
+    }
+    d.hex(
+        "mailbox protocols",
+        Some(i64::from(esi_protocols)),
+        r.mailbox_protocols(),
+    );
+
+    // SyncManagers, and the standard mailbox they carry.
+    let esi_sms: Vec<&Element> = dev.children_named("Sm").collect();
+    let sii_sms: Vec<_> = r.sync_managers()?.collect();
+    d.cmp("SyncManager count", esi_sms.len(), sii_sms.len());
+    for (i, (e, s)) in esi_sms.iter().zip(&sii_sms).enumerate() {
+        d.hex(
+            format!("SM{i} start address"),
+            num_attr(e, "StartAddress"),
+            s.start,
+        );
+        d.hex(
+            format!("SM{i} length"),
+            num_attr(e, "DefaultSize"),
+            s.length,
+        );
+        d.hex(
+            format!("SM{i} control byte"),
+            num_attr(e, "ControlByte"),
+            s.control,
+        );
+        d.hex(format!("SM{i} enable"), num_attr(e, "Enable"), s.enable);
+        d.cmp(
+            format!("SM{i} type"),
+            e.text.as_str(),
+            esi_sm_type(s.sm_type),
+        );
+    }
+    let mb = r.standard_mailbox();
+    let by_type = |t: &str| esi_sms.iter().find(|e| e.text == t);
+    for (t, offset, size) in [
+        ("MBoxOut", mb.rx_offset, mb.rx_size),
+        ("MBoxIn", mb.tx_offset, mb.tx_size),
+    ] {
+        let e = by_type(t);
+        d.hex(
+            format!("{t} offset (SII standard mailbox)"),
+            e.and_then(|e| num_attr(e, "StartAddress")),
+            offset,
+        );
+        d.hex(
+            format!("{t} size (SII standard mailbox)"),
+            e.and_then(|e| num_attr(e, "DefaultSize")),
+            size,
+        );
+    }
+
+    // FMMUs.
+    let esi_fmmus: Vec<String> = dev.children_named("Fmmu").map(|e| e.text.clone()).collect();
+    let sii_fmmus: Vec<String> = r
+        .fmmus()?
+        .filter_map(esi_fmmu)
+        .map(str::to_string)
+        .collect();
+    d.cmp("FMMU usage", esi_fmmus, sii_fmmus);
+
+    // PDOs.
+    for (direction, tag) in [(PdoDirection::Rx, "RxPdo"), (PdoDirection::Tx, "TxPdo")] {
+        let esi_pdos: Vec<&Element> = dev.children_named(tag).collect();
+        let mut seen = Vec::new();
+        for p in r.pdos(direction)? {
+            let p = p?;
+            seen.push(i64::from(p.index));
+            let what = format!("{tag} {:#06x}", p.index);
+            let Some(e) = esi_pdos
+                .iter()
+                .find(|e| num(e.child("Index")) == Some(i64::from(p.index)))
+            else {
+                d.cmp(what, "missing", "present");
+                continue;
+            };
+            d.cmp(
+                format!("{what} SyncManager"),
+                num_attr(e, "Sm"),
+                p.sm().map(i64::from),
+            );
+            d.cmp(
+                format!("{what} name"),
+                e.text_at("Name").unwrap_or("").to_string(),
+                string(&strings, p.name_idx),
+            );
+            let esi_entries: Vec<(i64, i64, i64)> = e
+                .children_named("Entry")
+                .map(|x| {
+                    (
+                        num(x.child("Index")).unwrap_or(-1),
+                        num(x.child("SubIndex")).unwrap_or(0),
+                        num(x.child("BitLen")).unwrap_or(-1),
+                    )
+                })
+                .collect();
+            let sii_entries: Vec<(i64, i64, i64)> = p
+                .entries()
+                .map(|x| (i64::from(x.index), i64::from(x.sub), i64::from(x.bit_len)))
+                .collect();
+            if esi_entries.len() != sii_entries.len() {
+                d.cmp(
+                    format!("{what} entry count"),
+                    esi_entries.len(),
+                    sii_entries.len(),
+                );
+            }
+            for (n, (a, b)) in esi_entries.iter().zip(&sii_entries).enumerate() {
+                if a != b {
+                    d.0.push(Mismatch {
+                        what: format!("{what} entry {}", n + 1),
+                        esi: format!("{:#06x}:{} {} bits", a.0, a.1, a.2),
+                        sii: format!("{:#06x}:{} {} bits", b.0, b.1, b.2),
+                    });
+                }
+            }
+        }
+        for e in &esi_pdos {
+            let index = num(e.child("Index")).unwrap_or(-1);
+            if !seen.contains(&index) {
+                d.cmp(format!("{tag} {index:#06x}"), "present", "missing");
+            }
+        }
+    }
+
+    // EEPROM.
+    let eeprom = dev.child("Eeprom");
+    let text = |p: &str| eeprom.and_then(|e| e.text_at(p));
+    let bytes_at = |p: &str| {
+        text(p)
+            .and_then(hex_binary)
+            .map_or_else(|| "missing".to_string(), |b| crate::esi::hex_binary(&b))
+    };
+    d.cmp(
+        "Eeprom ConfigData (SII bytes 0..13)",
+        bytes_at("ConfigData"),
+        crate::esi::hex_binary(&r.config_data()),
+    );
+    d.cmp(
+        "Eeprom BootStrap (SII bootstrap mailbox)",
+        bytes_at("BootStrap"),
+        crate::esi::hex_binary(&bootstrap_bytes(&r.bootstrap_mailbox())),
+    );
+    d.hex(
+        "Eeprom ByteSize",
+        text("ByteSize").and_then(hex_dec),
+        r.eeprom_size_bytes(),
+    );
+    Ok(d.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::esi::{Capabilities, generate};
+    use pam_slave::sii::{CategoryType, crc8};
+
+    fn ours() -> (String, Vec<u8>) {
+        let esi = String::from_utf8(generate(&Capabilities::default()).unwrap()).unwrap();
+        (esi, crate::sii_image())
+    }
+
+    /// Byte offset of the data of the first category of `kind`.
+    fn category_data(img: &[u8], kind: CategoryType) -> usize {
+        let r = SiiReader::new(img).unwrap();
+        let c = r.find(kind).unwrap().unwrap();
+        usize::from(c.word_offset) * 2 + 4
+    }
+
+    fn fix_crc(img: &mut [u8]) {
+        img[14] = crc8(&img[..14]);
+    }
+
+    #[test]
+    fn our_esi_and_our_sii_agree() {
+        let (esi, sii) = ours();
+        let m = check(&esi, &sii).unwrap();
+        assert!(m.is_empty(), "{m:#?}");
+    }
+
+    #[test]
+    fn changed_product_code_in_the_sii_is_reported() {
+        let (esi, mut sii) = ours();
+        sii[0x14] ^= 0x01;
+        let m = check(&esi, &sii).unwrap();
+        assert!(m.iter().any(|m| m.what == "product code"), "{m:#?}");
+    }
+
+    #[test]
+    fn changed_sm_size_is_reported() {
+        let (esi, mut sii) = ours();
+        let at = category_data(&sii, CategoryType::SyncM) + 2 * 8 + 2; // SM2 length
+        sii[at] = sii[at].wrapping_add(1);
+        let m = check(&esi, &sii).unwrap();
+        assert!(m.iter().any(|m| m.what == "SM2 length"), "{m:#?}");
+    }
+
+    #[test]
+    fn pdo_moved_to_no_sync_manager_is_reported() {
+        let (esi, mut sii) = ours();
+        // First RxPDO (0x1600): SM byte at header offset 3.
+        let at = category_data(&sii, CategoryType::RxPdo);
+        assert_eq!(u16::from_le_bytes([sii[at], sii[at + 1]]), 0x1600);
+        sii[at + 3] = 0xFF;
+        let m = check(&esi, &sii).unwrap();
+        assert!(
+            m.iter().any(|m| m.what == "RxPdo 0x1600 SyncManager"),
+            "{m:#?}"
+        );
+    }
+
+    #[test]
+    fn changed_config_data_is_reported() {
+        let (esi, mut sii) = ours();
+        sii[8] ^= 0x01; // station alias low byte
+        fix_crc(&mut sii);
+        let m = check(&esi, &sii).unwrap();
+        assert!(
+            m.iter().any(|m| m.what.starts_with("Eeprom ConfigData")),
+            "{m:#?}"
+        );
+    }
+
+    #[test]
+    fn flipped_capability_is_reported_against_the_sii() {
+        let (_, sii) = ours();
+        let caps = Capabilities {
+            complete_access: true,
+            ..Capabilities::default()
+        };
+        let esi = String::from_utf8(generate(&caps).unwrap()).unwrap();
+        let m = check(&esi, &sii).unwrap();
+        assert_eq!(m.len(), 1, "{m:#?}");
+        assert!(m[0].what.starts_with("CoE CompleteAccess"));
+    }
+
+    #[test]
+    fn invalid_inputs_are_errors_not_panics() {
+        let (esi, sii) = ours();
+        assert!(matches!(check("<a>", &sii), Err(CheckError::Xml(_))));
+        assert!(matches!(check("<a/>", &sii), Err(CheckError::Missing(_))));
+        assert!(matches!(check(&esi, &sii[..16]), Err(CheckError::Sii(_))));
+    }
+}

@@ -1,0 +1,1148 @@
+//! ESI (ETG.2000 v1.17) XML generation from the device model (host tool).
+//!
+//! Everything comes from `pam-slave`: the dictionary from
+//! [`pam_slave::od::model`], identity from [`pam_slave::device`], and the
+//! communication layout (SyncManagers, FMMUs, mailbox, PDO assignment,
+//! ConfigData, BootStrap) by decoding the device's own SII image, so the ESI
+//! and the EEPROM cannot disagree. The XML is written with quick-xml's
+//! [`Writer`], never by string concatenation, and is byte-for-byte
+//! deterministic.
+
+use std::collections::BTreeMap;
+use std::io;
+
+use pam_slave::device;
+use pam_slave::esc::Esc;
+use pam_slave::esc::registers as reg;
+use pam_slave::esc::soft::SoftEsc;
+use pam_slave::od::model::{ENUMS, OBJECTS};
+use pam_slave::od::types::{Access, DataType, DefaultValue, Entry, Object, ObjectCode, PdoMapping};
+use pam_slave::sii::{self, FmmuUsage, PdoDirection, SiiError, SiiReader, SmType};
+use quick_xml::Writer;
+use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, BytesText, Event};
+
+/// ETG.2000 schema version the file follows.
+pub const ESI_VERSION: &str = "1.17";
+/// Vendor name of vendor id 0x05AE.
+pub const VENDOR_NAME: &str = "W.E.St. Elektronik GmbH";
+/// Display name of the device group (the group type comes from the SII).
+pub const GROUP_NAME: &str = "PAM amplifiers";
+/// Name of the default PDO assignment (manual 7.1, "Case 1").
+pub const DIRECTIONAL_MAPPING: &str = "Directional Mode (Extended)";
+/// Name of the alternative PDO assignment (manual 7.1, "Case 2").
+pub const INDEPENDENT_MAPPING: &str = "Independent Mode (Extended)";
+
+/// AL state machine timeouts in ms (ESI `Info/StateMachine/Timeout`):
+/// PRE-OP, SAFE-OP/OP, back to INIT, back to SAFE-OP.
+pub const STATE_MACHINE_TIMEOUTS_MS: [u32; 4] = [2000, 9000, 5000, 200];
+/// Mailbox request and response timeouts in ms (ESI `Info/Mailbox/Timeout`).
+pub const MAILBOX_TIMEOUTS_MS: [u32; 2] = [100, 2000];
+
+/// CoE services the slave supports, written as `Mailbox/CoE` attributes.
+///
+/// The defaults are what the slave implements today; flip a field when the
+/// service lands (and its bit in the SII General category, which `check`
+/// compares).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Capabilities {
+    /// SDO Information service (SII CoE details bit 1).
+    pub sdo_info: bool,
+    /// PDO assignment via 0x1C12/0x1C13 (SII CoE details bit 2).
+    pub pdo_assign: bool,
+    /// PDO mapping configuration via 0x16xx/0x1Axx (SII CoE details bit 3).
+    pub pdo_config: bool,
+    /// SDO complete access (SII CoE details bit 5).
+    pub complete_access: bool,
+    /// Segmented SDO transfer.
+    pub segmented_sdo: bool,
+}
+
+impl Default for Capabilities {
+    fn default() -> Self {
+        Capabilities {
+            sdo_info: false,
+            pdo_assign: true,
+            pdo_config: false,
+            complete_access: false,
+            segmented_sdo: true,
+        }
+    }
+}
+
+impl Capabilities {
+    /// The SII General "CoE details" byte these capabilities imply (bit 0
+    /// SDO is always set).
+    pub fn coe_details(&self) -> u8 {
+        0x01 | u8::from(self.sdo_info) << 1
+            | u8::from(self.pdo_assign) << 2
+            | u8::from(self.pdo_config) << 3
+            | u8::from(self.complete_access) << 5
+    }
+}
+
+/// Why the ESI could not be generated.
+#[derive(Debug, thiserror::Error)]
+pub enum EsiError {
+    /// The device's own SII image does not decode.
+    #[error("the device SII image does not decode: {0}")]
+    Sii(#[from] SiiError),
+    /// Writing the XML failed.
+    #[error("writing XML failed: {0}")]
+    Io(#[from] io::Error),
+    /// The model and the SII disagree in a way the ESI cannot express.
+    #[error("inconsistent device model: {0}")]
+    Model(String),
+}
+
+type W = Writer<Vec<u8>>;
+
+fn start(w: &mut W, name: &str, attrs: &[(&str, &str)]) -> io::Result<()> {
+    let mut s = BytesStart::new(name);
+    for a in attrs {
+        s.push_attribute(*a);
+    }
+    w.write_event(Event::Start(s))
+}
+
+fn end(w: &mut W, name: &str) -> io::Result<()> {
+    w.write_event(Event::End(BytesEnd::new(name)))
+}
+
+fn text_attrs(w: &mut W, name: &str, attrs: &[(&str, &str)], value: &str) -> io::Result<()> {
+    let mut e = w.create_element(name);
+    for a in attrs {
+        e = e.with_attribute(*a);
+    }
+    e.write_text_content(BytesText::new(value))?;
+    Ok(())
+}
+
+fn text(w: &mut W, name: &str, value: &str) -> io::Result<()> {
+    text_attrs(w, name, &[], value)
+}
+
+fn empty(w: &mut W, name: &str, attrs: &[(&str, &str)]) -> io::Result<()> {
+    let mut e = w.create_element(name);
+    for a in attrs {
+        e = e.with_attribute(*a);
+    }
+    e.write_empty()?;
+    Ok(())
+}
+
+/// `#x` and `width` upper-case hex digits.
+pub fn hex(value: u32, width: usize) -> String {
+    format!("#x{value:0width$X}")
+}
+
+/// Upper-case `xs:hexBinary` of `bytes`.
+pub fn hex_binary(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02X}")).collect()
+}
+
+fn flag(b: bool) -> &'static str {
+    if b { "1" } else { "0" }
+}
+
+/// The ESI type name of an entry: `UINT`, `BIT7`, `DT0800EN03`, `STRING(13)`.
+pub fn type_name(e: &Entry) -> String {
+    match e.data_type {
+        DataType::VisibleString => format!("STRING({})", e.bit_len / 8),
+        t => t.etg_name().to_string(),
+    }
+}
+
+/// Little-endian bytes of `value` in the entry's size (whole bytes,
+/// two's complement for negative values).
+pub fn value_bytes(value: i64, bit_len: u16) -> Vec<u8> {
+    let n = usize::from(bit_len.div_ceil(8)).clamp(1, 8);
+    value.to_le_bytes()[..n].to_vec()
+}
+
+/// `DefaultData`-style hex of an integer value in an entry's size.
+pub fn default_data(value: i64, bit_len: u16) -> String {
+    hex_binary(&value_bytes(value, bit_len))
+}
+
+/// ETG.1004 unit codes (prefix exponent << 24 | SI unit index << 16) for
+/// the model's unit texts that have one.
+fn unit_code(unit: &str) -> Option<(u32, &'static str, &'static str)> {
+    match unit {
+        "ms" => Some((0xFD03_0000, "millisecond", "ms")),
+        "mA" => Some((0xFD04_0000, "milliampere", "mA")),
+        "Hz" => Some((0x0020_0000, "hertz", "Hz")),
+        _ => None,
+    }
+}
+
+fn access_attrs(a: Access) -> (&'static str, Option<(&'static str, &'static str)>) {
+    match a {
+        Access::Ro => ("ro", None),
+        Access::Rw => ("rw", None),
+        Access::RwPreOp => ("rw", Some(("WriteRestrictions", "PreOP"))),
+        Access::Wo => ("wo", None),
+    }
+}
+
+fn write_access(w: &mut W, a: Access) -> io::Result<()> {
+    let (text_value, restriction) = access_attrs(a);
+    match restriction {
+        Some(r) => text_attrs(w, "Access", &[r], text_value),
+        None => text(w, "Access", text_value),
+    }
+}
+
+fn pdo_flag(p: PdoMapping) -> Option<&'static str> {
+    match p {
+        PdoMapping::None => None,
+        PdoMapping::Rx => Some("R"),
+        PdoMapping::Tx => Some("T"),
+    }
+}
+
+/// Flags of one entry (object or sub item): Access, Category, PdoMapping,
+/// Backup, Setting, in schema order.
+fn write_entry_flags(w: &mut W, e: &Entry, category: Option<&str>) -> io::Result<()> {
+    start(w, "Flags", &[])?;
+    write_access(w, e.access)?;
+    if let Some(c) = category {
+        text(w, "Category", c)?;
+    }
+    if let Some(p) = pdo_flag(e.pdo) {
+        text(w, "PdoMapping", p)?;
+    }
+    if e.backup {
+        text(w, "Backup", "1")?;
+    }
+    if e.setting {
+        text(w, "Setting", "1")?;
+    }
+    end(w, "Flags")
+}
+
+/// ETG.1000.6 mandatory objects (`Category` m); every other object is o.
+fn category(index: u16) -> &'static str {
+    match index {
+        0x1000 | 0x1018 | 0x1C00 => "m",
+        _ => "o",
+    }
+}
+
+/// Bit offsets of a record's entries: subindex 0 at 0 (8 bits), the rest
+/// packed from bit 16 in subindex order; and the total size rounded up to
+/// whole bytes.
+pub fn record_layout(o: &Object) -> (Vec<(&'static Entry, u32)>, u32) {
+    let mut out = Vec::new();
+    let mut off = 16u32;
+    for e in o.entries {
+        if e.sub == 0 {
+            out.push((e, 0));
+        } else {
+            out.push((e, off));
+            off += u32::from(e.bit_len);
+        }
+    }
+    (out, off.div_ceil(8) * 8)
+}
+
+/// Number of elements and element entry of an ARRAY object.
+fn array_shape(o: &Object) -> Option<(u32, &'static Entry)> {
+    let first = o.entries.iter().find(|e| e.sub >= 1)?;
+    Some((u32::from(o.max_sub()), first))
+}
+
+/// The ESI data type name of an object.
+pub fn object_type_name(o: &Object) -> String {
+    match (o.code, o.entries.first()) {
+        (ObjectCode::Var, Some(e)) => type_name(e),
+        _ => format!("DT{:04X}", o.index),
+    }
+}
+
+/// Bit size of an object as the ESI states it.
+pub fn object_bit_size(o: &Object) -> u32 {
+    match o.code {
+        ObjectCode::Var => o.entries.first().map_or(0, |e| u32::from(e.bit_len)),
+        ObjectCode::Record => record_layout(o).1,
+        ObjectCode::Array => array_shape(o).map_or(16, |(n, e)| 16 + n * u32::from(e.bit_len)),
+    }
+}
+
+fn write_base_types(w: &mut W) -> io::Result<()> {
+    // Name -> (sort key, bit size); sorted by CoE code then name.
+    let mut base: BTreeMap<(u16, String), u32> = BTreeMap::new();
+    for o in OBJECTS {
+        for e in o.entries {
+            if matches!(e.data_type, DataType::Enum(_)) {
+                continue;
+            }
+            base.insert((e.data_type.code(), type_name(e)), u32::from(e.bit_len));
+        }
+    }
+    for ((_, name), bits) in &base {
+        start(w, "DataType", &[])?;
+        text(w, "Name", name)?;
+        text(w, "BitSize", &bits.to_string())?;
+        end(w, "DataType")?;
+    }
+    for en in ENUMS {
+        start(w, "DataType", &[])?;
+        text(w, "Index", &hex(u32::from(en.index), 4))?;
+        text(w, "Name", en.name)?;
+        text(w, "BitSize", &en.bit_len.to_string())?;
+        for (value, label) in en.values {
+            start(w, "EnumInfo", &[])?;
+            text(w, "Text", label)?;
+            text(w, "Enum", &value.to_string())?;
+            end(w, "EnumInfo")?;
+        }
+        end(w, "DataType")?;
+    }
+    Ok(())
+}
+
+fn write_sub_item(
+    w: &mut W,
+    sub: Option<u8>,
+    name: &str,
+    type_name: &str,
+    bits: u32,
+    offset: u32,
+    e: &Entry,
+) -> io::Result<()> {
+    start(w, "SubItem", &[])?;
+    if let Some(s) = sub {
+        text(w, "SubIdx", &s.to_string())?;
+    }
+    text(w, "Name", name)?;
+    text(w, "Type", type_name)?;
+    if !e.unit.is_empty() {
+        text(w, "Comment", &format!("Unit: {}", e.unit))?;
+    }
+    text(w, "BitSize", &bits.to_string())?;
+    text(w, "BitOffs", &offset.to_string())?;
+    write_entry_flags(w, e, None)?;
+    end(w, "SubItem")
+}
+
+fn write_complex_types(w: &mut W) -> io::Result<()> {
+    for o in OBJECTS {
+        match o.code {
+            ObjectCode::Var => {}
+            ObjectCode::Record => {
+                let (layout, size) = record_layout(o);
+                start(w, "DataType", &[])?;
+                text(w, "Name", &format!("DT{:04X}", o.index))?;
+                text(w, "BitSize", &size.to_string())?;
+                for (e, off) in layout {
+                    let t = type_name(e);
+                    write_sub_item(w, Some(e.sub), e.name, &t, u32::from(e.bit_len), off, e)?;
+                }
+                end(w, "DataType")?;
+            }
+            ObjectCode::Array => {
+                let Some((n, elem)) = array_shape(o) else {
+                    continue;
+                };
+                let arr = format!("DT{:04X}ARR", o.index);
+                let bits = n * u32::from(elem.bit_len);
+                start(w, "DataType", &[])?;
+                text(w, "Name", &arr)?;
+                text(w, "BaseType", &type_name(elem))?;
+                text(w, "BitSize", &bits.to_string())?;
+                start(w, "ArrayInfo", &[])?;
+                text(w, "LBound", "1")?;
+                text(w, "Elements", &n.to_string())?;
+                end(w, "ArrayInfo")?;
+                end(w, "DataType")?;
+                start(w, "DataType", &[])?;
+                text(w, "Name", &format!("DT{:04X}", o.index))?;
+                text(w, "BitSize", &(16 + bits).to_string())?;
+                if let Some(sub0) = o.entry(0) {
+                    write_sub_item(w, Some(0), sub0.name, &type_name(sub0), 8, 0, sub0)?;
+                }
+                write_sub_item(w, None, "Elements", &arr, bits, 16, elem)?;
+                end(w, "DataType")?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `Info` content of one entry: Min/Max/Default data (or DefaultString),
+/// then the unit code where ETG.1004 has one.
+fn write_value_info(w: &mut W, e: &Entry) -> io::Result<()> {
+    match e.default {
+        DefaultValue::Str(s) => text(w, "DefaultString", s)?,
+        DefaultValue::Int(v) => {
+            if let Some(min) = e.min {
+                text(w, "MinData", &default_data(min, e.bit_len))?;
+            }
+            if let Some(max) = e.max {
+                text(w, "MaxData", &default_data(max, e.bit_len))?;
+            }
+            text(w, "DefaultData", &default_data(v, e.bit_len))?;
+        }
+    }
+    if let Some((code, _, _)) = unit_code(e.unit) {
+        text(w, "Unit", &hex(code, 8))?;
+    }
+    Ok(())
+}
+
+/// Object-level access of a record or array: the common access of its
+/// entries, else rw if any entry is writable.
+fn object_access(o: &Object) -> Access {
+    let mut it = o.entries.iter().filter(|e| !e.gap).map(|e| e.access);
+    let Some(first) = it.next() else {
+        return Access::Ro;
+    };
+    if it.clone().all(|a| a == first) {
+        return first;
+    }
+    if o.entries.iter().any(|e| e.access.writable()) {
+        Access::Rw
+    } else {
+        Access::Ro
+    }
+}
+
+fn write_objects(w: &mut W) -> io::Result<()> {
+    for o in OBJECTS {
+        start(w, "Object", &[])?;
+        text(w, "Index", &hex(u32::from(o.index), 4))?;
+        text(w, "Name", o.name)?;
+        text(w, "Type", &object_type_name(o))?;
+        text(w, "BitSize", &object_bit_size(o).to_string())?;
+        start(w, "Info", &[])?;
+        match (o.code, o.entries.first()) {
+            (ObjectCode::Var, Some(e)) => write_value_info(w, e)?,
+            _ => {
+                for e in o.entries {
+                    start(w, "SubItem", &[])?;
+                    text(w, "Name", e.name)?;
+                    start(w, "Info", &[])?;
+                    write_value_info(w, e)?;
+                    end(w, "Info")?;
+                    end(w, "SubItem")?;
+                }
+            }
+        }
+        end(w, "Info")?;
+        match (o.code, o.entries.first()) {
+            (ObjectCode::Var, Some(e)) => write_entry_flags(w, e, Some(category(o.index)))?,
+            _ => {
+                start(w, "Flags", &[])?;
+                write_access(w, object_access(o))?;
+                text(w, "Category", category(o.index))?;
+                end(w, "Flags")?;
+            }
+        }
+        end(w, "Object")?;
+    }
+    Ok(())
+}
+
+fn write_unit_types(w: &mut W) -> io::Result<()> {
+    let mut units: BTreeMap<u32, (&str, &str)> = BTreeMap::new();
+    for e in OBJECTS.iter().flat_map(|o| o.entries) {
+        if let Some((code, name, symbol)) = unit_code(e.unit) {
+            units.insert(code, (name, symbol));
+        }
+    }
+    if units.is_empty() {
+        return Ok(());
+    }
+    start(w, "UnitTypes", &[])?;
+    for (code, (name, symbol)) in units {
+        start(w, "UnitType", &[])?;
+        text(w, "NotationIndex", &hex(code >> 24, 2))?;
+        text(w, "Index", &hex(code, 8))?;
+        text(w, "Name", name)?;
+        text(w, "Symbol", symbol)?;
+        end(w, "UnitType")?;
+    }
+    end(w, "UnitTypes")
+}
+
+fn write_dictionary(w: &mut W) -> io::Result<()> {
+    start(w, "Dictionary", &[])?;
+    write_unit_types(w)?;
+    start(w, "DataTypes", &[])?;
+    write_base_types(w)?;
+    write_complex_types(w)?;
+    end(w, "DataTypes")?;
+    start(w, "Objects", &[])?;
+    write_objects(w)?;
+    end(w, "Objects")?;
+    end(w, "Dictionary")
+}
+
+/// One PDO of the SII with its direction and default SyncManager.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PdoSlot {
+    /// PDO index.
+    pub index: u16,
+    /// RxPDO (outputs) or TxPDO (inputs).
+    pub direction: PdoDirection,
+    /// Default SyncManager; `None` for an alternative PDO (SII 0xFF).
+    pub sm: Option<u8>,
+}
+
+/// The PDOs of an SII image, RxPDOs first, in category order.
+pub fn sii_pdos(r: &SiiReader<'_>) -> Result<Vec<PdoSlot>, SiiError> {
+    let mut out = Vec::new();
+    for direction in [PdoDirection::Rx, PdoDirection::Tx] {
+        for p in r.pdos(direction)? {
+            let p = p?;
+            out.push(PdoSlot {
+                index: p.index,
+                direction,
+                sm: p.sm(),
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// Entries of a PDO as the model's mapping object lists them:
+/// `(index, sub, bits)`, padding as index 0.
+pub fn mapping_entries(pdo: u16) -> Vec<(u16, u8, u8)> {
+    let Some((_, o)) = pam_slave::od::model::find(pdo) else {
+        return Vec::new();
+    };
+    o.entries
+        .iter()
+        .filter(|e| e.sub >= 1)
+        .filter_map(|e| match e.default {
+            DefaultValue::Int(m) => {
+                let m = m as u32;
+                Some(((m >> 16) as u16, (m >> 8) as u8, m as u8))
+            }
+            DefaultValue::Str(_) => None,
+        })
+        .collect()
+}
+
+fn write_pdo(w: &mut W, slot: &PdoSlot, all: &[PdoSlot]) -> Result<(), EsiError> {
+    let tag = match slot.direction {
+        PdoDirection::Rx => "RxPdo",
+        PdoDirection::Tx => "TxPdo",
+    };
+    let sm = slot.sm.map(|s| s.to_string());
+    let mut attrs: Vec<(&str, &str)> = Vec::new();
+    if let Some(sm) = &sm {
+        attrs.push(("Fixed", "1"));
+        attrs.push(("Sm", sm));
+    }
+    let name = pam_slave::od::model::find(slot.index)
+        .map(|(_, o)| o.name)
+        .ok_or_else(|| EsiError::Model(format!("PDO {:#06x} has no mapping object", slot.index)))?;
+    start(w, tag, &attrs)?;
+    text(w, "Index", &hex(u32::from(slot.index), 4))?;
+    text(w, "Name", name)?;
+    // A default PDO excludes every alternative of its direction and back.
+    for other in all
+        .iter()
+        .filter(|o| o.direction == slot.direction && o.sm.is_some() != slot.sm.is_some())
+    {
+        text(w, "Exclude", &hex(u32::from(other.index), 4))?;
+    }
+    for (index, sub, bits) in mapping_entries(slot.index) {
+        start(w, "Entry", &[])?;
+        if index == 0 {
+            text(w, "Index", "#x0")?;
+            text(w, "BitLen", &bits.to_string())?;
+        } else {
+            let (_, e) = pam_slave::od::model::find_entry(index, sub).ok_or_else(|| {
+                EsiError::Model(format!(
+                    "{:#06x} maps missing {index:#06x}:{sub}",
+                    slot.index
+                ))
+            })?;
+            text(w, "Index", &hex(u32::from(index), 4))?;
+            text(w, "SubIndex", &sub.to_string())?;
+            text(w, "BitLen", &bits.to_string())?;
+            text(w, "Name", e.name)?;
+            text(w, "DataType", &type_name(e))?;
+        }
+        end(w, "Entry")?;
+    }
+    end(w, tag)?;
+    Ok(())
+}
+
+fn write_alternative_mappings(w: &mut W, pdos: &[PdoSlot]) -> io::Result<()> {
+    start(w, "VendorSpecific", &[])?;
+    start(w, "TwinCAT", &[])?;
+    for (name, default) in [(DIRECTIONAL_MAPPING, true), (INDEPENDENT_MAPPING, false)] {
+        let attrs: &[(&str, &str)] = if default { &[("Default", "1")] } else { &[] };
+        start(w, "AlternativeSmMapping", attrs)?;
+        text(w, "Name", name)?;
+        for (sm, direction) in [("2", PdoDirection::Rx), ("3", PdoDirection::Tx)] {
+            start(w, "Sm", &[("No", sm)])?;
+            for p in pdos
+                .iter()
+                .filter(|p| p.direction == direction && p.sm.is_some() == default)
+            {
+                text(w, "Pdo", &hex(u32::from(p.index), 4))?;
+            }
+            end(w, "Sm")?;
+        }
+        end(w, "AlternativeSmMapping")?;
+    }
+    end(w, "TwinCAT")?;
+    end(w, "VendorSpecific")
+}
+
+fn sm_name(t: SmType) -> &'static str {
+    match t {
+        SmType::MailboxOut => "MBoxOut",
+        SmType::MailboxIn => "MBoxIn",
+        SmType::ProcessOut => "Outputs",
+        SmType::ProcessIn => "Inputs",
+        SmType::Unused | SmType::Unknown(_) => "",
+    }
+}
+
+fn fmmu_name(u: FmmuUsage) -> Option<&'static str> {
+    match u {
+        FmmuUsage::Outputs => Some("Outputs"),
+        FmmuUsage::Inputs => Some("Inputs"),
+        FmmuUsage::SyncMStatus => Some("MBoxState"),
+        FmmuUsage::Unused | FmmuUsage::NotUsed | FmmuUsage::Unknown(_) => None,
+    }
+}
+
+/// The 8 bytes of ESI `Eeprom/BootStrap`: bootstrap mailbox out offset,
+/// out size, in offset, in size (u16 little-endian each).
+pub fn bootstrap_bytes(m: &sii::SiiMailbox) -> [u8; 8] {
+    let mut b = [0u8; 8];
+    for (i, v) in [m.rx_offset, m.rx_size, m.tx_offset, m.tx_size]
+        .into_iter()
+        .enumerate()
+    {
+        b[2 * i..2 * i + 2].copy_from_slice(&v.to_le_bytes());
+    }
+    b
+}
+
+/// The ESC watchdog registers 0x0400/0x0410/0x0420 as the software ESC
+/// resets them (divider, PDI time, SM time).
+fn watchdog_registers(image: &[u8]) -> [u16; 3] {
+    let mut esc = SoftEsc::new(image);
+    [
+        reg::WATCHDOG_DIVIDER,
+        reg::WATCHDOG_TIME_PDI,
+        reg::WATCHDOG_TIME_PD,
+    ]
+    .map(|a| esc.read_u16(a).unwrap_or(0))
+}
+
+/// Generates the ESI XML of the PAM-199-P-ETC.
+pub fn generate(caps: &Capabilities) -> Result<Vec<u8>, EsiError> {
+    let image = device::sii_image();
+    let r = SiiReader::new(&image)?;
+    let strings = r.strings()?;
+    let general = r
+        .general()?
+        .ok_or_else(|| EsiError::Model("SII has no General category".into()))?
+        .resolve(&strings);
+    let pdos = sii_pdos(&r)?;
+    let profile = match pam_slave::od::model::find_entry(0x1000, 0) {
+        Some((_, e)) => match e.default {
+            DefaultValue::Int(v) => v & 0xFFFF,
+            DefaultValue::Str(_) => 0,
+        },
+        None => 0,
+    };
+
+    let mut w = Writer::new_with_indent(Vec::new(), b'\t', 1);
+    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
+    start(
+        &mut w,
+        "EtherCATInfo",
+        &[
+            ("xmlns:xsi", "http://www.w3.org/2001/XMLSchema-instance"),
+            ("xsi:noNamespaceSchemaLocation", "EtherCATInfo.xsd"),
+            ("Version", ESI_VERSION),
+        ],
+    )?;
+    start(&mut w, "Vendor", &[])?;
+    text(&mut w, "Id", &hex(device::VENDOR_ID, 8))?;
+    text_attrs(&mut w, "Name", &[("LcId", "1033")], VENDOR_NAME)?;
+    end(&mut w, "Vendor")?;
+
+    start(&mut w, "Descriptions", &[])?;
+    start(&mut w, "Groups", &[])?;
+    start(&mut w, "Group", &[])?;
+    text(&mut w, "Type", general.group)?;
+    text_attrs(&mut w, "Name", &[("LcId", "1033")], GROUP_NAME)?;
+    end(&mut w, "Group")?;
+    end(&mut w, "Groups")?;
+
+    start(&mut w, "Devices", &[])?;
+    start(&mut w, "Device", &[("Physics", "YY")])?;
+    text_attrs(
+        &mut w,
+        "Type",
+        &[
+            ("ProductCode", &hex(device::PRODUCT_CODE, 8)),
+            ("RevisionNo", &hex(device::REVISION, 8)),
+        ],
+        general.order,
+    )?;
+    text_attrs(&mut w, "Name", &[("LcId", "1033")], general.name)?;
+
+    start(&mut w, "Info", &[])?;
+    start(&mut w, "StateMachine", &[])?;
+    start(&mut w, "Timeout", &[])?;
+    let [preop, safeop, init, back] = STATE_MACHINE_TIMEOUTS_MS;
+    text(&mut w, "PreopTimeout", &preop.to_string())?;
+    text(&mut w, "SafeopOpTimeout", &safeop.to_string())?;
+    text(&mut w, "BackToInitTimeout", &init.to_string())?;
+    text(&mut w, "BackToSafeopTimeout", &back.to_string())?;
+    end(&mut w, "Timeout")?;
+    end(&mut w, "StateMachine")?;
+    start(&mut w, "Mailbox", &[])?;
+    start(&mut w, "Timeout", &[])?;
+    text(
+        &mut w,
+        "RequestTimeout",
+        &MAILBOX_TIMEOUTS_MS[0].to_string(),
+    )?;
+    text(
+        &mut w,
+        "ResponseTimeout",
+        &MAILBOX_TIMEOUTS_MS[1].to_string(),
+    )?;
+    end(&mut w, "Timeout")?;
+    end(&mut w, "Mailbox")?;
+    end(&mut w, "Info")?;
+
+    text(&mut w, "GroupType", general.group)?;
+    start(&mut w, "Profile", &[])?;
+    text(&mut w, "ProfileNo", &profile.to_string())?;
+    write_dictionary(&mut w)?;
+    end(&mut w, "Profile")?;
+
+    for u in r.fmmus()? {
+        if let Some(name) = fmmu_name(u) {
+            text(&mut w, "Fmmu", name)?;
+        }
+    }
+    for sm in r.sync_managers()? {
+        text_attrs(
+            &mut w,
+            "Sm",
+            &[
+                ("DefaultSize", &sm.length.to_string()),
+                ("StartAddress", &hex(u32::from(sm.start), 4)),
+                ("ControlByte", &hex(u32::from(sm.control), 2)),
+                ("Enable", &sm.enable.to_string()),
+            ],
+            sm_name(sm.sm_type),
+        )?;
+    }
+    for slot in &pdos {
+        write_pdo(&mut w, slot, &pdos)?;
+    }
+
+    let protocols = r.mailbox_protocols();
+    let mut mbx_attrs: Vec<(&str, &str)> = Vec::new();
+    if general.flags & 0x04 != 0 {
+        mbx_attrs.push(("DataLinkLayer", "1"));
+    }
+    start(&mut w, "Mailbox", &mbx_attrs)?;
+    if protocols & sii::protocols::EOE != 0 {
+        empty(&mut w, "EoE", &[])?;
+    }
+    if protocols & sii::protocols::COE != 0 {
+        empty(
+            &mut w,
+            "CoE",
+            &[
+                ("SdoInfo", flag(caps.sdo_info)),
+                ("PdoAssign", flag(caps.pdo_assign)),
+                ("PdoConfig", flag(caps.pdo_config)),
+                ("CompleteAccess", flag(caps.complete_access)),
+                ("SegmentedSdo", flag(caps.segmented_sdo)),
+            ],
+        )?;
+    }
+    if protocols & sii::protocols::FOE != 0 {
+        empty(&mut w, "FoE", &[])?;
+    }
+    end(&mut w, "Mailbox")?;
+
+    let [divider, pdi, sm_wd] = watchdog_registers(&image);
+    start(&mut w, "ESC", &[])?;
+    text(&mut w, "Reg0400", &hex(u32::from(divider), 4))?;
+    text(&mut w, "Reg0410", &hex(u32::from(pdi), 4))?;
+    text(&mut w, "Reg0420", &hex(u32::from(sm_wd), 4))?;
+    end(&mut w, "ESC")?;
+
+    start(&mut w, "Eeprom", &[])?;
+    text(&mut w, "ByteSize", &r.eeprom_size_bytes().to_string())?;
+    text(&mut w, "ConfigData", &hex_binary(&r.config_data()))?;
+    text(
+        &mut w,
+        "BootStrap",
+        &hex_binary(&bootstrap_bytes(&r.bootstrap_mailbox())),
+    )?;
+    end(&mut w, "Eeprom")?;
+
+    write_alternative_mappings(&mut w, &pdos)?;
+    end(&mut w, "Device")?;
+    end(&mut w, "Devices")?;
+    end(&mut w, "Descriptions")?;
+    end(&mut w, "EtherCATInfo")?;
+    let mut out = w.into_inner();
+    out.push(b'\n');
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::xml::{self, Element, hex_binary as unhex, hex_dec};
+    use pam_slave::od::model;
+    use std::path::PathBuf;
+    use std::process::Command;
+
+    fn generated() -> Vec<u8> {
+        generate(&Capabilities::default()).unwrap()
+    }
+
+    fn device(doc: &Element) -> &Element {
+        doc.path("Descriptions/Devices/Device").unwrap()
+    }
+
+    fn golden_dir() -> PathBuf {
+        PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/golden"))
+    }
+
+    /// Compares `actual` with the golden file `name`, or rewrites it when
+    /// `UPDATE_GOLDEN=1`.
+    fn golden(name: &str, actual: &[u8]) {
+        let path = golden_dir().join(name);
+        if std::env::var("UPDATE_GOLDEN").is_ok_and(|v| v == "1") {
+            std::fs::create_dir_all(golden_dir()).unwrap();
+            std::fs::write(&path, actual).unwrap();
+            return;
+        }
+        let want = std::fs::read(&path).unwrap_or_else(|e| {
+            panic!(
+                "{}: {e} (run with UPDATE_GOLDEN=1 to create it)",
+                path.display()
+            )
+        });
+        assert!(
+            want == actual,
+            "{} differs from the generated output; if the change is intended, \
+             regenerate with UPDATE_GOLDEN=1",
+            path.display()
+        );
+    }
+
+    fn schema_dir() -> Option<PathBuf> {
+        std::env::var_os("ESI_SCHEMA_DIR")
+            .map(PathBuf::from)
+            .into_iter()
+            .chain([PathBuf::from(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../../shared/esi-schema"
+            ))])
+            .find(|p| p.join("EtherCATInfo.xsd").is_file())
+    }
+
+    #[test]
+    fn generated_esi_validates_against_the_etg_schema() {
+        let Some(dir) = schema_dir() else {
+            println!("SKIPPED: ESI schema not found (set ESI_SCHEMA_DIR)");
+            return;
+        };
+        let file = std::env::temp_dir().join(format!("pam-esi-{}.xml", std::process::id()));
+        std::fs::write(&file, generated()).unwrap();
+        let out = Command::new("xmllint")
+            .arg("--noout")
+            .arg("--schema")
+            .arg(dir.join("EtherCATInfo.xsd"))
+            .arg(&file)
+            .output();
+        let _ = std::fs::remove_file(&file);
+        let Ok(out) = out else {
+            println!("SKIPPED: xmllint not installed");
+            return;
+        };
+        assert!(
+            out.status.success(),
+            "xmllint: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+
+    #[test]
+    fn generated_esi_matches_the_golden_file() {
+        golden("PAM-199-P-ETC.xml", &generated());
+    }
+
+    #[test]
+    fn sii_image_matches_the_golden_file() {
+        golden("eeprom.bin", &crate::sii_image());
+    }
+
+    #[test]
+    fn generation_is_deterministic() {
+        assert_eq!(generated(), generated());
+    }
+
+    /// Decodes little-endian `DefaultData` in the entry's signedness.
+    fn decode(hex: &str, e: &Entry) -> i64 {
+        let b = unhex(hex).unwrap();
+        assert_eq!(b.len(), usize::from(e.bit_len.div_ceil(8)), "{}", e.name);
+        let mut buf = [0u8; 8];
+        buf[..b.len()].copy_from_slice(&b);
+        let raw = i64::from_le_bytes(buf);
+        let bits = 8 * b.len() as u32;
+        if e.data_type.is_signed() && bits < 64 && raw >> (bits - 1) & 1 == 1 {
+            raw - (1i64 << bits)
+        } else {
+            raw
+        }
+    }
+
+    fn check_info(info: &Element, e: &Entry, what: &str) {
+        match e.default {
+            DefaultValue::Str(s) => assert_eq!(info.text_at("DefaultString"), Some(s), "{what}"),
+            DefaultValue::Int(v) => {
+                let d = info
+                    .text_at("DefaultData")
+                    .unwrap_or_else(|| panic!("{what}"));
+                assert_eq!(decode(d, e), v, "{what} default");
+                assert_eq!(
+                    info.text_at("MinData").map(|m| decode(m, e)),
+                    e.min,
+                    "{what}"
+                );
+                assert_eq!(
+                    info.text_at("MaxData").map(|m| decode(m, e)),
+                    e.max,
+                    "{what}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn dictionary_holds_every_model_object_and_entry_with_its_defaults() {
+        let doc = xml::parse(std::str::from_utf8(&generated()).unwrap()).unwrap();
+        let dict = device(&doc).path("Profile/Dictionary").unwrap();
+        let objects: Vec<&Element> = dict
+            .path("Objects")
+            .unwrap()
+            .children_named("Object")
+            .collect();
+        assert_eq!(objects.len(), model::OBJECTS.len());
+        let types: Vec<&Element> = dict
+            .path("DataTypes")
+            .unwrap()
+            .children_named("DataType")
+            .collect();
+        let declared: Vec<&str> = types.iter().map(|t| t.text_at("Name").unwrap()).collect();
+        for en in model::ENUMS {
+            let t = types
+                .iter()
+                .find(|t| t.text_at("Name") == Some(en.name))
+                .unwrap();
+            let values: Vec<(i64, &str)> = t
+                .children_named("EnumInfo")
+                .map(|i| {
+                    (
+                        hex_dec(i.text_at("Enum").unwrap()).unwrap(),
+                        i.text_at("Text").unwrap(),
+                    )
+                })
+                .collect();
+            assert_eq!(values, en.values.to_vec(), "{}", en.name);
+        }
+        for (o, x) in model::OBJECTS.iter().zip(&objects) {
+            let what = format!("{:#06x}", o.index);
+            assert_eq!(
+                hex_dec(x.text_at("Index").unwrap()),
+                Some(i64::from(o.index))
+            );
+            assert_eq!(x.text_at("Name"), Some(o.name), "{what}");
+            let ty = x.text_at("Type").unwrap();
+            assert!(declared.contains(&ty), "{what}: type {ty} not declared");
+            let info = x.child("Info").unwrap();
+            if o.code == ObjectCode::Var {
+                check_info(info, &o.entries[0], &what);
+                continue;
+            }
+            let subs: Vec<&Element> = info.children_named("SubItem").collect();
+            assert_eq!(subs.len(), o.entries.len(), "{what}");
+            for (e, s) in o.entries.iter().zip(subs) {
+                assert_eq!(s.text_at("Name"), Some(e.name), "{what}");
+                check_info(s.child("Info").unwrap(), e, &format!("{what}:{}", e.sub));
+            }
+            if o.code == ObjectCode::Record {
+                let t = types
+                    .iter()
+                    .find(|t| t.text_at("Name") == Some(ty))
+                    .unwrap();
+                let items: Vec<(i64, &str, String)> = t
+                    .children_named("SubItem")
+                    .map(|i| {
+                        (
+                            hex_dec(i.text_at("SubIdx").unwrap()).unwrap(),
+                            i.text_at("Name").unwrap(),
+                            i.text_at("Type").unwrap().to_string(),
+                        )
+                    })
+                    .collect();
+                let want: Vec<(i64, &str, String)> = o
+                    .entries
+                    .iter()
+                    .map(|e| (i64::from(e.sub), e.name, type_name(e)))
+                    .collect();
+                assert_eq!(items, want, "{what}");
+                for (_, _, t) in &items {
+                    assert!(declared.contains(&t.as_str()), "{what}: {t}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn dictionary_spot_checks_defaults_access_and_units() {
+        let xml = String::from_utf8(generated()).unwrap();
+        // CURRENT 1000 mA, range 500..3000.
+        assert!(xml.contains("<MinData>F401</MinData>"));
+        assert!(xml.contains("<DefaultData>E803</DefaultData>"));
+        assert!(xml.contains("<Unit>#xFD040000</Unit>"));
+        // 0x1C12/0x1C13 writable in PRE-OP only.
+        assert!(xml.contains("<Access WriteRestrictions=\"PreOP\">rw</Access>"));
+        // Gap padding types and strings are declared.
+        for t in [
+            "BIT3",
+            "BIT5",
+            "BIT7",
+            "STRING(13)",
+            "STRING(2)",
+            "ULINT",
+            "DT1C12ARR",
+        ] {
+            assert!(xml.contains(&format!("<Name>{t}</Name>")), "{t}");
+        }
+        assert_eq!(default_data(-10_000, 16), "F0D8");
+        assert_eq!(default_data(1, 1), "01");
+    }
+
+    #[test]
+    fn pdos_carry_sync_managers_excludes_and_padding_as_the_sii() {
+        let doc = xml::parse(std::str::from_utf8(&generated()).unwrap()).unwrap();
+        let dev = device(&doc);
+        let pdo = |tag: &str, index: i64| {
+            dev.children_named(tag)
+                .find(|p| hex_dec(p.text_at("Index").unwrap()) == Some(index))
+                .unwrap()
+                .clone()
+        };
+        let excludes = |p: &Element| -> Vec<i64> {
+            p.children_named("Exclude")
+                .map(|e| hex_dec(&e.text).unwrap())
+                .collect()
+        };
+        let p1600 = pdo("RxPdo", 0x1600);
+        assert_eq!(
+            (p1600.attr("Sm"), p1600.attr("Fixed")),
+            (Some("2"), Some("1"))
+        );
+        assert_eq!(excludes(&p1600), [0x1601]);
+        let p1601 = pdo("RxPdo", 0x1601);
+        assert_eq!((p1601.attr("Sm"), p1601.attr("Fixed")), (None, None));
+        assert_eq!(excludes(&p1601), [0x1600]);
+        for (i, sm) in [
+            (0x1A00, Some("3")),
+            (0x1A02, Some("3")),
+            (0x1A01, None),
+            (0x1A03, None),
+        ] {
+            let p = pdo("TxPdo", i);
+            assert_eq!(p.attr("Sm"), sm, "{i:#x}");
+            let want: &[i64] = if sm.is_some() {
+                &[0x1A01, 0x1A03]
+            } else {
+                &[0x1A00, 0x1A02]
+            };
+            assert_eq!(excludes(&p), want, "{i:#x}");
+        }
+        let pad = p1600.children_named("Entry").nth(1).unwrap();
+        assert_eq!(pad.text_at("Index"), Some("#x0"));
+        assert_eq!(pad.text_at("BitLen"), Some("7"));
+        assert!(pad.child("SubIndex").is_none());
+        let alt: Vec<(&str, Option<&str>, Vec<&str>)> = dev
+            .path("VendorSpecific/TwinCAT")
+            .unwrap()
+            .children_named("AlternativeSmMapping")
+            .map(|m| {
+                (
+                    m.text_at("Name").unwrap(),
+                    m.attr("Default"),
+                    m.children_named("Sm")
+                        .flat_map(|s| s.children_named("Pdo").map(|p| p.text.as_str()))
+                        .collect(),
+                )
+            })
+            .collect();
+        assert_eq!(
+            alt,
+            [
+                (
+                    DIRECTIONAL_MAPPING,
+                    Some("1"),
+                    vec!["#x1600", "#x1A00", "#x1A02"]
+                ),
+                (
+                    INDEPENDENT_MAPPING,
+                    None,
+                    vec!["#x1601", "#x1A01", "#x1A03"]
+                ),
+            ]
+        );
+    }
+
+    #[test]
+    fn mailbox_coe_attributes_follow_the_capabilities() {
+        let caps = Capabilities {
+            sdo_info: true,
+            complete_access: true,
+            ..Capabilities::default()
+        };
+        let doc = xml::parse(std::str::from_utf8(&generate(&caps).unwrap()).unwrap()).unwrap();
+        let coe = device(&doc).path("Mailbox/CoE").unwrap();
+        assert_eq!(coe.attr("SdoInfo"), Some("1"));
+        assert_eq!(coe.attr("CompleteAccess"), Some("1"));
+        assert_eq!(coe.attr("PdoAssign"), Some("1"));
+        assert_eq!(coe.attr("SegmentedSdo"), Some("1"));
+        assert!(device(&doc).path("Mailbox/FoE").is_some());
+        assert_eq!(caps.coe_details(), 0x01 | 0x02 | 0x04 | 0x20);
+        assert_eq!(Capabilities::default().coe_details(), 0x05);
+    }
+
+    #[test]
+    fn eeprom_section_mirrors_the_sii_header() {
+        let doc = xml::parse(std::str::from_utf8(&generated()).unwrap()).unwrap();
+        let ee = device(&doc).child("Eeprom").unwrap();
+        let img = crate::sii_image();
+        assert_eq!(ee.text_at("ByteSize"), Some("2048"));
+        assert_eq!(unhex(ee.text_at("ConfigData").unwrap()).unwrap(), img[..14]);
+        // Bootstrap mailbox: out 0x1000+1024, in 0x1400+1024.
+        assert_eq!(ee.text_at("BootStrap"), Some("0010000400140004"));
+        assert_eq!(
+            unhex(ee.text_at("BootStrap").unwrap()).unwrap(),
+            img[0x28..0x30]
+        );
+    }
+}

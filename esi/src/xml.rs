@@ -1,0 +1,196 @@
+//! A tiny read-only XML element tree over quick-xml's reader (host tool).
+//!
+//! Used by `check` and the tests to read an ESI back. It keeps element
+//! names, attributes, the concatenated text and the children in document
+//! order; comments, processing instructions and namespaces are dropped.
+//! It writes nothing: generation uses quick-xml's writer directly.
+
+use quick_xml::Reader;
+use quick_xml::events::{BytesStart, Event};
+
+/// An XML document could not be parsed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("XML error at byte {position}: {message}")]
+pub struct XmlError {
+    /// Byte offset where the reader stopped.
+    pub position: u64,
+    /// What went wrong.
+    pub message: String,
+}
+
+/// One element with its attributes, text and child elements.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Element {
+    /// Element name as written (prefix included).
+    pub name: String,
+    /// Attributes in document order, values unescaped.
+    pub attrs: Vec<(String, String)>,
+    /// Text content directly inside this element, unescaped and trimmed.
+    pub text: String,
+    /// Child elements in document order.
+    pub children: Vec<Element>,
+}
+
+impl Element {
+    /// Value of attribute `name`.
+    pub fn attr(&self, name: &str) -> Option<&str> {
+        self.attrs
+            .iter()
+            .find(|(k, _)| k == name)
+            .map(|(_, v)| v.as_str())
+    }
+
+    /// The first child named `name`.
+    pub fn child(&self, name: &str) -> Option<&Element> {
+        self.children.iter().find(|c| c.name == name)
+    }
+
+    /// All children named `name`.
+    pub fn children_named<'a>(&'a self, name: &'a str) -> impl Iterator<Item = &'a Element> {
+        self.children.iter().filter(move |c| c.name == name)
+    }
+
+    /// The element at the `/`-separated child path (first match per step).
+    pub fn path(&self, path: &str) -> Option<&Element> {
+        path.split('/')
+            .filter(|s| !s.is_empty())
+            .try_fold(self, |e, step| e.child(step))
+    }
+
+    /// Text of the element at `path` (see [`Self::path`]).
+    pub fn text_at(&self, path: &str) -> Option<&str> {
+        self.path(path).map(|e| e.text.as_str())
+    }
+}
+
+fn start_element(start: &BytesStart<'_>, position: u64) -> Result<Element, XmlError> {
+    let err = |message: String| XmlError { position, message };
+    let name = String::from_utf8_lossy(start.name().as_ref()).into_owned();
+    let mut attrs = Vec::new();
+    for a in start.attributes() {
+        let a = a.map_err(|e| err(e.to_string()))?;
+        let key = String::from_utf8_lossy(a.key.as_ref()).into_owned();
+        let value = a.unescape_value().map_err(|e| err(e.to_string()))?;
+        attrs.push((key, value.into_owned()));
+    }
+    Ok(Element {
+        name,
+        attrs,
+        ..Element::default()
+    })
+}
+
+/// Parses `text` into its root element.
+pub fn parse(text: &str) -> Result<Element, XmlError> {
+    let mut reader = Reader::from_str(text);
+    let mut stack: Vec<Element> = Vec::new();
+    let mut root: Option<Element> = None;
+    loop {
+        let position = reader.buffer_position();
+        let err = |message: String| XmlError { position, message };
+        let event = reader.read_event().map_err(|e| err(e.to_string()))?;
+        match event {
+            Event::Start(s) => stack.push(start_element(&s, position)?),
+            Event::Empty(s) => {
+                let e = start_element(&s, position)?;
+                match stack.last_mut() {
+                    Some(parent) => parent.children.push(e),
+                    None if root.is_none() => root = Some(e),
+                    None => return Err(err("second root element".into())),
+                }
+            }
+            Event::End(_) => {
+                let mut e = stack
+                    .pop()
+                    .ok_or_else(|| err("unbalanced end tag".into()))?;
+                e.text = e.text.trim().to_string();
+                match stack.last_mut() {
+                    Some(parent) => parent.children.push(e),
+                    None if root.is_none() => root = Some(e),
+                    None => return Err(err("second root element".into())),
+                }
+            }
+            Event::Text(t) => {
+                if let Some(top) = stack.last_mut() {
+                    let t = t.unescape().map_err(|e| err(e.to_string()))?;
+                    top.text.push_str(&t);
+                }
+            }
+            Event::CData(t) => {
+                if let Some(top) = stack.last_mut() {
+                    top.text.push_str(&String::from_utf8_lossy(&t));
+                }
+            }
+            Event::Eof => break,
+            _ => {}
+        }
+    }
+    if !stack.is_empty() {
+        return Err(XmlError {
+            position: reader.buffer_position(),
+            message: format!(
+                "unclosed element <{}>",
+                stack.last().map_or("", |e| &e.name)
+            ),
+        });
+    }
+    root.ok_or(XmlError {
+        position: 0,
+        message: "no root element".into(),
+    })
+}
+
+/// Parses an ETG `HexDecValue`: `#x`-prefixed hex or signed decimal.
+pub fn hex_dec(s: &str) -> Option<i64> {
+    let s = s.trim();
+    if let Some(h) = s.strip_prefix("#x").or_else(|| s.strip_prefix("#X")) {
+        i64::from_str_radix(h, 16).ok()
+    } else {
+        s.parse().ok()
+    }
+}
+
+/// Decodes `xs:hexBinary` text into bytes.
+pub fn hex_binary(s: &str) -> Option<Vec<u8>> {
+    let s = s.trim();
+    if s.len() % 2 != 0 {
+        return None;
+    }
+    (0..s.len())
+        .step_by(2)
+        .map(|i| s.get(i..i + 2).and_then(|b| u8::from_str_radix(b, 16).ok()))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_nested_elements_attributes_and_escaped_text() {
+        let doc =
+            parse(r#"<?xml version="1.0"?><a x="1&amp;2"><b>t &lt; u</b><c/><b>second</b></a>"#)
+                .unwrap();
+        assert_eq!(doc.name, "a");
+        assert_eq!(doc.attr("x"), Some("1&2"));
+        assert_eq!(doc.text_at("b"), Some("t < u"));
+        assert_eq!(doc.children_named("b").count(), 2);
+        assert!(doc.child("c").is_some());
+    }
+
+    #[test]
+    fn rejects_unbalanced_documents() {
+        assert!(parse("<a><b></a>").is_err());
+        assert!(parse("<a>").is_err());
+        assert!(parse("").is_err());
+    }
+
+    #[test]
+    fn hex_dec_and_hex_binary_decode_etg_notation() {
+        assert_eq!(hex_dec("#x1A00"), Some(0x1A00));
+        assert_eq!(hex_dec("-5"), Some(-5));
+        assert_eq!(hex_dec("#xZZ"), None);
+        assert_eq!(hex_binary("E803"), Some(vec![0xE8, 0x03]));
+        assert_eq!(hex_binary("E80"), None);
+    }
+}

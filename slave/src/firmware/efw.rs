@@ -1,0 +1,980 @@
+//! The `.efw` firmware image: header view and `Repr`, [`pack`], and the
+//! incremental [`EfwValidator`] (format table in the [module
+//! docs](super#efw-image-format-project-defined-version-1)).
+
+use super::{Crc32, DeviceIdentity, FirmwareVersion, ImageInfo, VERSION_LEN, crc32};
+use crate::wire::foe::FoeErrorCode;
+
+/// Magic bytes, the last one being the format version.
+pub const EFW_MAGIC: [u8; 8] = *b"PAMEFW\0\x01";
+
+/// Format version carried in the last magic byte.
+pub const EFW_FORMAT_VERSION: u8 = 1;
+
+/// Header length of a format-1 header without extension.
+pub const EFW_HEADER_LEN: usize = field::FIXED_END + 4;
+
+/// Largest accepted `header_len` (a header with extension bytes).
+pub const EFW_MAX_HEADER_LEN: usize = 512;
+
+type Field = core::ops::Range<usize>;
+
+mod field {
+    use super::Field;
+
+    /// `b"PAMEFW\0"`, without the version byte.
+    pub const MAGIC_PREFIX: Field = 0..7;
+    /// Format version (last magic byte).
+    pub const FORMAT: usize = 7;
+    /// Header length including the header CRC.
+    pub const HEADER_LEN: Field = 8..10;
+    /// Flags (reserved, 0).
+    pub const FLAGS: Field = 10..12;
+    /// Vendor ID.
+    pub const VENDOR_ID: Field = 12..16;
+    /// Product code.
+    pub const PRODUCT_CODE: Field = 16..20;
+    /// Lowest supported device revision.
+    pub const REVISION_MIN: Field = 20..24;
+    /// Highest supported device revision.
+    pub const REVISION_MAX: Field = 24..28;
+    /// Firmware version text, NUL padded.
+    pub const VERSION: Field = 28..44;
+    /// Payload length.
+    pub const PAYLOAD_LEN: Field = 44..48;
+    /// Payload CRC-32.
+    pub const PAYLOAD_CRC: Field = 48..52;
+    /// End of the fixed fields; extension bytes (if any) and the header CRC
+    /// follow.
+    pub const FIXED_END: usize = PAYLOAD_CRC.end;
+}
+
+fn get_u16(buf: &[u8], f: Field) -> u16 {
+    buf.get(f)
+        .and_then(|b| <[u8; 2]>::try_from(b).ok())
+        .map_or(0, u16::from_le_bytes)
+}
+
+fn get_u32(buf: &[u8], f: Field) -> u32 {
+    buf.get(f)
+        .and_then(|b| <[u8; 4]>::try_from(b).ok())
+        .map_or(0, u32::from_le_bytes)
+}
+
+fn set_bytes(buf: &mut [u8], f: Field, value: &[u8]) {
+    if let Some(dst) = buf.get_mut(f).filter(|d| d.len() == value.len()) {
+        dst.copy_from_slice(value);
+    }
+}
+
+/// Why an `.efw` image was refused. Each variant maps to the FoE error code
+/// sent to the master ([`EfwError::foe_code`]); the `Display` text goes
+/// into the FoE error text.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, thiserror::Error)]
+pub enum EfwError {
+    /// The file does not start with `PAMEFW\0`.
+    #[error("not an .efw image (bad magic)")]
+    BadMagic,
+    /// The format version byte is not [`EFW_FORMAT_VERSION`].
+    #[error("unsupported .efw format version {0}")]
+    UnsupportedFormat(u8),
+    /// `header_len` is below [`EFW_HEADER_LEN`] or above
+    /// [`EFW_MAX_HEADER_LEN`].
+    #[error("bad .efw header length {0}")]
+    BadHeaderLen(u16),
+    /// The header CRC does not match the header bytes.
+    #[error("header CRC {expected:#010x}, computed {computed:#010x}")]
+    HeaderCrc {
+        /// CRC stored in the header.
+        expected: u32,
+        /// CRC computed over the header bytes.
+        computed: u32,
+    },
+    /// The image is for another vendor.
+    #[error("image vendor {found:#x}, device vendor {expected:#x}")]
+    WrongVendor {
+        /// The device's vendor ID.
+        expected: u32,
+        /// The image's vendor ID.
+        found: u32,
+    },
+    /// The image is for another product.
+    #[error("image product {found:#x}, device product {expected:#x}")]
+    WrongProduct {
+        /// The device's product code.
+        expected: u32,
+        /// The image's product code.
+        found: u32,
+    },
+    /// The device revision is outside the image's supported range.
+    #[error("device revision {revision:#x} not in {min:#x}..={max:#x}")]
+    RevisionOutOfRange {
+        /// The device's revision.
+        revision: u32,
+        /// Lowest revision the image supports.
+        min: u32,
+        /// Highest revision the image supports.
+        max: u32,
+    },
+    /// The payload does not fit an image slot.
+    #[error("payload of {len} bytes exceeds slot capacity {capacity}")]
+    TooLarge {
+        /// Payload length.
+        len: usize,
+        /// Slot capacity.
+        capacity: usize,
+    },
+    /// The transfer ended before the announced end of the image.
+    #[error("image truncated: {received} of {expected} bytes")]
+    Truncated {
+        /// Image length announced by the header (or the minimum header
+        /// length if the header itself is incomplete).
+        expected: usize,
+        /// Bytes received.
+        received: usize,
+    },
+    /// More bytes arrived than the header announces.
+    #[error("image longer than the {expected} bytes announced")]
+    Oversized {
+        /// Image length announced by the header.
+        expected: usize,
+    },
+    /// The payload CRC does not match the header.
+    #[error("payload CRC {expected:#010x}, computed {computed:#010x}")]
+    PayloadCrc {
+        /// CRC stored in the header.
+        expected: u32,
+        /// CRC computed over the payload.
+        computed: u32,
+    },
+    /// [`pack`]/emit: the output buffer is too small.
+    #[error("output buffer too small")]
+    BufferTooSmall,
+}
+
+impl EfwError {
+    /// The FoE error code reported for this error (ETG.1000.6 §5.8 and the
+    /// SSC extensions, see [`FoeErrorCode`]):
+    ///
+    /// | error                                            | code                        |
+    /// |--------------------------------------------------|-----------------------------|
+    /// | bad magic / format / header length / header CRC  | `0x8010` NoFileHeader       |
+    /// | wrong vendor / product / revision out of range   | `0x800D` InvalidFirmware    |
+    /// | payload larger than a slot                       | `0x8003` DiskFull           |
+    /// | truncated / oversized / payload CRC              | `0x800C` InvalidChecksum    |
+    /// | buffer too small (tools only)                    | `0x800B` ProgramError       |
+    pub const fn foe_code(&self) -> FoeErrorCode {
+        match self {
+            Self::BadMagic
+            | Self::UnsupportedFormat(_)
+            | Self::BadHeaderLen(_)
+            | Self::HeaderCrc { .. } => FoeErrorCode::NoFileHeader,
+            Self::WrongVendor { .. }
+            | Self::WrongProduct { .. }
+            | Self::RevisionOutOfRange { .. } => FoeErrorCode::InvalidFirmware,
+            Self::TooLarge { .. } => FoeErrorCode::DiskFull,
+            Self::Truncated { .. } | Self::Oversized { .. } | Self::PayloadCrc { .. } => {
+                FoeErrorCode::InvalidChecksum
+            }
+            Self::BufferTooSmall => FoeErrorCode::ProgramError,
+        }
+    }
+}
+
+/// A read-only view of an `.efw` header.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EfwHeader<T: AsRef<[u8]>> {
+    buffer: T,
+}
+
+impl<T: AsRef<[u8]>> EfwHeader<T> {
+    /// Wraps a buffer (the start of an image) without checking.
+    pub const fn new_unchecked(buffer: T) -> Self {
+        Self { buffer }
+    }
+
+    /// Wraps a buffer and runs [`EfwHeader::check_len`].
+    pub fn new_checked(buffer: T) -> Result<Self, EfwError> {
+        let h = Self::new_unchecked(buffer);
+        h.check_len()?;
+        Ok(h)
+    }
+
+    /// Checks that `header_len` is in range and the whole header is in the
+    /// buffer ([`EfwError::Truncated`] or [`EfwError::BadHeaderLen`]).
+    pub fn check_len(&self) -> Result<(), EfwError> {
+        let len = self.buffer.as_ref().len();
+        if len < field::FLAGS.start {
+            return Err(EfwError::Truncated {
+                expected: EFW_HEADER_LEN,
+                received: len,
+            });
+        }
+        let hl = self.header_len();
+        if !(EFW_HEADER_LEN..=EFW_MAX_HEADER_LEN).contains(&usize::from(hl)) {
+            return Err(EfwError::BadHeaderLen(hl));
+        }
+        if len < usize::from(hl) {
+            return Err(EfwError::Truncated {
+                expected: usize::from(hl),
+                received: len,
+            });
+        }
+        Ok(())
+    }
+
+    /// The magic prefix is `PAMEFW\0`.
+    pub fn magic_ok(&self) -> bool {
+        self.buffer.as_ref().get(field::MAGIC_PREFIX) == EFW_MAGIC.get(field::MAGIC_PREFIX)
+    }
+
+    /// Format version byte.
+    pub fn format_version(&self) -> u8 {
+        self.buffer.as_ref().get(field::FORMAT).copied().unwrap_or(0)
+    }
+
+    /// Header length including the header CRC.
+    pub fn header_len(&self) -> u16 {
+        get_u16(self.buffer.as_ref(), field::HEADER_LEN)
+    }
+
+    /// Flags.
+    pub fn flags(&self) -> u16 {
+        get_u16(self.buffer.as_ref(), field::FLAGS)
+    }
+
+    /// Vendor ID.
+    pub fn vendor_id(&self) -> u32 {
+        get_u32(self.buffer.as_ref(), field::VENDOR_ID)
+    }
+
+    /// Product code.
+    pub fn product_code(&self) -> u32 {
+        get_u32(self.buffer.as_ref(), field::PRODUCT_CODE)
+    }
+
+    /// Lowest supported device revision.
+    pub fn revision_min(&self) -> u32 {
+        get_u32(self.buffer.as_ref(), field::REVISION_MIN)
+    }
+
+    /// Highest supported device revision.
+    pub fn revision_max(&self) -> u32 {
+        get_u32(self.buffer.as_ref(), field::REVISION_MAX)
+    }
+
+    /// Firmware version field.
+    pub fn version(&self) -> FirmwareVersion {
+        let raw = self
+            .buffer
+            .as_ref()
+            .get(field::VERSION)
+            .and_then(|b| <[u8; VERSION_LEN]>::try_from(b).ok())
+            .unwrap_or([0; VERSION_LEN]);
+        FirmwareVersion::from_raw(raw)
+    }
+
+    /// Payload length.
+    pub fn payload_len(&self) -> u32 {
+        get_u32(self.buffer.as_ref(), field::PAYLOAD_LEN)
+    }
+
+    /// Payload CRC-32.
+    pub fn payload_crc(&self) -> u32 {
+        get_u32(self.buffer.as_ref(), field::PAYLOAD_CRC)
+    }
+
+    /// Range of the header CRC field (the last 4 header bytes).
+    fn header_crc_field(&self) -> Field {
+        let end = usize::from(self.header_len());
+        end.saturating_sub(4)..end
+    }
+
+    /// Header CRC as stored.
+    pub fn header_crc(&self) -> u32 {
+        get_u32(self.buffer.as_ref(), self.header_crc_field())
+    }
+
+    /// Header CRC computed over the header bytes before the CRC field
+    /// (0 if the header is not in the buffer).
+    pub fn computed_header_crc(&self) -> u32 {
+        let covered = 0..self.header_crc_field().start;
+        self.buffer.as_ref().get(covered).map_or(0, crc32)
+    }
+
+    /// The payload following the header, if the buffer holds it.
+    pub fn payload(&self) -> Option<&[u8]> {
+        let start = usize::from(self.header_len());
+        let end = start.checked_add(usize::try_from(self.payload_len()).ok()?)?;
+        self.buffer.as_ref().get(start..end)
+    }
+}
+
+/// High-level representation of an `.efw` header.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct EfwHeaderRepr {
+    /// Header length including the CRC ([`EFW_HEADER_LEN`] unless the
+    /// header carries extension bytes, written as zeroes).
+    pub header_len: u16,
+    /// Flags (reserved, 0).
+    pub flags: u16,
+    /// Vendor ID the image is for.
+    pub vendor_id: u32,
+    /// Product code the image is for.
+    pub product_code: u32,
+    /// Lowest supported device revision.
+    pub revision_min: u32,
+    /// Highest supported device revision.
+    pub revision_max: u32,
+    /// Firmware version.
+    pub version: FirmwareVersion,
+    /// Payload length.
+    pub payload_len: u32,
+    /// Payload CRC-32.
+    pub payload_crc: u32,
+}
+
+impl EfwHeaderRepr {
+    /// Parses and checks a header: length, magic, format version and header
+    /// CRC. Device compatibility is checked by [`EfwHeaderRepr::check_device`].
+    pub fn parse(bytes: &[u8]) -> Result<Self, EfwError> {
+        let h = EfwHeader::new_unchecked(bytes);
+        if bytes.len() >= field::MAGIC_PREFIX.end && !h.magic_ok() {
+            return Err(EfwError::BadMagic);
+        }
+        if bytes.len() > field::FORMAT && h.format_version() != EFW_FORMAT_VERSION {
+            return Err(EfwError::UnsupportedFormat(h.format_version()));
+        }
+        h.check_len()?;
+        let (expected, computed) = (h.header_crc(), h.computed_header_crc());
+        if expected != computed {
+            return Err(EfwError::HeaderCrc { expected, computed });
+        }
+        Ok(Self {
+            header_len: h.header_len(),
+            flags: h.flags(),
+            vendor_id: h.vendor_id(),
+            product_code: h.product_code(),
+            revision_min: h.revision_min(),
+            revision_max: h.revision_max(),
+            version: h.version(),
+            payload_len: h.payload_len(),
+            payload_crc: h.payload_crc(),
+        })
+    }
+
+    /// Checks that the image fits `device` and a slot of `capacity` bytes.
+    pub fn check_device(&self, device: &DeviceIdentity, capacity: usize) -> Result<(), EfwError> {
+        if self.vendor_id != device.vendor_id {
+            return Err(EfwError::WrongVendor {
+                expected: device.vendor_id,
+                found: self.vendor_id,
+            });
+        }
+        if self.product_code != device.product_code {
+            return Err(EfwError::WrongProduct {
+                expected: device.product_code,
+                found: self.product_code,
+            });
+        }
+        if !(self.revision_min..=self.revision_max).contains(&device.revision) {
+            return Err(EfwError::RevisionOutOfRange {
+                revision: device.revision,
+                min: self.revision_min,
+                max: self.revision_max,
+            });
+        }
+        let len = self.payload_len();
+        if len > capacity {
+            return Err(EfwError::TooLarge { len, capacity });
+        }
+        Ok(())
+    }
+
+    /// Payload length as `usize` (saturating on 16-bit targets).
+    pub fn payload_len(&self) -> usize {
+        usize::try_from(self.payload_len).unwrap_or(usize::MAX)
+    }
+
+    /// Header plus payload length: the exact file length.
+    pub fn image_len(&self) -> usize {
+        self.buffer_len().saturating_add(self.payload_len())
+    }
+
+    /// Header length.
+    pub const fn buffer_len(&self) -> usize {
+        self.header_len as usize
+    }
+
+    /// What the image is, for the boot state.
+    pub const fn image_info(&self) -> ImageInfo {
+        ImageInfo {
+            len: self.payload_len,
+            crc: self.payload_crc,
+            version: self.version,
+        }
+    }
+
+    /// Writes the header (extension bytes zero, CRC computed) and returns
+    /// its length. [`EfwError::BadHeaderLen`] if `header_len` is out of
+    /// range, [`EfwError::BufferTooSmall`] if `buf` is shorter.
+    pub fn emit(&self, buf: &mut [u8]) -> Result<usize, EfwError> {
+        let hl = usize::from(self.header_len);
+        if !(EFW_HEADER_LEN..=EFW_MAX_HEADER_LEN).contains(&hl) {
+            return Err(EfwError::BadHeaderLen(self.header_len));
+        }
+        let header = buf.get_mut(..hl).ok_or(EfwError::BufferTooSmall)?;
+        header.fill(0);
+        set_bytes(header, 0..8, &EFW_MAGIC);
+        set_bytes(header, field::HEADER_LEN, &self.header_len.to_le_bytes());
+        set_bytes(header, field::FLAGS, &self.flags.to_le_bytes());
+        set_bytes(header, field::VENDOR_ID, &self.vendor_id.to_le_bytes());
+        set_bytes(header, field::PRODUCT_CODE, &self.product_code.to_le_bytes());
+        set_bytes(header, field::REVISION_MIN, &self.revision_min.to_le_bytes());
+        set_bytes(header, field::REVISION_MAX, &self.revision_max.to_le_bytes());
+        set_bytes(header, field::VERSION, self.version.raw());
+        set_bytes(header, field::PAYLOAD_LEN, &self.payload_len.to_le_bytes());
+        set_bytes(header, field::PAYLOAD_CRC, &self.payload_crc.to_le_bytes());
+        let crc_at = hl - 4;
+        let crc = header.get(..crc_at).map_or(0, crc32);
+        set_bytes(header, crc_at..hl, &crc.to_le_bytes());
+        Ok(hl)
+    }
+}
+
+/// Builds an `.efw` image of `payload` into `out` and returns its length.
+/// The `payload_len` and `payload_crc` of `header` are ignored and computed
+/// from `payload`. No allocation: the caller provides `out`.
+pub fn pack(header: &EfwHeaderRepr, payload: &[u8], out: &mut [u8]) -> Result<usize, EfwError> {
+    let payload_len = u32::try_from(payload.len()).map_err(|_| EfwError::TooLarge {
+        len: payload.len(),
+        capacity: u32::MAX as usize,
+    })?;
+    let repr = EfwHeaderRepr {
+        payload_len,
+        payload_crc: crc32(payload),
+        ..*header
+    };
+    let total = repr.image_len();
+    if out.len() < total {
+        return Err(EfwError::BufferTooSmall);
+    }
+    let hl = repr.emit(out)?;
+    out.get_mut(hl..total)
+        .ok_or(EfwError::BufferTooSmall)?
+        .copy_from_slice(payload);
+    Ok(total)
+}
+
+/// An image that passed [`EfwValidator::finish`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct ValidatedImage {
+    /// Its header.
+    pub header: EfwHeaderRepr,
+}
+
+impl ValidatedImage {
+    /// Payload length, CRC and version, for the boot state.
+    pub const fn info(&self) -> ImageInfo {
+        self.header.image_info()
+    }
+}
+
+/// Checks an `.efw` image fed in arbitrary chunks (e.g. FoE DATA packets)
+/// without buffering it: the header is checked as soon as its last byte
+/// arrives (magic and format even earlier), the length and payload CRC at
+/// [`EfwValidator::finish`]. The first error is sticky.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EfwValidator {
+    device: DeviceIdentity,
+    capacity: usize,
+    /// Bytes accepted so far.
+    received: usize,
+    /// The header bytes (only the first `header_len` are used).
+    head: [u8; EFW_HEADER_LEN],
+    /// CRC over the extension bytes is folded in here for long headers.
+    header_crc: Crc32,
+    header: Option<EfwHeaderRepr>,
+    payload_crc: Crc32,
+    error: Option<EfwError>,
+}
+
+impl EfwValidator {
+    /// A validator for an image to run on `device`, whose payload must fit
+    /// `capacity` bytes (the slot size).
+    pub const fn new(device: DeviceIdentity, capacity: usize) -> Self {
+        Self {
+            device,
+            capacity,
+            received: 0,
+            head: [0; EFW_HEADER_LEN],
+            header_crc: Crc32::new(),
+            header: None,
+            payload_crc: Crc32::new(),
+            error: None,
+        }
+    }
+
+    /// Bytes accepted so far.
+    pub const fn received(&self) -> usize {
+        self.received
+    }
+
+    /// The header, once complete and valid.
+    pub const fn header(&self) -> Option<&EfwHeaderRepr> {
+        self.header.as_ref()
+    }
+
+    /// The image length the header announces, once known.
+    pub fn expected_len(&self) -> Option<usize> {
+        self.header.map(|h| h.image_len())
+    }
+
+    /// Payload bytes accepted so far (the slot offset of the next payload
+    /// byte).
+    pub fn payload_received(&self) -> usize {
+        self.header
+            .map_or(0, |h| self.received.saturating_sub(h.buffer_len()))
+    }
+
+    /// Feeds the next `chunk` and returns the payload bytes it contains
+    /// (to be written to the slot at the offset [`payload_received`]
+    /// had before the call). Errors are sticky; on error nothing of the
+    /// chunk counts as received.
+    ///
+    /// [`payload_received`]: EfwValidator::payload_received
+    pub fn feed<'c>(&mut self, chunk: &'c [u8]) -> Result<&'c [u8], EfwError> {
+        if let Some(e) = self.error {
+            return Err(e);
+        }
+        let result = self.feed_inner(chunk);
+        if let Err(e) = result {
+            self.error = Some(e);
+        }
+        result
+    }
+
+    fn feed_inner<'c>(&mut self, chunk: &'c [u8]) -> Result<&'c [u8], EfwError> {
+        let mut rest = chunk;
+        while self.header.is_none() {
+            let Some((&byte, tail)) = rest.split_first() else {
+                return Ok(&[]);
+            };
+            rest = tail;
+            self.header_byte(byte)?;
+        }
+        let header = self.header.ok_or(EfwError::BadMagic)?;
+        let expected = header.image_len();
+        let room = expected.saturating_sub(self.received);
+        if rest.len() > room {
+            return Err(EfwError::Oversized { expected });
+        }
+        self.payload_crc.update(rest);
+        self.received += rest.len();
+        Ok(rest)
+    }
+
+    /// Takes one header byte at position `self.received`.
+    fn header_byte(&mut self, byte: u8) -> Result<(), EfwError> {
+        let pos = self.received;
+        let header_len = usize::from(get_u16(&self.head, field::HEADER_LEN));
+        if let Some(slot) = self.head.get_mut(pos).filter(|_| pos < field::FIXED_END) {
+            *slot = byte;
+            self.header_crc.update(&[byte]);
+        } else if pos < header_len.saturating_sub(4) {
+            self.header_crc.update(&[byte]);
+        } else {
+            // CRC bytes: stored at the end of the fixed head buffer.
+            let at = field::FIXED_END + (pos + 4 - header_len);
+            if let Some(slot) = self.head.get_mut(at) {
+                *slot = byte;
+            }
+        }
+        self.received = pos + 1;
+        let view = EfwHeader::new_unchecked(self.head.as_slice());
+        if self.received == field::MAGIC_PREFIX.end && !view.magic_ok() {
+            return Err(EfwError::BadMagic);
+        }
+        if self.received == field::FORMAT + 1 && view.format_version() != EFW_FORMAT_VERSION {
+            return Err(EfwError::UnsupportedFormat(view.format_version()));
+        }
+        if self.received == field::HEADER_LEN.end {
+            let hl = view.header_len();
+            if !(EFW_HEADER_LEN..=EFW_MAX_HEADER_LEN).contains(&usize::from(hl)) {
+                return Err(EfwError::BadHeaderLen(hl));
+            }
+        }
+        if self.received >= EFW_HEADER_LEN && self.received == header_len {
+            let expected = get_u32(&self.head, field::FIXED_END..EFW_HEADER_LEN);
+            let computed = self.header_crc.finish();
+            if expected != computed {
+                return Err(EfwError::HeaderCrc { expected, computed });
+            }
+            let repr = EfwHeaderRepr {
+                header_len: view.header_len(),
+                flags: view.flags(),
+                vendor_id: view.vendor_id(),
+                product_code: view.product_code(),
+                revision_min: view.revision_min(),
+                revision_max: view.revision_max(),
+                version: view.version(),
+                payload_len: view.payload_len(),
+                payload_crc: view.payload_crc(),
+            };
+            repr.check_device(&self.device, self.capacity)?;
+            self.header = Some(repr);
+        }
+        Ok(())
+    }
+
+    /// Ends the image: it must be exactly `header_len + payload_len` bytes
+    /// with a matching payload CRC.
+    pub fn finish(&self) -> Result<ValidatedImage, EfwError> {
+        if let Some(e) = self.error {
+            return Err(e);
+        }
+        let Some(header) = self.header else {
+            let hl = usize::from(get_u16(&self.head, field::HEADER_LEN));
+            return Err(EfwError::Truncated {
+                expected: if self.received >= field::HEADER_LEN.end {
+                    hl
+                } else {
+                    EFW_HEADER_LEN
+                },
+                received: self.received,
+            });
+        };
+        let expected = header.image_len();
+        if self.received != expected {
+            return Err(EfwError::Truncated {
+                expected,
+                received: self.received,
+            });
+        }
+        let computed = self.payload_crc.finish();
+        if computed != header.payload_crc {
+            return Err(EfwError::PayloadCrc {
+                expected: header.payload_crc,
+                computed,
+            });
+        }
+        Ok(ValidatedImage { header })
+    }
+}
+
+#[cfg(test)]
+#[allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+mod tests {
+    use super::*;
+
+    const DEVICE: DeviceIdentity = DeviceIdentity {
+        vendor_id: 0x0000_05AE,
+        product_code: 0x00C7_03F3,
+        revision: 7,
+    };
+
+    fn header(version: &str) -> EfwHeaderRepr {
+        EfwHeaderRepr {
+            header_len: EFW_HEADER_LEN as u16,
+            flags: 0,
+            vendor_id: DEVICE.vendor_id,
+            product_code: DEVICE.product_code,
+            revision_min: 1,
+            revision_max: 9,
+            version: FirmwareVersion::new(version).unwrap(),
+            payload_len: 0,
+            payload_crc: 0,
+        }
+    }
+
+    fn image(h: &EfwHeaderRepr, payload: &[u8]) -> Vec<u8> {
+        let mut out = vec![0u8; usize::from(h.header_len) + payload.len()];
+        let n = pack(h, payload, &mut out).unwrap();
+        assert_eq!(n, out.len());
+        out
+    }
+
+    fn validate(bytes: &[u8], chunk: usize, capacity: usize) -> Result<ValidatedImage, EfwError> {
+        let mut v = EfwValidator::new(DEVICE, capacity);
+        let mut payload_seen = 0;
+        for c in bytes.chunks(chunk) {
+            let before = v.payload_received();
+            let p = v.feed(c)?;
+            assert_eq!(before, payload_seen);
+            payload_seen += p.len();
+        }
+        v.finish()
+    }
+
+    /// A hand-assembled v1 header for payload "abc" (version "1.2.3").
+    #[test]
+    fn packs_byte_exact_header() {
+        let img = image(&header("1.2.3"), b"abc");
+        let mut expected = Vec::new();
+        expected.extend_from_slice(b"PAMEFW\0\x01");
+        expected.extend_from_slice(&56u16.to_le_bytes());
+        expected.extend_from_slice(&0u16.to_le_bytes());
+        expected.extend_from_slice(&0x05AEu32.to_le_bytes());
+        expected.extend_from_slice(&0x00C7_03F3u32.to_le_bytes());
+        expected.extend_from_slice(&1u32.to_le_bytes());
+        expected.extend_from_slice(&9u32.to_le_bytes());
+        expected.extend_from_slice(b"1.2.3\0\0\0\0\0\0\0\0\0\0\0");
+        expected.extend_from_slice(&3u32.to_le_bytes());
+        expected.extend_from_slice(&0x3524_41C2u32.to_le_bytes()); // crc32("abc")
+        let hcrc = crc32(&expected);
+        expected.extend_from_slice(&hcrc.to_le_bytes());
+        expected.extend_from_slice(b"abc");
+        assert_eq!(img, expected);
+        let h = EfwHeader::new_checked(&img[..]).unwrap();
+        assert!(h.magic_ok());
+        assert_eq!(h.version().as_str(), "1.2.3");
+        assert_eq!(h.payload(), Some(&b"abc"[..]));
+        assert_eq!(h.header_crc(), hcrc);
+    }
+
+    #[test]
+    fn header_repr_round_trips() {
+        let h = EfwHeaderRepr {
+            payload_len: 3,
+            payload_crc: crc32(b"abc"),
+            ..header("9.9")
+        };
+        let img = image(&h, b"abc");
+        assert_eq!(EfwHeaderRepr::parse(&img).unwrap(), h);
+    }
+
+    #[test]
+    fn valid_image_passes_in_any_chunking() {
+        let payload: Vec<u8> = (0..5000u32).map(|i| (i * 31) as u8).collect();
+        let img = image(&header("1.2.3"), &payload);
+        for chunk in [1, 7, 55, 56, 57, 1018, img.len()] {
+            let ok = validate(&img, chunk, 8192).unwrap();
+            assert_eq!(ok.header.payload_len, 5000);
+            assert_eq!(ok.info().version.as_str(), "1.2.3");
+        }
+    }
+
+    #[test]
+    fn feed_returns_exactly_the_payload_bytes() {
+        let img = image(&header("1"), b"0123456789");
+        let mut v = EfwValidator::new(DEVICE, 100);
+        assert_eq!(v.feed(&img[..50]).unwrap(), b"");
+        assert!(v.header().is_none());
+        assert_eq!(v.feed(&img[50..60]).unwrap(), b"0123");
+        assert_eq!(v.header().unwrap().version.as_str(), "1");
+        assert_eq!(v.payload_received(), 4);
+        assert_eq!(v.feed(&img[60..]).unwrap(), b"456789");
+        assert_eq!(v.expected_len(), Some(66));
+        assert!(v.finish().is_ok());
+    }
+
+    #[test]
+    fn long_header_with_extension_is_accepted() {
+        let h = EfwHeaderRepr {
+            header_len: 100,
+            ..header("2.0")
+        };
+        let img = image(&h, b"xyz");
+        assert_eq!(img.len(), 103);
+        assert_eq!(&img[52..96], &[0u8; 44][..]);
+        assert_eq!(validate(&img, 3, 10).unwrap().header.header_len, 100);
+        assert_eq!(EfwHeaderRepr::parse(&img).unwrap().header_len, 100);
+    }
+
+    #[test]
+    fn bad_magic_is_detected_after_seven_bytes() {
+        let mut img = image(&header("1"), b"x");
+        img[0] = b'X';
+        let mut v = EfwValidator::new(DEVICE, 10);
+        assert_eq!(v.feed(&img[..7]), Err(EfwError::BadMagic));
+        assert_eq!(v.feed(&img[7..]), Err(EfwError::BadMagic), "sticky");
+        assert_eq!(v.finish(), Err(EfwError::BadMagic));
+        assert_eq!(EfwHeaderRepr::parse(&img), Err(EfwError::BadMagic));
+    }
+
+    #[test]
+    fn unknown_format_version_is_refused() {
+        let mut img = image(&header("1"), b"x");
+        img[7] = 2;
+        assert_eq!(validate(&img, 8, 10), Err(EfwError::UnsupportedFormat(2)));
+    }
+
+    #[test]
+    fn impossible_header_len_is_refused() {
+        for bad in [0u16, 55, 513, 0xFFFF] {
+            let mut img = image(&header("1"), b"x");
+            img[8..10].copy_from_slice(&bad.to_le_bytes());
+            assert_eq!(validate(&img, 64, 10), Err(EfwError::BadHeaderLen(bad)));
+            assert_eq!(EfwHeaderRepr::parse(&img), Err(EfwError::BadHeaderLen(bad)));
+        }
+    }
+
+    #[test]
+    fn corrupted_header_fails_header_crc() {
+        let mut img = image(&header("1"), b"x");
+        img[30] ^= 1;
+        assert!(matches!(
+            validate(&img, 1018, 10),
+            Err(EfwError::HeaderCrc { .. })
+        ));
+        assert!(matches!(
+            EfwHeaderRepr::parse(&img),
+            Err(EfwError::HeaderCrc { .. })
+        ));
+    }
+
+    #[test]
+    fn wrong_product_vendor_and_revision_are_refused() {
+        let wrong_product = EfwHeaderRepr {
+            product_code: 0x1234,
+            ..header("1")
+        };
+        assert_eq!(
+            validate(&image(&wrong_product, b"x"), 1018, 10),
+            Err(EfwError::WrongProduct {
+                expected: DEVICE.product_code,
+                found: 0x1234
+            })
+        );
+        let wrong_vendor = EfwHeaderRepr {
+            vendor_id: 2,
+            ..header("1")
+        };
+        assert!(matches!(
+            validate(&image(&wrong_vendor, b"x"), 1018, 10),
+            Err(EfwError::WrongVendor { found: 2, .. })
+        ));
+        let too_new = EfwHeaderRepr {
+            revision_min: 8,
+            revision_max: 8,
+            ..header("1")
+        };
+        assert_eq!(
+            validate(&image(&too_new, b"x"), 1018, 10),
+            Err(EfwError::RevisionOutOfRange {
+                revision: 7,
+                min: 8,
+                max: 8
+            })
+        );
+    }
+
+    #[test]
+    fn payload_larger_than_the_slot_is_refused_at_the_header() {
+        let img = image(&header("1"), &[0u8; 11]);
+        let mut v = EfwValidator::new(DEVICE, 10);
+        assert_eq!(
+            v.feed(&img[..EFW_HEADER_LEN]),
+            Err(EfwError::TooLarge {
+                len: 11,
+                capacity: 10
+            })
+        );
+        assert!(validate(&img, 1018, 11).is_ok());
+    }
+
+    #[test]
+    fn truncated_image_is_refused() {
+        let img = image(&header("1"), &[7u8; 100]);
+        assert_eq!(
+            validate(&img[..120], 1018, 1000),
+            Err(EfwError::Truncated {
+                expected: 156,
+                received: 120
+            })
+        );
+        assert_eq!(
+            validate(&img[..20], 1018, 1000),
+            Err(EfwError::Truncated {
+                expected: 56,
+                received: 20
+            })
+        );
+        assert_eq!(
+            validate(&[], 1, 1000),
+            Err(EfwError::Truncated {
+                expected: 56,
+                received: 0
+            })
+        );
+    }
+
+    #[test]
+    fn oversized_image_is_refused_when_the_extra_byte_arrives() {
+        let mut img = image(&header("1"), &[7u8; 100]);
+        img.push(0);
+        let mut v = EfwValidator::new(DEVICE, 1000);
+        v.feed(&img[..156]).unwrap();
+        assert_eq!(v.feed(&img[156..]), Err(EfwError::Oversized { expected: 156 }));
+        assert_eq!(v.finish(), Err(EfwError::Oversized { expected: 156 }));
+    }
+
+    #[test]
+    fn corrupted_payload_fails_payload_crc() {
+        let mut img = image(&header("1"), &[7u8; 100]);
+        img[100] ^= 0x80;
+        assert!(matches!(
+            validate(&img, 64, 1000),
+            Err(EfwError::PayloadCrc { .. })
+        ));
+    }
+
+    #[test]
+    fn errors_map_to_foe_codes() {
+        assert_eq!(EfwError::BadMagic.foe_code(), FoeErrorCode::NoFileHeader);
+        assert_eq!(
+            EfwError::WrongProduct {
+                expected: 1,
+                found: 2
+            }
+            .foe_code(),
+            FoeErrorCode::InvalidFirmware
+        );
+        assert_eq!(
+            EfwError::TooLarge {
+                len: 2,
+                capacity: 1
+            }
+            .foe_code(),
+            FoeErrorCode::DiskFull
+        );
+        assert_eq!(
+            EfwError::PayloadCrc {
+                expected: 1,
+                computed: 2
+            }
+            .foe_code(),
+            FoeErrorCode::InvalidChecksum
+        );
+    }
+
+    #[test]
+    fn pack_into_short_buffer_fails() {
+        let mut out = [0u8; 58];
+        assert_eq!(
+            pack(&header("1"), b"abc", &mut out),
+            Err(EfwError::BufferTooSmall)
+        );
+        let bad = EfwHeaderRepr {
+            header_len: 10,
+            ..header("1")
+        };
+        let mut out = [0u8; 100];
+        assert_eq!(pack(&bad, b"abc", &mut out), Err(EfwError::BadHeaderLen(10)));
+    }
+
+    #[test]
+    fn short_buffers_never_panic_the_view() {
+        for len in 0..EFW_HEADER_LEN {
+            let img = image(&header("1"), b"abc");
+            let h = EfwHeader::new_unchecked(&img[..len]);
+            let _ = (h.header_crc(), h.computed_header_crc(), h.payload(), h.version());
+            assert!(EfwHeaderRepr::parse(&img[..len]).is_err());
+        }
+    }
+}

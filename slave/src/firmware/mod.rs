@@ -1,0 +1,247 @@
+//! Firmware update: the `.efw` image format, its incremental validator, the
+//! A/B image store and the bootloader decisions (application layer, used by
+//! the FoE server in BOOT; manual §5.10 "Firmware update via FoE").
+//!
+//! This module holds no wire formats of the EtherCAT protocol and never
+//! touches the ESC; flash access goes through the [`ImageStore`] HAL trait,
+//! so the same logic runs on the device, in the soft slave ([`MemStore`],
+//! [`FileStore`](file_store::FileStore)) and in tests. Nothing here
+//! allocates or panics on input.
+//!
+//! # Update flow (manual §5.10)
+//!
+//! 1. The master switches the slave to BOOT and downloads the `.efw` file by
+//!    FoE (password `00000000`). [`begin_download`] picks the inactive slot
+//!    and erases it, [`write_chunk`] stores the payload as it arrives while
+//!    an [`EfwValidator`] checks the header (as soon as it is complete) and
+//!    the payload CRC; [`finish_download`] records the slot as
+//!    *downloaded*.
+//! 2. The master switches to INIT: [`commit_pending`] marks the image
+//!    *pending* (the real device's bootloader copies it at this point).
+//! 3. After a power cycle the bootloader ([`power_on`]) verifies the
+//!    pending image against its CRC and boots it on trial, counting boot
+//!    attempts; the new firmware calls [`confirm_boot`] once it runs, or
+//!    [`reject_boot`] if its start check fails. An image that fails
+//!    verification, or is not confirmed within [`MAX_BOOT_ATTEMPTS`]
+//!    boots, is rolled back to the previous slot.
+//!
+//! The boot state lives in two copies with sequence numbers and CRCs
+//! ([`BootState`]); a power cut at any moment leaves either the old or the
+//! new record valid, and the active slot is never written during a
+//! download, so an interrupted download always boots the old firmware.
+//!
+//! # `.efw` image format (project defined, version 1)
+//!
+//! A header followed by the payload (the executable image written to the
+//! slot, starting at slot offset 0). All integers little-endian.
+//!
+//! | offset | size | field           | meaning                                                   |
+//! |-------:|-----:|-----------------|-----------------------------------------------------------|
+//! | 0      | 8    | `magic`         | `b"PAMEFW\0"` + format version byte `0x01`                 |
+//! | 8      | 2    | `header_len`    | header length incl. `header_crc32`; 56 for v1, ≤ 512       |
+//! | 10     | 2    | `flags`         | reserved, written 0, ignored                              |
+//! | 12     | 4    | `vendor_id`     | must equal the device's vendor ID (0x1018:01)             |
+//! | 16     | 4    | `product_code`  | must equal the device's product code (0x1018:02)          |
+//! | 20     | 4    | `revision_min`  | lowest device revision (0x1018:03) the image supports     |
+//! | 24     | 4    | `revision_max`  | highest device revision the image supports                |
+//! | 28     | 16   | `version`       | firmware version, ASCII, NUL padded (e.g. `"1.2.3"`)       |
+//! | 44     | 4    | `payload_len`   | payload length in bytes, ≤ slot capacity                  |
+//! | 48     | 4    | `payload_crc32` | CRC-32 of the payload                                     |
+//! | 52     | …    | (extension)     | only if `header_len` > 56: ignored, covered by the CRC     |
+//! | hl − 4 | 4    | `header_crc32`  | CRC-32 of header bytes `0 .. header_len − 4`               |
+//! | hl     | pl   | payload         | `payload_len` bytes; the file ends exactly here           |
+//!
+//! CRC-32 is CRC-32/ISO-HDLC (the zlib/Ethernet `crc32`: polynomial
+//! `0x04C11DB7` reflected, init and xor-out `0xFFFFFFFF`), see [`crc32`].
+
+mod boot;
+mod efw;
+#[cfg(feature = "std")]
+pub mod file_store;
+mod store;
+
+pub use boot::{
+    BootDecision, BootOutcome, MAX_BOOT_ATTEMPTS, RollbackReason, begin_download,
+    commit_pending, confirm_boot, finish_download, power_on, provision, reject_boot,
+    verify_slot, write_chunk,
+};
+pub use efw::{
+    EFW_FORMAT_VERSION, EFW_HEADER_LEN, EFW_MAGIC, EFW_MAX_HEADER_LEN, EfwError, EfwHeader,
+    EfwHeaderRepr, EfwValidator, ValidatedImage, pack,
+};
+pub use store::{
+    BootState, Candidate, CandidateStage, ImageInfo, ImageStore, MemStore, STATE_RECORD_LEN, Slot,
+    StoreError,
+};
+
+/// Identity of the running device, which an image must match (object
+/// 0x1018 "Identity": vendor ID, product code, revision number).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct DeviceIdentity {
+    /// Vendor ID (0x1018:01).
+    pub vendor_id: u32,
+    /// Product code (0x1018:02).
+    pub product_code: u32,
+    /// Revision number (0x1018:03).
+    pub revision: u32,
+}
+
+/// Length of a [`FirmwareVersion`] field.
+pub const VERSION_LEN: usize = 16;
+
+/// A firmware version: up to 16 ASCII bytes, NUL padded (the `.efw`
+/// `version` field and the boot state's image records).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct FirmwareVersion([u8; VERSION_LEN]);
+
+impl FirmwareVersion {
+    /// The empty version ("unknown").
+    pub const EMPTY: Self = Self([0; VERSION_LEN]);
+
+    /// A version from text: `None` if longer than 16 bytes, not printable
+    /// ASCII, or containing NUL.
+    pub fn new(text: &str) -> Option<Self> {
+        let bytes = text.as_bytes();
+        if bytes.len() > VERSION_LEN || !bytes.iter().all(|b| b.is_ascii_graphic() || *b == b' ')
+        {
+            return None;
+        }
+        let mut raw = [0u8; VERSION_LEN];
+        raw.get_mut(..bytes.len())?.copy_from_slice(bytes);
+        Some(Self(raw))
+    }
+
+    /// The version exactly as stored (possibly from an untrusted file).
+    pub const fn from_raw(raw: [u8; VERSION_LEN]) -> Self {
+        Self(raw)
+    }
+
+    /// The 16 stored bytes.
+    pub const fn raw(&self) -> &[u8; VERSION_LEN] {
+        &self.0
+    }
+
+    /// The bytes before the first NUL.
+    pub fn as_bytes(&self) -> &[u8] {
+        let end = self.0.iter().position(|&b| b == 0).unwrap_or(VERSION_LEN);
+        self.0.get(..end).unwrap_or(&[])
+    }
+
+    /// The version as text; `"?"` if the stored bytes are not UTF-8.
+    pub fn as_str(&self) -> &str {
+        core::str::from_utf8(self.as_bytes()).unwrap_or("?")
+    }
+}
+
+impl core::fmt::Display for FirmwareVersion {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Reflected CRC-32 polynomial (`0x04C11DB7` bit-reversed).
+const CRC32_POLY_REFLECTED: u32 = 0xEDB8_8320;
+
+/// Byte-wise lookup table for [`Crc32`] (1 KiB, built at compile time).
+const CRC32_TABLE: [u32; 256] = {
+    let mut table = [0u32; 256];
+    let mut i = 0;
+    while i < 256 {
+        let mut c = i as u32;
+        let mut bit = 0;
+        while bit < 8 {
+            c = if c & 1 != 0 {
+                (c >> 1) ^ CRC32_POLY_REFLECTED
+            } else {
+                c >> 1
+            };
+            bit += 1;
+        }
+        table[i] = c;
+        i += 1;
+    }
+    table
+};
+
+/// Incremental CRC-32/ISO-HDLC (zlib `crc32`): polynomial `0x04C11DB7`
+/// reflected, init `0xFFFFFFFF`, xor-out `0xFFFFFFFF`; check value of
+/// `"123456789"` is `0xCBF43926`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Crc32 {
+    state: u32,
+}
+
+impl Default for Crc32 {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Crc32 {
+    /// A CRC over no bytes yet.
+    pub const fn new() -> Self {
+        Self { state: 0xFFFF_FFFF }
+    }
+
+    /// Feeds `data`.
+    pub fn update(&mut self, data: &[u8]) {
+        let mut c = self.state;
+        for &b in data {
+            let idx = usize::from((c as u8) ^ b);
+            c = (c >> 8) ^ CRC32_TABLE.get(idx).copied().unwrap_or(0);
+        }
+        self.state = c;
+    }
+
+    /// The CRC of everything fed so far (the state is kept).
+    pub const fn finish(&self) -> u32 {
+        !self.state
+    }
+}
+
+/// CRC-32/ISO-HDLC of `data` (see [`Crc32`]).
+pub fn crc32(data: &[u8]) -> u32 {
+    let mut c = Crc32::new();
+    c.update(data);
+    c.finish()
+}
+
+#[cfg(test)]
+#[allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crc32_matches_the_standard_check_value() {
+        assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
+        assert_eq!(crc32(b""), 0);
+        assert_eq!(crc32(b"a"), 0xE8B7_BE43);
+    }
+
+    #[test]
+    fn crc32_is_incremental() {
+        let data: [u8; 300] = core::array::from_fn(|i| (i * 7) as u8);
+        let mut c = Crc32::new();
+        for part in data.chunks(17) {
+            c.update(part);
+        }
+        assert_eq!(c.finish(), crc32(&data));
+    }
+
+    #[test]
+    fn version_text_is_nul_padded_ascii() {
+        let v = FirmwareVersion::new("1.2.3").unwrap();
+        assert_eq!(&v.raw()[..6], b"1.2.3\0");
+        assert_eq!(v.as_str(), "1.2.3");
+        assert!(FirmwareVersion::new("12345678901234567").is_none());
+        assert!(FirmwareVersion::new("1.0\0").is_none());
+        assert!(FirmwareVersion::new("1.0-é").is_none());
+        assert_eq!(FirmwareVersion::new("1234567890123456").unwrap().as_str().len(), 16);
+        assert_eq!(FirmwareVersion::from_raw([0xFF; 16]).as_str(), "?");
+    }
+}
