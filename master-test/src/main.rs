@@ -33,6 +33,10 @@ enum Cmd {
         /// Process data cycles to run (about 1 ms each).
         #[arg(long, default_value_t = 250)]
         cycles: u32,
+        /// Capture every frame of the virtual link (both directions) to
+        /// this pcap file (open it with Wireshark or `tshark -r FILE -Y ecat`).
+        #[arg(long)]
+        pcap: Option<std::path::PathBuf>,
     },
 }
 
@@ -43,6 +47,7 @@ fn main() -> ExitCode {
         current: 1500,
         command: 5000,
         cycles: 250,
+        pcap: None,
     });
     let result = match cmd {
         Cmd::Demo {
@@ -50,7 +55,8 @@ fn main() -> ExitCode {
             current,
             command,
             cycles,
-        } => smol::block_on(demo(slaves, current, command, cycles)),
+            pcap,
+        } => smol::block_on(demo(slaves, current, command, cycles, pcap.as_deref())),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -66,6 +72,7 @@ async fn demo(
     current: u16,
     command: i32,
     cycles: u32,
+    pcap: Option<&std::path::Path>,
 ) -> Result<(), Box<dyn std::error::Error>> {
     if slaves == 0 || slaves > master_test::MAX_SUBDEVICES {
         return Err(format!(
@@ -75,7 +82,11 @@ async fn demo(
         .into());
     }
     println!("== PAM-199-P-ETC demo on the virtual EtherCAT link ({slaves} slave(s)) ==");
-    let bus = VirtualBus::new(slaves)?;
+    let bus = VirtualBus::with_options(slaves, master_test::link::Clock::real(), pcap)
+        .map_err(|e| match pcap {
+            Some(p) => format!("{e} (pcap file {})", p.display()),
+            None => e.to_string(),
+        })?;
     let md = &*bus.maindevice;
     let group = bus.init().await?;
     for sd in group.iter(md) {
@@ -161,6 +172,10 @@ async fn demo(
     let group = group.into_pre_op(md).await?;
     let _ = group.into_init(md).await?;
     println!("state: INIT (done)");
+    if let Some(p) = pcap {
+        drop(bus);
+        println!("capture written to {} (tshark -r {} -Y ecat)", p.display(), p.display());
+    }
     Ok(())
 }
 

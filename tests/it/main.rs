@@ -3,6 +3,7 @@
 //! each area of the product is a module.
 
 mod bring_up;
+mod capture;
 mod common;
 mod sdo;
 mod sii;
