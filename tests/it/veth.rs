@@ -109,21 +109,7 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
     // Give the runner time to open its socket.
     std::thread::sleep(Duration::from_millis(300));
 
-    let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
-        Box::leak(Box::new(PduStorage::new()));
-    let (tx, rx, pdu_loop) = storage.try_split().expect("split");
-    let md: &'static MainDevice<'static> = Box::leak(Box::new(MainDevice::new(
-        pdu_loop,
-        master_test::timeouts(),
-        MainDeviceConfig {
-            dc_static_sync_iterations: 0,
-            retry_behaviour: RetryBehaviour::None,
-        },
-    )));
-    let task = ethercrab::std::tx_rx_task(&host_if, tx, rx).expect("raw socket on the host end");
-    std::thread::spawn(move || {
-        let _ = smol::block_on(task);
-    });
+    let md = new_master(&host_if);
     smol::block_on(async {
         let group = md
             .init_single_group::<MAX_SUBDEVICES, PDI_LEN>(ethercrab::std::ethercat_now)
@@ -152,5 +138,87 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
             .await
             .expect("command value arrived");
         assert_eq!(v, 7000);
+
     });
+
+    // Garbage on the wire: random EtherType-0x88A4 payloads from a second
+    // raw socket. Random datagrams legitimately rewrite station addresses,
+    // SMs and AL control (as on a real ESC), and ethercrab's own raw-socket
+    // task gives up on the unparseable replies it sees, so the check
+    // afterwards is a fresh master that must rediscover both slaves.
+    send_garbage(&host_if, 2000);
+    let md2 = new_master(&host_if);
+    smol::block_on(async {
+        let group = md2
+            .init_single_group::<MAX_SUBDEVICES, PDI_LEN>(ethercrab::std::ethercat_now)
+            .await
+            .expect("a fresh master finds the slaves after the garbage");
+        assert_eq!(group.len(), 2);
+        let group = group.into_op(md2).await.expect("OP again");
+        let resp = group.tx_rx(md2).await.expect("process data");
+        assert_eq!(resp.working_counter, 6);
+    });
+    let runner = guard.runner.as_mut().expect("runner");
+    assert!(
+        runner.try_wait().expect("status").is_none(),
+        "pam-slave is still running after the garbage"
+    );
+}
+
+/// An ethercrab master with its standard raw-socket task on `iface`.
+fn new_master(iface: &str) -> &'static MainDevice<'static> {
+    let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
+        Box::leak(Box::new(PduStorage::new()));
+    let (tx, rx, pdu_loop) = storage.try_split().expect("split");
+    let md: &'static MainDevice<'static> = Box::leak(Box::new(MainDevice::new(
+        pdu_loop,
+        master_test::timeouts(),
+        MainDeviceConfig {
+            dc_static_sync_iterations: 0,
+            retry_behaviour: RetryBehaviour::None,
+        },
+    )));
+    let task = ethercrab::std::tx_rx_task(iface, tx, rx).expect("raw socket on the host end");
+    std::thread::spawn(move || {
+        let _ = smol::block_on(task);
+    });
+    md
+}
+
+/// Sends `n` frames of random bytes with EtherType 0x88A4 on `iface`.
+fn send_garbage(iface: &str, n: usize) {
+    let ifaces = pnet_datalink::interfaces();
+    let Some(nic) = ifaces.iter().find(|i| i.name == iface) else {
+        panic!("interface {iface} vanished");
+    };
+    let Ok(pnet_datalink::Channel::Ethernet(mut tx, _rx)) =
+        pnet_datalink::channel(nic, pnet_datalink::Config::default())
+    else {
+        panic!("second raw socket on {iface}");
+    };
+    let mut x: u64 = 0x2545_F491_4F6C_DD1D;
+    for i in 0..n {
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let len = 16 + (next() % 1400) as usize;
+        let mut f: Vec<u8> = (0..len).map(|_| next() as u8).collect();
+        f[0..6].fill(0xFF);
+        f[6] = 0x10; // from a master: the runner must look at it
+        f[12] = 0x88;
+        f[13] = 0xA4;
+        if i % 2 == 0 {
+            // A plausible EtherCAT header so datagram parsing is reached.
+            let pl = (len - 16).min(0x7FF) as u16;
+            f[14] = pl as u8;
+            f[15] = 0x10 | ((pl >> 8) as u8 & 0x07);
+        }
+        if let Some(Err(e)) = tx.send_to(&f, None) {
+            panic!("sending garbage: {e}");
+        }
+    }
+    std::thread::sleep(Duration::from_millis(200));
 }

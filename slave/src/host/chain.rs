@@ -313,3 +313,33 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod garbage_tests {
+    use super::*;
+
+    #[test]
+    fn random_ethercat_frames_never_panic_the_line_or_its_firmware() {
+        let mut chain = Chain::new(2);
+        let mut x: u64 = 0x2545_F491_4F6C_DD1D;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        for i in 0..20_000u64 {
+            let len = 16 + (next() % 1400) as usize;
+            let mut f: Vec<u8> = (0..len).map(|_| next() as u8).collect();
+            f[6] = 0x10;
+            f[12] = 0x88;
+            f[13] = 0xA4;
+            if i % 2 == 0 {
+                let pl = (len - 16).min(0x7FF) as u16;
+                f[14] = pl as u8;
+                f[15] = 0x10 | ((pl >> 8) as u8 & 0x07);
+            }
+            chain.process(&mut f, i * 1_000_000);
+        }
+    }
+}

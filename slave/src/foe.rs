@@ -1,0 +1,1043 @@
+//! FoE server (mailbox protocol layer, ETG.1000.6 §5.8 "File Access over
+//! EtherCAT"): firmware download in BOOT (manual §5.10) and a small
+//! read-only info file.
+//!
+//! [`FoeServer::handle`] takes one parsed request ([`FoeRepr`]) and writes
+//! at most one reply into the mailbox data area. It never touches the ESC
+//! or the mailbox header and never panics on any request; flash goes
+//! through the [`ImageStore`] in the [`FoeContext`], image checks through
+//! an [`EfwValidator`], and the boot state only through the
+//! [`firmware`](crate::firmware) functions, so an aborted or refused
+//! download never changes the active image.
+//!
+//! # Rules
+//!
+//! * Write request (WRQ): accepted only in BOOT, with password
+//!   [`FOE_PASSWORD`] (`0x00000000`) and a file name ending in `.efw`
+//!   (ASCII case ignored); answered with ACK 0 after the inactive slot is
+//!   erased. DATA packets are numbered from 1; a repeat of the previous
+//!   packet is acknowledged again without being written twice; any other
+//!   number aborts with PacketNumberWrong. A DATA packet shorter than the
+//!   maximum (mailbox data size − 6) ends the file, so a file whose length
+//!   is a multiple of the maximum ends with an empty DATA packet. The
+//!   image is then validated and recorded as downloaded; the last ACK
+//!   comes only after that.
+//! * Read request (RRQ): [`INFO_FILE_NAME`] (any state, password ignored)
+//!   returns the device identity and running version as text, in DATA
+//!   packets the master acknowledges one by one.
+//! * While [`FoeContext::busy`] is set (flash busy), WRQ and DATA are
+//!   answered with BUSY and not processed: the master repeats them.
+//! * An ERR from the master ends any transfer silently.
+//!
+//! # Error codes
+//!
+//! | situation                              | code                          | text |
+//! |----------------------------------------|-------------------------------|------|
+//! | WRQ outside BOOT                       | `0x8008` BootstrapOnly        | "firmware download only in BOOT" |
+//! | WRQ with password ≠ 0                  | `0x800A` NoRights             | "wrong password" |
+//! | WRQ name not `*.efw`                   | `0x8009` NotBootstrap         | "only .efw files can be downloaded in BOOT" |
+//! | RRQ of an unknown name                 | `0x8001` NotFound             | "file not found" |
+//! | wrong DATA/ACK packet number           | `0x8005` PacketNumberWrong    | "packet number wrong" |
+//! | DATA/ACK/unknown opcode out of context | `0x8004` Illegal              | "no transfer in progress" … |
+//! | image refused                          | [`EfwError::foe_code`]        | the [`EfwError`] text |
+//! | flash failure                          | [`StoreError::foe_code`]      | the [`StoreError`] text |
+//!
+//! ETG.1000.6 names `0x8008` "Bootstrap only" and `0x8009` "Not bootstrap";
+//! the ETG Slave Stack Code documents them as "FoE only supported in
+//! Bootstrap" and "downloaded file name is not valid in Bootstrap state",
+//! which is how they are used here.
+
+use core::fmt::Write as _;
+
+use crate::firmware::{
+    DeviceIdentity, EfwError, EfwValidator, ImageStore, Slot, StoreError, begin_download,
+    finish_download, write_chunk,
+};
+use crate::wire::foe::{FoeErrorCode, FoeRepr, HEADER_LEN};
+
+/// The password a firmware download must carry (manual §5.10).
+pub const FOE_PASSWORD: u32 = 0x0000_0000;
+
+/// Suffix of downloadable firmware files.
+pub const FIRMWARE_SUFFIX: &[u8] = b".efw";
+
+/// Name of the read-only info file.
+pub const INFO_FILE_NAME: &[u8] = b"info.txt";
+
+/// Capacity of the generated info file.
+pub const INFO_FILE_CAPACITY: usize = 192;
+
+/// Longest error text sent (longer texts are cut).
+const ERROR_TEXT_CAPACITY: usize = 96;
+
+/// What the FoE server needs from the device for one request.
+pub struct FoeContext<'a> {
+    /// The image store (flash HAL).
+    pub store: &'a mut dyn ImageStore,
+    /// The device identity an image must match (object 0x1018).
+    pub identity: DeviceIdentity,
+    /// The running firmware's version text.
+    pub version: &'a str,
+    /// The AL state is BOOT.
+    pub in_boot: bool,
+    /// The flash is busy (e.g. an erase is in progress): answer BUSY.
+    pub busy: bool,
+}
+
+/// The state of the FoE server.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum FoeState {
+    /// No transfer.
+    #[default]
+    Idle,
+    /// Receiving a firmware image.
+    Receiving {
+        /// Slot being written (the inactive one).
+        slot: Slot,
+        /// Number of the next DATA packet expected.
+        next_packet: u32,
+        /// Largest DATA size seen or expected; shorter packets end the file.
+        segment: usize,
+        /// Checks the image as it arrives.
+        validator: EfwValidator,
+    },
+    /// A download completed; only a repeat of its last packet is
+    /// acknowledged again.
+    Complete {
+        /// The last packet number.
+        packet: u32,
+    },
+    /// Sending the info file.
+    Sending {
+        /// The file.
+        file: heapless::Vec<u8, INFO_FILE_CAPACITY>,
+        /// Number of the last DATA packet sent.
+        packet: u32,
+        /// File offset of the last DATA packet sent.
+        start: usize,
+        /// Length of the last DATA packet sent.
+        len: usize,
+        /// The last DATA packet sent was the final (short) one.
+        last: bool,
+    },
+    /// The last transfer ended with this error.
+    Error {
+        /// The error sent.
+        code: FoeErrorCode,
+    },
+}
+
+/// The FoE server of one slave.
+#[derive(Debug, Clone, Default)]
+pub struct FoeServer {
+    state: FoeState,
+}
+
+impl FoeServer {
+    /// A server with no transfer.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The current state.
+    pub const fn state(&self) -> &FoeState {
+        &self.state
+    }
+
+    /// Drops any transfer (AL state change, link loss). The partly written
+    /// inactive slot is not referenced by the boot state, so the active
+    /// image is untouched.
+    pub fn abort(&mut self) {
+        self.state = FoeState::Idle;
+    }
+
+    /// Handles one request and writes the FoE reply into `out`, the
+    /// mailbox data area after the mailbox header (its length is the
+    /// mailbox size limit: DATA packets sent are `out.len() - 6` bytes at
+    /// most, and DATA packets received of that size are taken as "more to
+    /// come"). Returns the reply length, or `None` when nothing is sent.
+    pub fn handle(
+        &mut self,
+        request: FoeRepr<'_>,
+        ctx: &mut FoeContext<'_>,
+        out: &mut [u8],
+    ) -> Option<usize> {
+        match request {
+            FoeRepr::WriteRequest { password, name } => self.write_request(password, name, ctx, out),
+            FoeRepr::ReadRequest { name, .. } => self.read_request(name, ctx, out),
+            FoeRepr::Data { packet, data } => self.data(packet, data, ctx, out),
+            FoeRepr::Ack { packet } => self.ack(packet, out),
+            FoeRepr::Busy { .. } => self.master_busy(out),
+            FoeRepr::Error { .. } => {
+                self.state = FoeState::Idle;
+                None
+            }
+            FoeRepr::Unknown { .. } => {
+                self.fail(out, FoeErrorCode::Illegal, "unknown FoE opcode")
+            }
+        }
+    }
+
+    fn write_request(
+        &mut self,
+        password: u32,
+        name: &[u8],
+        ctx: &mut FoeContext<'_>,
+        out: &mut [u8],
+    ) -> Option<usize> {
+        self.state = FoeState::Idle;
+        if !ctx.in_boot {
+            return self.fail(
+                out,
+                FoeErrorCode::BootstrapOnly,
+                "firmware download only in BOOT",
+            );
+        }
+        if password != FOE_PASSWORD {
+            return self.fail(out, FoeErrorCode::NoRights, "wrong password");
+        }
+        if !ends_with_ignore_case(name, FIRMWARE_SUFFIX) {
+            return self.fail(
+                out,
+                FoeErrorCode::NotBootstrap,
+                "only .efw files can be downloaded in BOOT",
+            );
+        }
+        if ctx.busy {
+            return emit(out, FoeRepr::Busy { done: 0, entire: 0 });
+        }
+        let slot = match begin_download(ctx.store) {
+            Ok(slot) => slot,
+            Err(e) => return self.fail_store(out, e),
+        };
+        self.state = FoeState::Receiving {
+            slot,
+            next_packet: 1,
+            segment: out.len().saturating_sub(HEADER_LEN),
+            validator: EfwValidator::new(ctx.identity, ctx.store.slot_capacity()),
+        };
+        emit(out, FoeRepr::Ack { packet: 0 })
+    }
+
+    fn data(
+        &mut self,
+        packet: u32,
+        data: &[u8],
+        ctx: &mut FoeContext<'_>,
+        out: &mut [u8],
+    ) -> Option<usize> {
+        let FoeState::Receiving {
+            slot,
+            next_packet,
+            segment,
+            validator,
+        } = &mut self.state
+        else {
+            return match self.state {
+                FoeState::Complete { packet: last } if packet == last => {
+                    emit(out, FoeRepr::Ack { packet })
+                }
+                _ => self.fail(out, FoeErrorCode::Illegal, "no download in progress"),
+            };
+        };
+        if packet != *next_packet {
+            if packet.wrapping_add(1) == *next_packet && packet != 0 {
+                // A repeat of the packet just acknowledged.
+                return emit(out, FoeRepr::Ack { packet });
+            }
+            return self.fail(out, FoeErrorCode::PacketNumberWrong, "packet number wrong");
+        }
+        if !ctx.in_boot {
+            return self.fail(
+                out,
+                FoeErrorCode::BootstrapOnly,
+                "firmware download only in BOOT",
+            );
+        }
+        if ctx.busy {
+            let (done, entire) = progress(validator);
+            return emit(out, FoeRepr::Busy { done, entire });
+        }
+        // A master with a larger mailbox than ours: its full size counts.
+        *segment = (*segment).max(data.len());
+        let last = data.len() < *segment;
+        let slot = *slot;
+        let offset = validator.payload_received();
+        let payload = match validator.feed(data) {
+            Ok(p) => p,
+            Err(e) => return self.fail_efw(out, e),
+        };
+        if let Err(e) = write_chunk(ctx.store, slot, offset, payload) {
+            return self.fail_store(out, e);
+        }
+        *next_packet = next_packet.wrapping_add(1);
+        if !last {
+            return emit(out, FoeRepr::Ack { packet });
+        }
+        let image = match validator.finish() {
+            Ok(image) => image,
+            Err(e) => return self.fail_efw(out, e),
+        };
+        if let Err(e) = finish_download(ctx.store, slot, &image) {
+            return self.fail_store(out, e);
+        }
+        self.state = FoeState::Complete { packet };
+        emit(out, FoeRepr::Ack { packet })
+    }
+
+    fn read_request(
+        &mut self,
+        name: &[u8],
+        ctx: &FoeContext<'_>,
+        out: &mut [u8],
+    ) -> Option<usize> {
+        self.state = FoeState::Idle;
+        if !name.eq_ignore_ascii_case(INFO_FILE_NAME) {
+            return self.fail(out, FoeErrorCode::NotFound, "file not found");
+        }
+        let file = info_file(ctx);
+        self.state = FoeState::Sending {
+            file,
+            packet: 0,
+            start: 0,
+            len: 0,
+            last: false,
+        };
+        self.send_next(out)
+    }
+
+    fn ack(&mut self, packet: u32, out: &mut [u8]) -> Option<usize> {
+        match &self.state {
+            FoeState::Sending {
+                packet: sent, last, ..
+            } if *sent == packet => {
+                if *last {
+                    self.state = FoeState::Idle;
+                    None
+                } else {
+                    self.send_next(out)
+                }
+            }
+            FoeState::Sending { .. } => {
+                self.fail(out, FoeErrorCode::PacketNumberWrong, "packet number wrong")
+            }
+            _ => self.fail(out, FoeErrorCode::Illegal, "no upload in progress"),
+        }
+    }
+
+    /// The master is busy: repeat the last DATA packet of an upload.
+    fn master_busy(&mut self, out: &mut [u8]) -> Option<usize> {
+        match &self.state {
+            FoeState::Sending {
+                file,
+                packet,
+                start,
+                len,
+                ..
+            } => {
+                let data = file.get(*start..start.saturating_add(*len)).unwrap_or(&[]);
+                emit(
+                    out,
+                    FoeRepr::Data {
+                        packet: *packet,
+                        data,
+                    },
+                )
+            }
+            _ => None,
+        }
+    }
+
+    /// Sends the DATA packet after the last one sent.
+    fn send_next(&mut self, out: &mut [u8]) -> Option<usize> {
+        let segment = out.len().saturating_sub(HEADER_LEN);
+        let FoeState::Sending {
+            file,
+            packet,
+            start,
+            len,
+            last,
+        } = &mut self.state
+        else {
+            return None;
+        };
+        if segment == 0 {
+            self.state = FoeState::Idle;
+            return None;
+        }
+        *start = start.saturating_add(*len);
+        let data = file.get(*start..).unwrap_or(&[]);
+        let data = data.get(..segment).unwrap_or(data);
+        *len = data.len();
+        *last = data.len() < segment;
+        *packet = packet.wrapping_add(1);
+        let reply = FoeRepr::Data {
+            packet: *packet,
+            data,
+        };
+        emit(out, reply)
+    }
+
+    /// Ends the transfer with an error reply.
+    fn fail(&mut self, out: &mut [u8], code: FoeErrorCode, text: &str) -> Option<usize> {
+        self.state = FoeState::Error { code };
+        let room = out.len().saturating_sub(HEADER_LEN);
+        let text = text.as_bytes();
+        let text = text.get(..room).unwrap_or(text);
+        emit(out, FoeRepr::Error { code, text })
+    }
+
+    fn fail_efw(&mut self, out: &mut [u8], e: EfwError) -> Option<usize> {
+        let mut text: heapless::String<ERROR_TEXT_CAPACITY> = heapless::String::new();
+        let _ = write!(text, "{e}");
+        self.fail(out, e.foe_code(), &text)
+    }
+
+    fn fail_store(&mut self, out: &mut [u8], e: StoreError) -> Option<usize> {
+        let mut text: heapless::String<ERROR_TEXT_CAPACITY> = heapless::String::new();
+        let _ = write!(text, "{e}");
+        self.fail(out, e.foe_code(), &text)
+    }
+}
+
+fn emit(out: &mut [u8], reply: FoeRepr<'_>) -> Option<usize> {
+    reply.emit(out).ok()
+}
+
+fn ends_with_ignore_case(name: &[u8], suffix: &[u8]) -> bool {
+    name.len() > suffix.len()
+        && name
+            .get(name.len() - suffix.len()..)
+            .is_some_and(|tail| tail.eq_ignore_ascii_case(suffix))
+}
+
+/// BUSY progress in percent once the image length is known.
+fn progress(validator: &EfwValidator) -> (u16, u16) {
+    match validator.expected_len() {
+        Some(total) if total > 0 => {
+            let done = validator.received().saturating_mul(100) / total;
+            (u16::try_from(done).unwrap_or(100), 100)
+        }
+        _ => (0, 0),
+    }
+}
+
+/// The info file: identity and running version, one `key=value` per line.
+fn info_file(ctx: &FoeContext<'_>) -> heapless::Vec<u8, INFO_FILE_CAPACITY> {
+    let mut text: heapless::String<INFO_FILE_CAPACITY> = heapless::String::new();
+    let id = &ctx.identity;
+    let _ = write!(
+        text,
+        "vendor_id=0x{:08X}\nproduct_code=0x{:08X}\nrevision=0x{:08X}\nversion={}\n",
+        id.vendor_id, id.product_code, id.revision, ctx.version
+    );
+    text.into_bytes()
+}
+
+#[cfg(test)]
+#[allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+mod tests {
+    use super::*;
+    use crate::firmware::{
+        BootOutcome, EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, MemStore, commit_pending,
+        pack, power_on, provision,
+    };
+
+    const DEVICE: DeviceIdentity = DeviceIdentity {
+        vendor_id: 0x0000_05AE,
+        product_code: 0x00C7_03F3,
+        revision: 7,
+    };
+    /// Mailbox data area of 1024 bytes: 1018 bytes of FoE data per packet.
+    const MBX: usize = 1024;
+    const SEG: usize = MBX - HEADER_LEN;
+
+    type Small = MemStore<{ 64 * 1024 }>;
+
+    fn header(version: &str) -> EfwHeaderRepr {
+        EfwHeaderRepr {
+            header_len: EFW_HEADER_LEN as u16,
+            flags: 0,
+            vendor_id: DEVICE.vendor_id,
+            product_code: DEVICE.product_code,
+            revision_min: 1,
+            revision_max: 9,
+            version: FirmwareVersion::new(version).unwrap(),
+            payload_len: 0,
+            payload_crc: 0,
+        }
+    }
+
+    fn efw(h: &EfwHeaderRepr, payload: &[u8]) -> Vec<u8> {
+        let mut out = vec![0; usize::from(h.header_len) + payload.len()];
+        pack(h, payload, &mut out).unwrap();
+        out
+    }
+
+    fn payload(len: usize) -> Vec<u8> {
+        (0..len).map(|i| (i as u32).wrapping_mul(2_654_435_761) as u8 ^ (i >> 12) as u8).collect()
+    }
+
+    /// A simulated master side: sends requests, decodes replies.
+    struct Bench<'s> {
+        server: FoeServer,
+        store: &'s mut dyn ImageStore,
+        in_boot: bool,
+        busy: bool,
+        out: Vec<u8>,
+    }
+
+    #[derive(Debug, PartialEq, Eq)]
+    enum Reply {
+        Ack(u32),
+        Data(u32, Vec<u8>),
+        Err(FoeErrorCode, String),
+        Busy(u16, u16),
+        None,
+    }
+
+    impl<'s> Bench<'s> {
+        fn new(store: &'s mut dyn ImageStore) -> Self {
+            Self {
+                server: FoeServer::new(),
+                store,
+                in_boot: true,
+                busy: false,
+                out: vec![0; MBX],
+            }
+        }
+
+        fn send(&mut self, req: FoeRepr<'_>) -> Reply {
+            // round trip through the wire format, as on the bus
+            let mut raw = vec![0u8; req.buffer_len()];
+            req.emit(&mut raw).unwrap();
+            let req = FoeRepr::parse(&raw).unwrap();
+            let mut ctx = FoeContext {
+                store: &mut *self.store,
+                identity: DEVICE,
+                version: "1.0.0",
+                in_boot: self.in_boot,
+                busy: self.busy,
+            };
+            self.out.fill(0xEE);
+            let Some(n) = self.server.handle(req, &mut ctx, &mut self.out) else {
+                return Reply::None;
+            };
+            match FoeRepr::parse(&self.out[..n]).unwrap() {
+                FoeRepr::Ack { packet } => Reply::Ack(packet),
+                FoeRepr::Data { packet, data } => Reply::Data(packet, data.to_vec()),
+                FoeRepr::Error { code, text } => {
+                    Reply::Err(code, String::from_utf8(text.to_vec()).unwrap())
+                }
+                FoeRepr::Busy { done, entire } => Reply::Busy(done, entire),
+                other => panic!("unexpected reply {other:?}"),
+            }
+        }
+
+        fn wrq(&mut self, name: &str, password: u32) -> Reply {
+            self.send(FoeRepr::WriteRequest {
+                password,
+                name: name.as_bytes(),
+            })
+        }
+
+        fn data(&mut self, packet: u32, data: &[u8]) -> Reply {
+            self.send(FoeRepr::Data { packet, data })
+        }
+
+        /// A whole download as a master does it; returns the last reply.
+        fn download(&mut self, file: &[u8]) -> Reply {
+            let reply = self.wrq("pam199.efw", 0);
+            if reply != Reply::Ack(0) {
+                return reply;
+            }
+            let mut packet = 0;
+            let mut chunks = file.chunks(SEG).peekable();
+            loop {
+                packet += 1;
+                let chunk = chunks.next().unwrap_or(&[]);
+                let reply = self.data(packet, chunk);
+                let ended = chunk.len() < SEG;
+                if reply != Reply::Ack(packet) || ended {
+                    return reply;
+                }
+            }
+        }
+    }
+
+    fn provisioned<const N: usize>() -> MemStore<N> {
+        let mut s = MemStore::<N>::new();
+        provision(&mut s, FirmwareVersion::new("1.0.0").unwrap(), &[0xA5; 4000]).unwrap();
+        s
+    }
+
+    fn running_version(store: &mut dyn ImageStore) -> String {
+        power_on(store).version.as_str().to_owned()
+    }
+
+    /// Runs `f` on a thread with a stack large enough for a MiB-sized
+    /// `MemStore` built by value.
+    fn with_big_stack(f: impl FnOnce() + Send + 'static) {
+        std::thread::Builder::new()
+            .stack_size(64 << 20)
+            .spawn(f)
+            .unwrap()
+            .join()
+            .unwrap();
+    }
+
+    #[test]
+    fn full_download_of_a_1_mib_image_then_commit_and_power_on_runs_it() {
+        with_big_stack(|| {
+            type Big = MemStore<{ 2 * 1024 * 1024 }>;
+            let mut store: Box<Big> = Box::new(provisioned::<{ 2 * 1024 * 1024 }>());
+            let file = efw(&header("2.1.0"), &payload(1024 * 1024));
+            let mut bench = Bench::new(&mut *store);
+            assert_eq!(bench.download(&file), Reply::Ack(file.len() as u32 / SEG as u32 + 1));
+            assert!(matches!(bench.server.state(), FoeState::Complete { .. }));
+            drop(bench);
+            commit_pending(&mut *store).unwrap();
+            let d = power_on(&mut *store);
+            assert_eq!(d.version.as_str(), "2.1.0");
+            assert_eq!(d.slot, Slot::B);
+            assert_eq!(d.outcome, BootOutcome::Trial { attempt: 1 });
+        });
+    }
+
+    #[test]
+    fn file_of_exact_multiple_length_ends_with_an_empty_data_packet() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        // header + payload = 3 full packets
+        let file = efw(&header("2.0.0"), &payload(3 * SEG - EFW_HEADER_LEN));
+        assert_eq!(file.len(), 3 * SEG);
+        let mut b = Bench::new(&mut store);
+        assert_eq!(b.wrq("fw.EFW", 0), Reply::Ack(0));
+        for (i, c) in file.chunks(SEG).enumerate() {
+            assert_eq!(b.data(i as u32 + 1, c), Reply::Ack(i as u32 + 1));
+            assert!(matches!(b.server.state(), FoeState::Receiving { .. }));
+        }
+        assert_eq!(b.data(4, &[]), Reply::Ack(4));
+        drop(b);
+        commit_pending(&mut store).unwrap();
+        assert_eq!(running_version(&mut store), "2.0.0");
+    }
+
+    #[test]
+    fn wrong_password_is_refused_with_no_rights() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let mut b = Bench::new(&mut store);
+        assert_eq!(
+            b.wrq("fw.efw", 0x1234),
+            Reply::Err(FoeErrorCode::NoRights, "wrong password".into())
+        );
+        assert!(matches!(b.server.state(), FoeState::Error { .. }));
+        // data after the refusal is illegal, nothing written
+        assert!(matches!(b.data(1, &[1, 2]), Reply::Err(FoeErrorCode::Illegal, _)));
+        drop(b);
+        assert_eq!(store.slot_bytes(Slot::B), &[0xFF; 32 * 1024][..]);
+    }
+
+    #[test]
+    fn write_outside_boot_is_refused_bootstrap_only() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let mut b = Bench::new(&mut store);
+        b.in_boot = false;
+        assert_eq!(
+            b.wrq("fw.efw", 0),
+            Reply::Err(
+                FoeErrorCode::BootstrapOnly,
+                "firmware download only in BOOT".into()
+            )
+        );
+    }
+
+    #[test]
+    fn non_efw_file_name_is_refused() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let mut b = Bench::new(&mut store);
+        for name in ["fw.bin", "efw", ".efw", "fw.efw.txt", ""] {
+            assert!(
+                matches!(b.wrq(name, 0), Reply::Err(FoeErrorCode::NotBootstrap, _)),
+                "{name}"
+            );
+        }
+    }
+
+    #[test]
+    fn wrong_product_is_refused_at_the_first_packet() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let h = EfwHeaderRepr {
+            product_code: 0x0BAD,
+            ..header("2.0.0")
+        };
+        let file = efw(&h, &payload(5000));
+        let mut b = Bench::new(&mut store);
+        assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
+        let Reply::Err(code, text) = b.data(1, &file[..SEG]) else {
+            panic!()
+        };
+        assert_eq!(code, FoeErrorCode::InvalidFirmware);
+        assert_eq!(text, "image product 0xbad, device product 0xc703f3");
+        drop(b);
+        assert_eq!(running_version(&mut store), "1.0.0");
+    }
+
+    #[test]
+    fn bad_payload_crc_is_refused_at_the_end_and_old_image_stays() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let mut file = efw(&header("2.0.0"), &payload(5000));
+        file[3000] ^= 0x01;
+        let mut b = Bench::new(&mut store);
+        let reply = b.download(&file);
+        assert!(
+            matches!(&reply, Reply::Err(FoeErrorCode::InvalidChecksum, t) if t.starts_with("payload CRC")),
+            "{reply:?}"
+        );
+        drop(b);
+        assert_eq!(commit_pending(&mut store), Ok(None));
+        assert_eq!(running_version(&mut store), "1.0.0");
+    }
+
+    #[test]
+    fn truncated_transfer_aborted_by_the_master_keeps_the_old_image() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let file = efw(&header("2.0.0"), &payload(10_000));
+        let mut b = Bench::new(&mut store);
+        assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
+        for (i, c) in file.chunks(SEG).take(5).enumerate() {
+            assert_eq!(b.data(i as u32 + 1, c), Reply::Ack(i as u32 + 1));
+        }
+        // the master stops; the device leaves BOOT
+        b.server.abort();
+        assert_eq!(b.server.state(), &FoeState::Idle);
+        drop(b);
+        assert_eq!(commit_pending(&mut store), Ok(None));
+        assert_eq!(running_version(&mut store), "1.0.0");
+    }
+
+    #[test]
+    fn file_ending_early_is_refused_as_truncated() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let file = efw(&header("2.0.0"), &payload(10_000));
+        let mut b = Bench::new(&mut store);
+        let reply = b.download(&file[..2 * SEG + 100]);
+        assert_eq!(
+            reply,
+            Reply::Err(
+                FoeErrorCode::InvalidChecksum,
+                format!("image truncated: {} of {} bytes", 2 * SEG + 100, file.len())
+            )
+        );
+    }
+
+    #[test]
+    fn oversized_image_is_refused() {
+        // payload larger than the 32 KiB slot: refused from the header
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let file = efw(&header("2.0.0"), &payload(40_000));
+        let mut b = Bench::new(&mut store);
+        assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
+        assert_eq!(
+            b.data(1, &file[..SEG]),
+            Reply::Err(
+                FoeErrorCode::DiskFull,
+                "payload of 40000 bytes exceeds slot capacity 32768".into()
+            )
+        );
+        // file longer than its header says: refused when the extra arrives
+        let mut file = efw(&header("2.0.0"), &payload(3000));
+        file.extend_from_slice(&[0; 2000]);
+        let reply = b.download(&file);
+        assert!(matches!(reply, Reply::Err(FoeErrorCode::InvalidChecksum, _)), "{reply:?}");
+        drop(b);
+        assert_eq!(running_version(&mut store), "1.0.0");
+    }
+
+    #[test]
+    fn duplicate_data_packet_is_reacknowledged_without_writing_twice() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let file = efw(&header("2.0.0"), &payload(3000));
+        let chunks: Vec<&[u8]> = file.chunks(SEG).collect();
+        let mut b = Bench::new(&mut store);
+        assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
+        assert_eq!(b.data(1, chunks[0]), Reply::Ack(1));
+        assert_eq!(b.data(2, chunks[1]), Reply::Ack(2));
+        assert_eq!(b.data(2, chunks[1]), Reply::Ack(2));
+        let FoeState::Receiving { validator, .. } = b.server.state() else {
+            panic!()
+        };
+        assert_eq!(validator.received(), 2 * SEG);
+        assert_eq!(b.data(3, chunks[2]), Reply::Ack(3));
+        // repeat of the final packet after completion
+        assert_eq!(b.data(3, chunks[2]), Reply::Ack(3));
+        drop(b);
+        commit_pending(&mut store).unwrap();
+        assert_eq!(running_version(&mut store), "2.0.0");
+    }
+
+    #[test]
+    fn packet_number_skip_aborts_and_keeps_the_old_image() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let file = efw(&header("2.0.0"), &payload(5000));
+        let mut b = Bench::new(&mut store);
+        assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
+        assert_eq!(b.data(1, &file[..SEG]), Reply::Ack(1));
+        assert_eq!(
+            b.data(3, &file[SEG..2 * SEG]),
+            Reply::Err(FoeErrorCode::PacketNumberWrong, "packet number wrong".into())
+        );
+        assert_eq!(
+            b.server.state(),
+            &FoeState::Error {
+                code: FoeErrorCode::PacketNumberWrong
+            }
+        );
+        assert!(matches!(b.data(2, &file[SEG..2 * SEG]), Reply::Err(FoeErrorCode::Illegal, _)));
+        drop(b);
+        assert_eq!(commit_pending(&mut store), Ok(None));
+        assert_eq!(running_version(&mut store), "1.0.0");
+    }
+
+    #[test]
+    fn packet_zero_and_old_packets_are_wrong_numbers() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let file = efw(&header("2.0.0"), &payload(5000));
+        let mut b = Bench::new(&mut store);
+        assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
+        assert!(matches!(b.data(0, &file[..SEG]), Reply::Err(FoeErrorCode::PacketNumberWrong, _)));
+        assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
+        assert_eq!(b.data(1, &file[..SEG]), Reply::Ack(1));
+        assert_eq!(b.data(2, &file[SEG..2 * SEG]), Reply::Ack(2));
+        assert!(matches!(b.data(1, &file[..SEG]), Reply::Err(FoeErrorCode::PacketNumberWrong, _)));
+    }
+
+    #[test]
+    fn power_cut_in_the_middle_of_a_download_keeps_the_old_image() {
+        let file = efw(&header("2.0.0"), &payload(20_000));
+        let base = provisioned::<{ 64 * 1024 }>();
+        let mut full = base.clone();
+        let before = full.bytes_written();
+        assert!(matches!(Bench::new(&mut full).download(&file), Reply::Ack(_)));
+        let total = full.bytes_written() - before;
+        for cut in [0, 1, 16_000, 32_767, 32_768, 40_000, total - 64, total - 1] {
+            let mut store = base.clone();
+            store.cut_power_after(cut);
+            let reply = Bench::new(&mut store).download(&file);
+            assert!(matches!(reply, Reply::Err(FoeErrorCode::FlashError, _)), "cut {cut}: {reply:?}");
+            store.restore_power();
+            let _ = commit_pending(&mut store);
+            let d = power_on(&mut store);
+            assert_eq!((d.slot, d.version.as_str()), (Slot::A, "1.0.0"), "cut {cut}");
+        }
+    }
+
+    #[test]
+    fn busy_store_answers_busy_and_the_repeat_goes_through() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let file = efw(&header("2.0.0"), &payload(3000));
+        let mut b = Bench::new(&mut store);
+        b.busy = true;
+        assert_eq!(b.wrq("fw.efw", 0), Reply::Busy(0, 0));
+        b.busy = false;
+        assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
+        assert_eq!(b.data(1, &file[..SEG]), Reply::Ack(1));
+        b.busy = true;
+        let Reply::Busy(done, 100) = b.data(2, &file[SEG..2 * SEG]) else {
+            panic!()
+        };
+        assert_eq!(usize::from(done), SEG * 100 / file.len());
+        b.busy = false;
+        assert_eq!(b.data(2, &file[SEG..2 * SEG]), Reply::Ack(2));
+        assert_eq!(b.data(3, &file[2 * SEG..]), Reply::Ack(3));
+    }
+
+    #[test]
+    fn read_request_of_the_info_file_returns_identity_and_version() {
+        let mut store = Small::new();
+        let mut b = Bench::new(&mut store);
+        b.in_boot = false;
+        let Reply::Data(1, data) = b.send(FoeRepr::ReadRequest {
+            password: 0,
+            name: b"info.txt",
+        }) else {
+            panic!()
+        };
+        assert_eq!(
+            String::from_utf8(data).unwrap(),
+            "vendor_id=0x000005AE\nproduct_code=0x00C703F3\nrevision=0x00000007\nversion=1.0.0\n"
+        );
+        assert_eq!(b.send(FoeRepr::Ack { packet: 1 }), Reply::None);
+        assert_eq!(b.server.state(), &FoeState::Idle);
+    }
+
+    #[test]
+    fn info_file_is_split_over_small_mailboxes() {
+        let mut store = Small::new();
+        let mut b = Bench::new(&mut store);
+        b.out = vec![0; 16]; // 10 data bytes per packet
+        let mut file = Vec::new();
+        let mut reply = b.send(FoeRepr::ReadRequest {
+            password: 0,
+            name: b"INFO.TXT",
+        });
+        let mut expected = 1;
+        loop {
+            let Reply::Data(n, data) = reply else {
+                panic!("{reply:?}")
+            };
+            assert_eq!(n, expected);
+            file.extend_from_slice(&data);
+            let more = data.len() == 10;
+            if n == 2 {
+                // the master is busy once: the packet is sent again
+                assert_eq!(b.send(FoeRepr::Busy { done: 0, entire: 0 }), Reply::Data(2, data));
+            }
+            reply = b.send(FoeRepr::Ack { packet: n });
+            if !more {
+                assert_eq!(reply, Reply::None);
+                break;
+            }
+            expected += 1;
+        }
+        assert!(file.ends_with(b"version=1.0.0\n"));
+        assert_eq!(file.len(), 76);
+        // 76 bytes = 7 full packets + one of 6 bytes
+        assert_eq!(expected, 8);
+    }
+
+    #[test]
+    fn wrong_ack_during_upload_is_a_packet_number_error() {
+        let mut store = Small::new();
+        let mut b = Bench::new(&mut store);
+        b.out = vec![0; 16];
+        assert!(matches!(
+            b.send(FoeRepr::ReadRequest {
+                password: 0,
+                name: b"info.txt"
+            }),
+            Reply::Data(1, _)
+        ));
+        assert!(matches!(
+            b.send(FoeRepr::Ack { packet: 5 }),
+            Reply::Err(FoeErrorCode::PacketNumberWrong, _)
+        ));
+    }
+
+    #[test]
+    fn unknown_read_request_name_is_not_found() {
+        let mut store = Small::new();
+        let mut b = Bench::new(&mut store);
+        assert_eq!(
+            b.send(FoeRepr::ReadRequest {
+                password: 0,
+                name: b"secret.bin"
+            }),
+            Reply::Err(FoeErrorCode::NotFound, "file not found".into())
+        );
+    }
+
+    #[test]
+    fn master_error_ends_a_download_silently() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let mut b = Bench::new(&mut store);
+        assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
+        assert_eq!(
+            b.send(FoeRepr::Error {
+                code: FoeErrorCode::NotDefined,
+                text: b"user abort"
+            }),
+            Reply::None
+        );
+        assert_eq!(b.server.state(), &FoeState::Idle);
+    }
+
+    #[test]
+    fn stray_and_unknown_packets_are_illegal() {
+        let mut store = Small::new();
+        let mut b = Bench::new(&mut store);
+        assert!(matches!(b.send(FoeRepr::Ack { packet: 1 }), Reply::Err(FoeErrorCode::Illegal, _)));
+        assert!(matches!(b.data(1, b"x"), Reply::Err(FoeErrorCode::Illegal, _)));
+        assert!(matches!(
+            b.send(FoeRepr::Unknown {
+                opcode: 9,
+                word: 0,
+                tail: &[]
+            }),
+            Reply::Err(FoeErrorCode::Illegal, _)
+        ));
+        assert_eq!(b.send(FoeRepr::Busy { done: 1, entire: 2 }), Reply::None);
+    }
+
+    #[test]
+    fn tiny_or_missing_reply_buffer_never_panics() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let file = efw(&header("2.0.0"), &payload(100));
+        let requests = [
+            FoeRepr::WriteRequest {
+                password: 0,
+                name: b"a.efw",
+            },
+            FoeRepr::Data {
+                packet: 1,
+                data: &file,
+            },
+            FoeRepr::ReadRequest {
+                password: 0,
+                name: b"info.txt",
+            },
+            FoeRepr::Ack { packet: 1 },
+            FoeRepr::Error {
+                code: FoeErrorCode::Unknown(7),
+                text: &[],
+            },
+        ];
+        for len in 0..12 {
+            let mut server = FoeServer::new();
+            for req in requests {
+                let mut out = vec![0u8; len];
+                let mut ctx = FoeContext {
+                    store: &mut store,
+                    identity: DEVICE,
+                    version: "1.0.0",
+                    in_boot: true,
+                    busy: false,
+                };
+                if let Some(n) = server.handle(req, &mut ctx, &mut out) {
+                    assert!(n <= len);
+                    assert!(FoeRepr::parse(&out[..n]).is_ok());
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn error_text_is_cut_to_the_mailbox() {
+        let mut store = Small::new();
+        let mut server = FoeServer::new();
+        let mut out = [0u8; 10];
+        let mut ctx = FoeContext {
+            store: &mut store,
+            identity: DEVICE,
+            version: "1.0.0",
+            in_boot: false,
+            busy: false,
+        };
+        let req = FoeRepr::WriteRequest {
+            password: 0,
+            name: b"a.efw",
+        };
+        assert_eq!(server.handle(req, &mut ctx, &mut out), Some(10));
+        assert_eq!(
+            FoeRepr::parse(&out).unwrap(),
+            FoeRepr::Error {
+                code: FoeErrorCode::BootstrapOnly,
+                text: b"firm"
+            }
+        );
+    }
+}
