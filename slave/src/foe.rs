@@ -761,7 +761,8 @@ mod tests {
     #[test]
     fn duplicate_data_packet_is_reacknowledged_without_writing_twice() {
         let mut store = provisioned::<{ 64 * 1024 }>();
-        let file = efw(&header("2.0.0"), &payload(3000));
+        // 2956 bytes: two full packets and a short final one
+        let file = efw(&header("2.0.0"), &payload(2900));
         let chunks: Vec<&[u8]> = file.chunks(SEG).collect();
         let mut b = Bench::new(&mut store);
         assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
@@ -839,7 +840,7 @@ mod tests {
     #[test]
     fn busy_store_answers_busy_and_the_repeat_goes_through() {
         let mut store = provisioned::<{ 64 * 1024 }>();
-        let file = efw(&header("2.0.0"), &payload(3000));
+        let file = efw(&header("2.0.0"), &payload(2900));
         let mut b = Bench::new(&mut store);
         b.busy = true;
         assert_eq!(b.wrq("fw.efw", 0), Reply::Busy(0, 0));
@@ -854,6 +855,7 @@ mod tests {
         b.busy = false;
         assert_eq!(b.data(2, &file[SEG..2 * SEG]), Reply::Ack(2));
         assert_eq!(b.data(3, &file[2 * SEG..]), Reply::Ack(3));
+        assert!(matches!(b.server.state(), FoeState::Complete { packet: 3 }));
     }
 
     #[test]
@@ -905,8 +907,8 @@ mod tests {
             expected += 1;
         }
         assert!(file.ends_with(b"version=1.0.0\n"));
-        assert_eq!(file.len(), 76);
-        // 76 bytes = 7 full packets + one of 6 bytes
+        assert_eq!(file.len(), 79);
+        // 79 bytes = 7 full packets + one of 9 bytes
         assert_eq!(expected, 8);
     }
 
