@@ -82,10 +82,12 @@ async fn demo(
         .into());
     }
     println!("== PAM-199-P-ETC demo on the virtual EtherCAT link ({slaves} slave(s)) ==");
-    let bus = VirtualBus::with_options(slaves, master_test::link::Clock::real(), pcap)
-        .map_err(|e| match pcap {
-            Some(p) => format!("{e} (pcap file {})", p.display()),
-            None => e.to_string(),
+    let bus =
+        VirtualBus::with_options(slaves, master_test::link::Clock::real(), pcap).map_err(|e| {
+            match pcap {
+                Some(p) => format!("{e} (pcap file {})", p.display()),
+                None => e.to_string(),
+            }
         })?;
     let md = &*bus.maindevice;
     let group = bus.init().await?;
@@ -174,7 +176,11 @@ async fn demo(
     println!("state: INIT (done)");
     if let Some(p) = pcap {
         drop(bus);
-        println!("capture written to {} (tshark -r {} -Y ecat)", p.display(), p.display());
+        println!(
+            "capture written to {} (tshark -r {} -Y ecat)",
+            p.display(),
+            p.display()
+        );
     }
     Ok(())
 }

@@ -163,7 +163,9 @@ impl FoeServer {
         out: &mut [u8],
     ) -> Option<usize> {
         match request {
-            FoeRepr::WriteRequest { password, name } => self.write_request(password, name, ctx, out),
+            FoeRepr::WriteRequest { password, name } => {
+                self.write_request(password, name, ctx, out)
+            }
             FoeRepr::ReadRequest { name, .. } => self.read_request(name, ctx, out),
             FoeRepr::Data { packet, data } => self.data(packet, data, ctx, out),
             FoeRepr::Ack { packet } => self.ack(packet, out),
@@ -172,9 +174,7 @@ impl FoeServer {
                 self.state = FoeState::Idle;
                 None
             }
-            FoeRepr::Unknown { .. } => {
-                self.fail(out, FoeErrorCode::Illegal, "unknown FoE opcode")
-            }
+            FoeRepr::Unknown { .. } => self.fail(out, FoeErrorCode::Illegal, "unknown FoE opcode"),
         }
     }
 
@@ -285,12 +285,7 @@ impl FoeServer {
         emit(out, FoeRepr::Ack { packet })
     }
 
-    fn read_request(
-        &mut self,
-        name: &[u8],
-        ctx: &FoeContext<'_>,
-        out: &mut [u8],
-    ) -> Option<usize> {
+    fn read_request(&mut self, name: &[u8], ctx: &FoeContext<'_>, out: &mut [u8]) -> Option<usize> {
         self.state = FoeState::Idle;
         if !name.eq_ignore_ascii_case(INFO_FILE_NAME) {
             return self.fail(out, FoeErrorCode::NotFound, "file not found");
@@ -480,7 +475,9 @@ mod tests {
     }
 
     fn payload(len: usize) -> Vec<u8> {
-        (0..len).map(|i| (i as u32).wrapping_mul(2_654_435_761) as u8 ^ (i >> 12) as u8).collect()
+        (0..len)
+            .map(|i| (i as u32).wrapping_mul(2_654_435_761) as u8 ^ (i >> 12) as u8)
+            .collect()
     }
 
     /// A simulated master side: sends requests, decodes replies.
@@ -572,7 +569,12 @@ mod tests {
 
     fn provisioned<const N: usize>() -> MemStore<N> {
         let mut s = MemStore::<N>::new();
-        provision(&mut s, FirmwareVersion::new("1.0.0").unwrap(), &[0xA5; 4000]).unwrap();
+        provision(
+            &mut s,
+            FirmwareVersion::new("1.0.0").unwrap(),
+            &[0xA5; 4000],
+        )
+        .unwrap();
         s
     }
 
@@ -598,7 +600,10 @@ mod tests {
             let mut store: Box<Big> = Box::new(provisioned::<{ 2 * 1024 * 1024 }>());
             let file = efw(&header("2.1.0"), &payload(1024 * 1024));
             let mut bench = Bench::new(&mut *store);
-            assert_eq!(bench.download(&file), Reply::Ack(file.len() as u32 / SEG as u32 + 1));
+            assert_eq!(
+                bench.download(&file),
+                Reply::Ack(file.len() as u32 / SEG as u32 + 1)
+            );
             assert!(matches!(bench.server.state(), FoeState::Complete { .. }));
             drop(bench);
             commit_pending(&mut *store).unwrap();
@@ -637,7 +642,10 @@ mod tests {
         );
         assert!(matches!(b.server.state(), FoeState::Error { .. }));
         // data after the refusal is illegal, nothing written
-        assert!(matches!(b.data(1, &[1, 2]), Reply::Err(FoeErrorCode::Illegal, _)));
+        assert!(matches!(
+            b.data(1, &[1, 2]),
+            Reply::Err(FoeErrorCode::Illegal, _)
+        ));
         drop(b);
         assert_eq!(store.slot_bytes(Slot::B), &[0xFF; 32 * 1024][..]);
     }
@@ -753,7 +761,10 @@ mod tests {
         let mut file = efw(&header("2.0.0"), &payload(3000));
         file.extend_from_slice(&[0; 2000]);
         let reply = b.download(&file);
-        assert!(matches!(reply, Reply::Err(FoeErrorCode::InvalidChecksum, _)), "{reply:?}");
+        assert!(
+            matches!(reply, Reply::Err(FoeErrorCode::InvalidChecksum, _)),
+            "{reply:?}"
+        );
         drop(b);
         assert_eq!(running_version(&mut store), "1.0.0");
     }
@@ -790,7 +801,10 @@ mod tests {
         assert_eq!(b.data(1, &file[..SEG]), Reply::Ack(1));
         assert_eq!(
             b.data(3, &file[SEG..2 * SEG]),
-            Reply::Err(FoeErrorCode::PacketNumberWrong, "packet number wrong".into())
+            Reply::Err(
+                FoeErrorCode::PacketNumberWrong,
+                "packet number wrong".into()
+            )
         );
         assert_eq!(
             b.server.state(),
@@ -798,7 +812,10 @@ mod tests {
                 code: FoeErrorCode::PacketNumberWrong
             }
         );
-        assert!(matches!(b.data(2, &file[SEG..2 * SEG]), Reply::Err(FoeErrorCode::Illegal, _)));
+        assert!(matches!(
+            b.data(2, &file[SEG..2 * SEG]),
+            Reply::Err(FoeErrorCode::Illegal, _)
+        ));
         drop(b);
         assert_eq!(commit_pending(&mut store), Ok(None));
         assert_eq!(running_version(&mut store), "1.0.0");
@@ -810,11 +827,17 @@ mod tests {
         let file = efw(&header("2.0.0"), &payload(5000));
         let mut b = Bench::new(&mut store);
         assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
-        assert!(matches!(b.data(0, &file[..SEG]), Reply::Err(FoeErrorCode::PacketNumberWrong, _)));
+        assert!(matches!(
+            b.data(0, &file[..SEG]),
+            Reply::Err(FoeErrorCode::PacketNumberWrong, _)
+        ));
         assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
         assert_eq!(b.data(1, &file[..SEG]), Reply::Ack(1));
         assert_eq!(b.data(2, &file[SEG..2 * SEG]), Reply::Ack(2));
-        assert!(matches!(b.data(1, &file[..SEG]), Reply::Err(FoeErrorCode::PacketNumberWrong, _)));
+        assert!(matches!(
+            b.data(1, &file[..SEG]),
+            Reply::Err(FoeErrorCode::PacketNumberWrong, _)
+        ));
     }
 
     #[test]
@@ -823,17 +846,27 @@ mod tests {
         let base = provisioned::<{ 64 * 1024 }>();
         let mut full = base.clone();
         let before = full.bytes_written();
-        assert!(matches!(Bench::new(&mut full).download(&file), Reply::Ack(_)));
+        assert!(matches!(
+            Bench::new(&mut full).download(&file),
+            Reply::Ack(_)
+        ));
         let total = full.bytes_written() - before;
         for cut in [0, 1, 16_000, 32_767, 32_768, 40_000, total - 64, total - 1] {
             let mut store = base.clone();
             store.cut_power_after(cut);
             let reply = Bench::new(&mut store).download(&file);
-            assert!(matches!(reply, Reply::Err(FoeErrorCode::FlashError, _)), "cut {cut}: {reply:?}");
+            assert!(
+                matches!(reply, Reply::Err(FoeErrorCode::FlashError, _)),
+                "cut {cut}: {reply:?}"
+            );
             store.restore_power();
             let _ = commit_pending(&mut store);
             let d = power_on(&mut store);
-            assert_eq!((d.slot, d.version.as_str()), (Slot::A, "1.0.0"), "cut {cut}");
+            assert_eq!(
+                (d.slot, d.version.as_str()),
+                (Slot::A, "1.0.0"),
+                "cut {cut}"
+            );
         }
     }
 
@@ -897,7 +930,10 @@ mod tests {
             let more = data.len() == 10;
             if n == 2 {
                 // the master is busy once: the packet is sent again
-                assert_eq!(b.send(FoeRepr::Busy { done: 0, entire: 0 }), Reply::Data(2, data));
+                assert_eq!(
+                    b.send(FoeRepr::Busy { done: 0, entire: 0 }),
+                    Reply::Data(2, data)
+                );
             }
             reply = b.send(FoeRepr::Ack { packet: n });
             if !more {
@@ -962,8 +998,14 @@ mod tests {
     fn stray_and_unknown_packets_are_illegal() {
         let mut store = Small::new();
         let mut b = Bench::new(&mut store);
-        assert!(matches!(b.send(FoeRepr::Ack { packet: 1 }), Reply::Err(FoeErrorCode::Illegal, _)));
-        assert!(matches!(b.data(1, b"x"), Reply::Err(FoeErrorCode::Illegal, _)));
+        assert!(matches!(
+            b.send(FoeRepr::Ack { packet: 1 }),
+            Reply::Err(FoeErrorCode::Illegal, _)
+        ));
+        assert!(matches!(
+            b.data(1, b"x"),
+            Reply::Err(FoeErrorCode::Illegal, _)
+        ));
         assert!(matches!(
             b.send(FoeRepr::Unknown {
                 opcode: 9,

@@ -26,10 +26,14 @@ pub mod app;
 pub mod coe;
 pub mod device;
 pub mod esc;
+pub mod firmware;
+pub mod foe;
+pub mod hal;
 #[cfg(feature = "std")]
 pub mod host;
 pub mod mailbox;
 pub mod od;
+pub mod params;
 pub mod pdo;
 pub mod sii;
 pub mod wire;

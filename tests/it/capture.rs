@@ -33,16 +33,20 @@ fn virtual_link_capture_holds_requests_and_replies_of_the_bring_up() {
         assert_eq!(req.len(), rep.len());
     }
     // A CoE SDO response (mailbox type 3, service 3) travels in some reply.
-    let coe_reply = records.iter().skip(1).step_by(2).any(|r| {
-        r.data.windows(2).any(|w| w == [0x00, 0x30]) && r.data.len() > 16 + 12 + 6
-    });
+    let coe_reply = records
+        .iter()
+        .skip(1)
+        .step_by(2)
+        .any(|r| r.data.windows(2).any(|w| w == [0x00, 0x30]) && r.data.len() > 16 + 12 + 6);
     assert!(coe_reply, "a CoE SDO response is in the capture");
 }
 
 #[test]
 fn capture_decodes_with_tshark_where_installed() {
     if Command::new("tshark").arg("--version").output().is_err() {
-        eprintln!("SKIPPED: tshark is not installed; the pcap structure is checked by the other capture test");
+        eprintln!(
+            "SKIPPED: tshark is not installed; the pcap structure is checked by the other capture test"
+        );
         return;
     }
     let path = std::env::temp_dir().join(format!("pam-tshark-{}.pcap", std::process::id()));
@@ -58,11 +62,25 @@ fn capture_decodes_with_tshark_where_installed() {
     let out = Command::new("tshark")
         .args(["-r"])
         .arg(&path)
-        .args(["-Y", "ecat_mailbox.coe", "-T", "fields", "-e", "frame.number"])
+        .args([
+            "-Y",
+            "ecat_mailbox.coe",
+            "-T",
+            "fields",
+            "-e",
+            "frame.number",
+        ])
         .output()
         .expect("tshark runs");
     let _ = std::fs::remove_file(&path);
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(text.lines().count() >= 2, "tshark decodes CoE mailbox frames: {text}");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.lines().count() >= 2,
+        "tshark decodes CoE mailbox frames: {text}"
+    );
 }

@@ -138,7 +138,6 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
             .await
             .expect("command value arrived");
         assert_eq!(v, 7000);
-
     });
 
     // Garbage on the wire: random EtherType-0x88A4 payloads from a second

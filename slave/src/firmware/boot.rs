@@ -299,7 +299,9 @@ pub fn reject_boot<S: ImageStore + ?Sized>(store: &mut S) -> Result<Slot, StoreE
     clippy::indexing_slicing
 )]
 mod tests {
-    use super::super::{DeviceIdentity, EFW_HEADER_LEN, EfwHeaderRepr, EfwValidator, MemStore, pack};
+    use super::super::{
+        DeviceIdentity, EFW_HEADER_LEN, EfwHeaderRepr, EfwValidator, MemStore, pack,
+    };
     use super::*;
 
     type Store = MemStore<8192>;
@@ -372,7 +374,10 @@ mod tests {
         let img = efw("2.0.0", &[0x22; 2500]);
         download(&mut s, &img, 100).unwrap();
         assert_eq!(power_on(&mut s).version.as_str(), "1.0.0", "not committed");
-        assert_eq!(commit_pending(&mut s).unwrap().unwrap().version.as_str(), "2.0.0");
+        assert_eq!(
+            commit_pending(&mut s).unwrap().unwrap().version.as_str(),
+            "2.0.0"
+        );
         let d = power_on(&mut s);
         assert_eq!(
             (d.slot, d.version.as_str(), d.outcome),
@@ -439,7 +444,10 @@ mod tests {
     #[test]
     fn writes_to_the_active_slot_are_refused() {
         let mut s = provisioned();
-        assert_eq!(write_chunk(&mut s, Slot::A, 0, &[0]), Err(StoreError::ActiveSlot));
+        assert_eq!(
+            write_chunk(&mut s, Slot::A, 0, &[0]),
+            Err(StoreError::ActiveSlot)
+        );
     }
 
     #[test]
@@ -459,7 +467,11 @@ mod tests {
             // even committing afterwards cannot bring up a half image
             let _ = commit_pending(&mut s);
             let d = power_on(&mut s);
-            assert_eq!((d.slot, d.version.as_str()), (Slot::A, "1.0.0"), "cut {cut}");
+            assert_eq!(
+                (d.slot, d.version.as_str()),
+                (Slot::A, "1.0.0"),
+                "cut {cut}"
+            );
             assert_eq!(d.outcome, BootOutcome::Normal, "cut {cut}");
         }
     }
@@ -494,7 +506,11 @@ mod tests {
             s.restore_power();
             let d2 = power_on(&mut s);
             assert!(matches!(d1.version.as_str(), "1.0.0" | "2.0.0"));
-            assert_eq!(d2.version.as_str(), "2.0.0", "cut {cut}: still pending or trial");
+            assert_eq!(
+                d2.version.as_str(),
+                "2.0.0",
+                "cut {cut}: still pending or trial"
+            );
         }
     }
 

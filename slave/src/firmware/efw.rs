@@ -230,7 +230,11 @@ impl<T: AsRef<[u8]>> EfwHeader<T> {
 
     /// Format version byte.
     pub fn format_version(&self) -> u8 {
-        self.buffer.as_ref().get(field::FORMAT).copied().unwrap_or(0)
+        self.buffer
+            .as_ref()
+            .get(field::FORMAT)
+            .copied()
+            .unwrap_or(0)
     }
 
     /// Header length including the header CRC.
@@ -429,9 +433,21 @@ impl EfwHeaderRepr {
         set_bytes(header, field::HEADER_LEN, &self.header_len.to_le_bytes());
         set_bytes(header, field::FLAGS, &self.flags.to_le_bytes());
         set_bytes(header, field::VENDOR_ID, &self.vendor_id.to_le_bytes());
-        set_bytes(header, field::PRODUCT_CODE, &self.product_code.to_le_bytes());
-        set_bytes(header, field::REVISION_MIN, &self.revision_min.to_le_bytes());
-        set_bytes(header, field::REVISION_MAX, &self.revision_max.to_le_bytes());
+        set_bytes(
+            header,
+            field::PRODUCT_CODE,
+            &self.product_code.to_le_bytes(),
+        );
+        set_bytes(
+            header,
+            field::REVISION_MIN,
+            &self.revision_min.to_le_bytes(),
+        );
+        set_bytes(
+            header,
+            field::REVISION_MAX,
+            &self.revision_max.to_le_bytes(),
+        );
         set_bytes(header, field::VERSION, self.version.raw());
         set_bytes(header, field::PAYLOAD_LEN, &self.payload_len.to_le_bytes());
         set_bytes(header, field::PAYLOAD_CRC, &self.payload_crc.to_le_bytes());
@@ -910,7 +926,10 @@ mod tests {
         img.push(0);
         let mut v = EfwValidator::new(DEVICE, 1000);
         v.feed(&img[..156]).unwrap();
-        assert_eq!(v.feed(&img[156..]), Err(EfwError::Oversized { expected: 156 }));
+        assert_eq!(
+            v.feed(&img[156..]),
+            Err(EfwError::Oversized { expected: 156 })
+        );
         assert_eq!(v.finish(), Err(EfwError::Oversized { expected: 156 }));
     }
 
@@ -965,7 +984,10 @@ mod tests {
             ..header("1")
         };
         let mut out = [0u8; 100];
-        assert_eq!(pack(&bad, b"abc", &mut out), Err(EfwError::BadHeaderLen(10)));
+        assert_eq!(
+            pack(&bad, b"abc", &mut out),
+            Err(EfwError::BadHeaderLen(10))
+        );
     }
 
     #[test]
@@ -973,7 +995,12 @@ mod tests {
         for len in 0..EFW_HEADER_LEN {
             let img = image(&header("1"), b"abc");
             let h = EfwHeader::new_unchecked(&img[..len]);
-            let _ = (h.header_crc(), h.computed_header_crc(), h.payload(), h.version());
+            let _ = (
+                h.header_crc(),
+                h.computed_header_crc(),
+                h.payload(),
+                h.version(),
+            );
             assert!(EfwHeaderRepr::parse(&img[..len]).is_err());
         }
     }

@@ -149,17 +149,15 @@ impl ImageStore for FileStore {
 )]
 mod tests {
     use super::super::{
-        BootOutcome, DeviceIdentity, EFW_HEADER_LEN, EfwHeaderRepr, EfwValidator,
-        FirmwareVersion, begin_download, commit_pending, confirm_boot, finish_download, pack,
-        power_on, provision, write_chunk,
+        BootOutcome, DeviceIdentity, EFW_HEADER_LEN, EfwHeaderRepr, EfwValidator, FirmwareVersion,
+        begin_download, commit_pending, confirm_boot, finish_download, pack, power_on, provision,
+        write_chunk,
     };
     use super::*;
 
     fn temp_dir(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!(
-            "pam-file-store-{name}-{}",
-            std::process::id()
-        ));
+        let dir =
+            std::env::temp_dir().join(format!("pam-file-store-{name}-{}", std::process::id()));
         let _ = fs::remove_dir_all(&dir);
         dir
     }
@@ -236,7 +234,10 @@ mod tests {
         provision(&mut s, FirmwareVersion::new("1.0").unwrap(), &[1; 10]).unwrap();
         provision(&mut s, FirmwareVersion::new("1.1").unwrap(), &[2; 10]).unwrap();
         // the newer copy (state_1) is torn by a power cut
-        let mut f = OpenOptions::new().write(true).open(s.state_path(1)).unwrap();
+        let mut f = OpenOptions::new()
+            .write(true)
+            .open(s.state_path(1))
+            .unwrap();
         f.write_all(&[0u8; 20]).unwrap();
         drop(f);
         assert_eq!(s.read_state().unwrap().active_image.version.as_str(), "1.0");

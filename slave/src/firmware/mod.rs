@@ -5,7 +5,7 @@
 //! This module holds no wire formats of the EtherCAT protocol and never
 //! touches the ESC; flash access goes through the [`ImageStore`] HAL trait,
 //! so the same logic runs on the device, in the soft slave ([`MemStore`],
-//! [`FileStore`](file_store::FileStore)) and in tests. Nothing here
+//! or `file_store::FileStore` with the `std` feature) and in tests. Nothing here
 //! allocates or panics on input.
 //!
 //! # Update flow (manual §5.10)
@@ -61,9 +61,8 @@ pub mod file_store;
 mod store;
 
 pub use boot::{
-    BootDecision, BootOutcome, MAX_BOOT_ATTEMPTS, RollbackReason, begin_download,
-    commit_pending, confirm_boot, finish_download, power_on, provision, reject_boot,
-    verify_slot, write_chunk,
+    BootDecision, BootOutcome, MAX_BOOT_ATTEMPTS, RollbackReason, begin_download, commit_pending,
+    confirm_boot, finish_download, power_on, provision, reject_boot, verify_slot, write_chunk,
 };
 pub use efw::{
     EFW_FORMAT_VERSION, EFW_HEADER_LEN, EFW_MAGIC, EFW_MAX_HEADER_LEN, EfwError, EfwHeader,
@@ -102,8 +101,7 @@ impl FirmwareVersion {
     /// ASCII, or containing NUL.
     pub fn new(text: &str) -> Option<Self> {
         let bytes = text.as_bytes();
-        if bytes.len() > VERSION_LEN || !bytes.iter().all(|b| b.is_ascii_graphic() || *b == b' ')
-        {
+        if bytes.len() > VERSION_LEN || !bytes.iter().all(|b| b.is_ascii_graphic() || *b == b' ') {
             return None;
         }
         let mut raw = [0u8; VERSION_LEN];
@@ -143,6 +141,8 @@ impl core::fmt::Display for FirmwareVersion {
 const CRC32_POLY_REFLECTED: u32 = 0xEDB8_8320;
 
 /// Byte-wise lookup table for [`Crc32`] (1 KiB, built at compile time).
+// `i < 256` is the loop bound; `get_mut` is not usable in a const block.
+#[allow(clippy::indexing_slicing)]
 const CRC32_TABLE: [u32; 256] = {
     let mut table = [0u32; 256];
     let mut i = 0;
@@ -241,7 +241,13 @@ mod tests {
         assert!(FirmwareVersion::new("12345678901234567").is_none());
         assert!(FirmwareVersion::new("1.0\0").is_none());
         assert!(FirmwareVersion::new("1.0-é").is_none());
-        assert_eq!(FirmwareVersion::new("1234567890123456").unwrap().as_str().len(), 16);
+        assert_eq!(
+            FirmwareVersion::new("1234567890123456")
+                .unwrap()
+                .as_str()
+                .len(),
+            16
+        );
         assert_eq!(FirmwareVersion::from_raw([0xFF; 16]).as_str(), "?");
     }
 }

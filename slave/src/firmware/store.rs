@@ -250,8 +250,8 @@ impl BootState {
     /// | 9      | 1    | candidate stage (0 none, 1 downloaded, 2 pending, 3 trial) |
     /// | 10     | 1    | candidate slot                                          |
     /// | 11     | 1    | boot attempts of the candidate                          |
-    /// | 12     | 24   | active image: len u32, crc u32, version [16]            |
-    /// | 36     | 24   | candidate image: len u32, crc u32, version [16]         |
+    /// | 12     | 24   | active image: len u32, crc u32, version `[u8; 16]`          |
+    /// | 36     | 24   | candidate image: len u32, crc u32, version `[u8; 16]`       |
     /// | 60     | 4    | CRC-32 of bytes 0..60                                   |
     pub fn encode(&self) -> [u8; STATE_RECORD_LEN] {
         let mut buf = [0u8; STATE_RECORD_LEN];
@@ -428,7 +428,11 @@ impl<const N: usize> MemStore<N> {
         }
     }
 
-    fn slot_range(slot: Slot, offset: usize, len: usize) -> Result<core::ops::Range<usize>, StoreError> {
+    fn slot_range(
+        slot: Slot,
+        offset: usize,
+        len: usize,
+    ) -> Result<core::ops::Range<usize>, StoreError> {
         let cap = N / 2;
         let end = offset.checked_add(len).ok_or(StoreError::OutOfBounds)?;
         if end > cap {
@@ -641,7 +645,10 @@ mod tests {
         assert_eq!(s.slot_capacity(), 8);
         s.write(Slot::B, 2, &[0x0F, 0xF0]).unwrap();
         s.write(Slot::B, 2, &[0xFF, 0x30]).unwrap();
-        assert_eq!(s.slot_bytes(Slot::B), &[0xFF, 0xFF, 0x0F, 0x30, 0xFF, 0xFF, 0xFF, 0xFF]);
+        assert_eq!(
+            s.slot_bytes(Slot::B),
+            &[0xFF, 0xFF, 0x0F, 0x30, 0xFF, 0xFF, 0xFF, 0xFF]
+        );
         assert_eq!(s.slot_bytes(Slot::A), &[0xFF; 8]);
         s.erase(Slot::B).unwrap();
         assert_eq!(s.slot_bytes(Slot::B), &[0xFF; 8]);
@@ -650,7 +657,10 @@ mod tests {
         assert_eq!(s.read(Slot::B, 8, &mut buf), Ok(0));
         assert_eq!(s.read(Slot::B, 9, &mut buf), Err(StoreError::OutOfBounds));
         assert_eq!(s.write(Slot::A, 7, &[1, 2]), Err(StoreError::OutOfBounds));
-        assert_eq!(s.write(Slot::A, usize::MAX, &[1]), Err(StoreError::OutOfBounds));
+        assert_eq!(
+            s.write(Slot::A, usize::MAX, &[1]),
+            Err(StoreError::OutOfBounds)
+        );
     }
 
     #[test]
@@ -669,6 +679,9 @@ mod tests {
     fn store_errors_map_to_foe_codes() {
         assert_eq!(StoreError::OutOfBounds.foe_code(), FoeErrorCode::DiskFull);
         assert_eq!(StoreError::Io.foe_code(), FoeErrorCode::FlashError);
-        assert_eq!(StoreError::TrialRunning.foe_code(), FoeErrorCode::AccessDenied);
+        assert_eq!(
+            StoreError::TrialRunning.foe_code(),
+            FoeErrorCode::AccessDenied
+        );
     }
 }

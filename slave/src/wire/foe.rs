@@ -465,10 +465,10 @@ impl<'a> FoeRepr<'a> {
     /// [`WireError::Unrepresentable`] for an `Unknown` packet whose opcode
     /// is a known one; nothing is written then.
     pub fn emit(&self, buf: &mut [u8]) -> Result<usize, WireError> {
-        if let Self::Unknown { opcode, .. } = self {
-            if !matches!(FoeOpcode::from(*opcode), FoeOpcode::Unknown(_)) {
-                return Err(WireError::Unrepresentable);
-            }
+        if matches!(self, Self::Unknown { opcode, .. }
+            if !matches!(FoeOpcode::from(*opcode), FoeOpcode::Unknown(_)))
+        {
+            return Err(WireError::Unrepresentable);
         }
         let len = self.buffer_len();
         if buf.len() < len {
@@ -557,10 +557,7 @@ mod tests {
             }
         );
         let ack = [0x04, 0, 0x07, 0, 0, 0];
-        assert_eq!(
-            FoeRepr::parse(&ack).unwrap(),
-            FoeRepr::Ack { packet: 7 }
-        );
+        assert_eq!(FoeRepr::parse(&ack).unwrap(), FoeRepr::Ack { packet: 7 });
         let rrq = [0x01, 0, 0x78, 0x56, 0x34, 0x12, b'a'];
         assert_eq!(
             FoeRepr::parse(&rrq).unwrap(),

@@ -38,6 +38,7 @@ pub mod builder;
 pub mod coe;
 pub mod ecat;
 pub mod ethernet;
+pub mod foe;
 pub mod mailbox;
 
 /// Errors reported by the wire-format views and `Repr`s.
