@@ -14,10 +14,12 @@ use crate::coe::ObjectAccess;
 use crate::esc::registers::{self as reg, sm as smr};
 use crate::esc::soft::{FrameOutcome, SII_SIZE, SoftEsc};
 use crate::esc::{Esc, EscError};
+use crate::hal::{MemNv, NvStorage};
 use crate::mailbox::MailboxServer;
 use crate::od::model;
 use crate::od::store::{self, ObjectStore};
 use crate::od::types::{DataType, PdoMapping};
+use crate::params::{self, STORAGE_SIZE, Stored};
 use crate::pdo::{Direction, MAX_IMAGE, PdoError, ProcessImage};
 use crate::sii;
 use crate::wire::coe::SdoAbortCode;
@@ -64,6 +66,21 @@ const SM_CONTROL: [u8; 4] = [0x26, 0x22, 0x64, 0x20];
 
 /// Largest mailbox the device handles.
 pub const MAX_MAILBOX: usize = 1024;
+
+/// The vendor password that unlocks the manufacturer settings 0xF80F when
+/// written to 0xF801:01 PASSWORD ("WEST" in ASCII, little-endian 0x54534557).
+pub const VENDOR_PASSWORD: u32 = 0x5453_4557;
+
+/// Value a command entry (0xF801:02..04) reads back as acknowledgement.
+pub const COMMAND_ACK: i64 = 0x1111_1111;
+
+/// How long the acknowledgement stays visible.
+pub const COMMAND_ACK_NS: u64 = 500_000_000;
+
+/// Shortest interval between two SAVE commands: SAVE writes the EEPROM and
+/// must not be called cyclically (manual 6.2.2). A faster SAVE is refused
+/// with abort 0x08000021 (local control).
+pub const SAVE_MIN_INTERVAL_NS: u64 = 1_000_000_000;
 
 /// The SII EEPROM image of the device, encoded from the object dictionary.
 pub fn sii_image() -> [u8; SII_SIZE] {
@@ -244,10 +261,18 @@ fn encode_sii(out: &mut [u8]) -> Result<usize, sii::SiiError> {
 }
 
 /// The PAM-199 firmware on an ESC reached through the PDI, driving the
-/// solenoids through a [`PowerStage`].
-pub struct Slave<E: Esc, P: PowerStage = SimPowerStage> {
+/// solenoids through a [`PowerStage`] and keeping its parameters in an
+/// [`NvStorage`].
+pub struct Slave<E: Esc, P: PowerStage = SimPowerStage, N: NvStorage = MemNv<STORAGE_SIZE>> {
     esc: E,
     stage: P,
+    nv: N,
+    /// What the parameter storage held at power-on.
+    stored_at_power_on: Stored,
+    unlocked: bool,
+    last_save_ns: Option<u64>,
+    /// A command entry showing its acknowledgement until the given time.
+    ack: Option<(u16, u8, u64)>,
     amplifier: Amplifier,
     /// The live object dictionary.
     pub store: ObjectStore,
@@ -260,7 +285,7 @@ pub struct Slave<E: Esc, P: PowerStage = SimPowerStage> {
     now_ns: u64,
 }
 
-impl<E: Esc, P: PowerStage> core::fmt::Debug for Slave<E, P> {
+impl<E: Esc, P: PowerStage, N: NvStorage> core::fmt::Debug for Slave<E, P, N> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Slave")
             .field("al", &self.al)
@@ -359,14 +384,32 @@ impl<E: Esc> TransitionChecks for Checks<'_, E> {
     }
 }
 
-impl<E: Esc, P: PowerStage> Slave<E, P> {
-    /// The firmware in its power-on state on `esc`, driving `stage`.
-    pub fn new(esc: E, stage: P) -> Self {
-        let store = ObjectStore::new();
+impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
+    /// The firmware in its power-on state on `esc`, driving `stage`, with
+    /// the parameters saved in `nv` (defaults when it is blank; a corrupt
+    /// store is an EEPROM data error: power stage off until SAVE).
+    pub fn new(esc: E, stage: P, nv: N) -> Self {
+        let mut store = ObjectStore::new();
+        let mut amplifier = Amplifier::new();
+        let stored_at_power_on = params::stored(&nv);
+        match stored_at_power_on {
+            Stored::Valid(_) => {
+                if params::load(&mut store, &nv).is_err() {
+                    amplifier.eeprom_error = true;
+                }
+            }
+            Stored::Blank => {}
+            Stored::Corrupt => amplifier.eeprom_error = true,
+        }
         Slave {
             esc,
             stage,
-            amplifier: Amplifier::new(),
+            nv,
+            stored_at_power_on,
+            unlocked: false,
+            last_save_ns: None,
+            ack: None,
+            amplifier,
             store,
             al: AlStatus::INIT,
             outputs: ProcessImage::default(),
@@ -407,11 +450,58 @@ impl<E: Esc, P: PowerStage> Slave<E, P> {
         &self.amplifier
     }
 
+    /// The parameter storage.
+    pub fn nv(&self) -> &N {
+        &self.nv
+    }
+
+    /// The parameter storage, mutably (power-cut simulation).
+    pub fn nv_mut(&mut self) -> &mut N {
+        &mut self.nv
+    }
+
+    /// What the parameter storage held at power-on.
+    pub fn stored_at_power_on(&self) -> Stored {
+        self.stored_at_power_on
+    }
+
+    /// Runs SAVE / DEFAULT / LOADBACK (0xF801:02..04 written with 1).
+    fn command(&mut self, sub: u8) -> Result<(), SdoAbortCode> {
+        match sub {
+            2 => {
+                if let Some(last) = self.last_save_ns {
+                    if self.now_ns.saturating_sub(last) < SAVE_MIN_INTERVAL_NS {
+                        return Err(SdoAbortCode::LocalControl);
+                    }
+                }
+                params::save(&self.store, &mut self.nv).map_err(|_| SdoAbortCode::HardwareError)?;
+                self.last_save_ns = Some(self.now_ns);
+                // Saving valid parameters clears an EEPROM data error.
+                self.amplifier.eeprom_error = false;
+            }
+            3 => params::restore_defaults(&mut self.store),
+            4 => {
+                params::load(&mut self.store, &self.nv)
+                    .map_err(|_| SdoAbortCode::TransferFailed)?;
+            }
+            _ => return Err(SdoAbortCode::SubindexNotFound),
+        }
+        self.store.set(0xF801, sub, COMMAND_ACK);
+        self.ack = Some((0xF801, sub, self.now_ns.saturating_add(COMMAND_ACK_NS)));
+        Ok(())
+    }
+
     /// Runs the firmware once at time `now_ns`: AL control, mailbox,
     /// process data. Returns an error only if the PDI itself fails.
     pub fn poll(&mut self, now_ns: u64) -> Result<(), EscError> {
         self.now_ns = now_ns;
         self.store.set(0x10F8, 0, now_ns as i64);
+        if let Some((index, sub, until)) = self.ack {
+            if now_ns >= until {
+                self.store.set(index, sub, 0);
+                self.ack = None;
+            }
+        }
         let events = self.esc.read_u32(reg::AL_EVENT_REQUEST)?;
         if events & reg::AL_EVENT_AL_CONTROL != 0 {
             let control = self.esc.read_u16(reg::AL_CONTROL)?;
@@ -568,12 +658,12 @@ impl<E: Esc, P: PowerStage> Slave<E, P> {
 
 /// The object dictionary as the CoE server sees it: the store plus the
 /// device's rules (state-dependent access, assignment consistency).
-struct OdAccess<'a, E: Esc, P: PowerStage> {
-    slave: &'a mut Slave<E, P>,
+struct OdAccess<'a, E: Esc, P: PowerStage, N: NvStorage> {
+    slave: &'a mut Slave<E, P, N>,
     state: AlState,
 }
 
-impl<E: Esc, P: PowerStage> ObjectAccess for OdAccess<'_, E, P> {
+impl<E: Esc, P: PowerStage, N: NvStorage> ObjectAccess for OdAccess<'_, E, P, N> {
     fn sdo_upload(
         &mut self,
         index: u16,
@@ -599,6 +689,29 @@ impl<E: Esc, P: PowerStage> ObjectAccess for OdAccess<'_, E, P> {
         }
         let (flat, entry) = store::lookup(index, sub)?;
         let value = ObjectStore::check(entry, data, self.state)?;
+        // 0xF801: PASSWORD unlocks (or with 0 locks) the manufacturer
+        // settings; SAVE / DEFAULT / LOADBACK run when written with 1.
+        if index == 0xF801 {
+            if sub == 1 {
+                self.slave.unlocked = match value as u32 {
+                    VENDOR_PASSWORD => true,
+                    0 => false,
+                    _ => {
+                        self.slave.unlocked = false;
+                        return Err(SdoAbortCode::ValueRange);
+                    }
+                };
+                return Ok(());
+            }
+            if value != 1 {
+                return Err(SdoAbortCode::ValueRange);
+            }
+            return self.slave.command(sub);
+        }
+        // 0xF80F manufacturer settings need the vendor password first.
+        if index == 0xF80F && !self.slave.unlocked {
+            return Err(SdoAbortCode::UnsupportedAccess);
+        }
         // Manual 6.4.5: with ACC = ON the controller gains follow the PWM
         // frequency and cannot be set by the user.
         if matches!(index, 0x800D | 0x801D | 0x802D)
@@ -636,7 +749,8 @@ pub type ImageError = PdoError;
 
 /// The PAM-199 on the software ESC: takes EtherCAT frames.
 pub struct SoftSlave {
-    inner: Slave<SoftEsc, SimPowerStage>,
+    inner: Slave<SoftEsc, SimPowerStage, MemNv<STORAGE_SIZE>>,
+    port1_link: bool,
 }
 
 impl core::fmt::Debug for SoftSlave {
@@ -656,8 +770,18 @@ impl SoftSlave {
     pub fn new() -> Self {
         let sii = sii_image();
         SoftSlave {
-            inner: Slave::new(SoftEsc::new(&sii), SimPowerStage::new()),
+            inner: Slave::new(SoftEsc::new(&sii), SimPowerStage::new(), MemNv::new()),
+            port1_link: false,
         }
+    }
+
+    /// A power cycle: ESC, firmware and power stage restart; the parameter
+    /// storage (EEPROM) keeps what was saved.
+    pub fn power_cycle(&mut self) {
+        let nv = core::mem::take(self.inner.nv_mut());
+        let sii = sii_image();
+        self.inner = Slave::new(SoftEsc::new(&sii), SimPowerStage::new(), nv);
+        self.inner.esc.set_port1_link(self.port1_link);
     }
 
     /// Passes an Ethernet frame through the ESC (in place).
@@ -673,16 +797,17 @@ impl SoftSlave {
 
     /// Sets whether port 1 has a link (every slave but the last).
     pub fn set_port1_link(&mut self, link: bool) {
+        self.port1_link = link;
         self.inner.esc.set_port1_link(link);
     }
 
     /// The firmware.
-    pub fn slave(&self) -> &Slave<SoftEsc, SimPowerStage> {
+    pub fn slave(&self) -> &Slave<SoftEsc, SimPowerStage, MemNv<STORAGE_SIZE>> {
         &self.inner
     }
 
     /// The firmware, mutably.
-    pub fn slave_mut(&mut self) -> &mut Slave<SoftEsc, SimPowerStage> {
+    pub fn slave_mut(&mut self) -> &mut Slave<SoftEsc, SimPowerStage, MemNv<STORAGE_SIZE>> {
         &mut self.inner
     }
 }

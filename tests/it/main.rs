@@ -2,6 +2,7 @@
 //! slaves over the virtual link, with real EtherCAT frames. One test binary;
 //! each area of the product is a module.
 
+mod amplifier;
 mod bring_up;
 mod capture;
 mod common;

@@ -82,5 +82,10 @@ fn sdo_length_and_access_errors_carry_their_abort_codes() {
         assert_eq!(abort_code(&e), Some(0x0609_0011));
         let name: heapless::String<32> = sd.sdo_read(0x1008, 0).await.expect("device name");
         assert_eq!(name.as_str(), "PAM-199-P-ETC");
+        // 0x10F8 timestamp counts while the slave runs (manual 7.2).
+        let t1: u64 = sd.sdo_read(0x10F8, 0).await.expect("timestamp");
+        smol::Timer::after(std::time::Duration::from_millis(5)).await;
+        let t2: u64 = sd.sdo_read(0x10F8, 0).await.expect("timestamp");
+        assert!(t2 > t1, "0x10F8 advances: {t1} then {t2}");
     });
 }

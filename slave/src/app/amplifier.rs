@@ -16,6 +16,9 @@
 //! - Diagnosis objects (0xA000/0xA010/0xA020) and their TxPDO bits are
 //!   `true` while a fault is present or latched.
 //! - No valid outputs (not in OP, watchdog expired) disables the power stage.
+//! - An EEPROM data error at power-on (no valid parameter set) keeps the
+//!   power stage off, independent of SENS, until parameters are saved
+//!   (manual 8.1); 0xA000:01 MEMORY shows it.
 
 use super::chain::{DirectionalChain, DirectionalParams, IndependentChain, IndependentParams};
 use super::curve::{DirectionalCurve, IndependentCurve};
@@ -87,19 +90,12 @@ struct Monitor {
 
 impl Monitor {
     /// Updates the latch; returns whether the channel may run.
-    fn update(
-        &mut self,
-        sens: i64,
-        enable: bool,
-        now: Faults,
-        eeprom: bool,
-        recheck: bool,
-    ) -> bool {
+    fn update(&mut self, sens: i64, enable: bool, now: Faults, recheck: bool) -> bool {
         if sens == SENS_OFF {
             *self = Monitor::default();
             return true;
         }
-        let fault = now.any() || eeprom;
+        let fault = now.any();
         if fault {
             self.latched = true;
             self.flags = or(self.flags, now);
@@ -291,7 +287,7 @@ impl Amplifier {
                 let Some(mon) = self.monitors.get_mut(i + 1) else {
                     continue;
                 };
-                let ok = mon.update(sens, enable, rel, eeprom, recheck);
+                let ok = mon.update(sens, enable, rel, recheck);
                 shown = or(shown, mon.flags);
                 let ready = enable && ok && !eeprom;
                 let Some(chain) = self.ind.get_mut(i) else {
@@ -330,7 +326,7 @@ impl Amplifier {
             let enable = get(store, 0x7000, 1) != 0 && outputs_valid;
             let rel = relevant(&faults, ChannelKind::Directional);
             let mon = &mut self.monitors[0];
-            let ok = mon.update(sens, enable, rel, eeprom, recheck);
+            let ok = mon.update(sens, enable, rel, recheck);
             shown = mon.flags;
             let ready = enable && ok && !eeprom;
             self.dir.set_params(directional_params(store));

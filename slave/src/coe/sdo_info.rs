@@ -1,0 +1,1015 @@
+//! SDO Information server (ETG.1000.6 5.6.3): OD lists, object and entry
+//! descriptions, fragmented responses.
+//!
+//! Layer 3 (`coe`). The server reads only the static description
+//! [`crate::od::model`]; it holds no object values, knows nothing of the ESC
+//! or the mailbox, and allocates nothing. Frames are read and written with
+//! the views of [`crate::wire::coe`].
+//!
+//! # Requests and responses
+//!
+//! [`SdoInfoServer::handle`] takes the bytes after the CoE header (SDO Info
+//! header onwards) and writes the first fragment of the response into `out`;
+//! [`SdoInfoServer::next_fragment`] writes the following ones. Every
+//! fragment but the last carries the incomplete bit, and "fragments left"
+//! counts down to 0 on the last one (assuming every fragment gets the same
+//! `out` size; a smaller `out` makes smaller fragments and the count is
+//! recomputed from what is left). A new request abandons a response still
+//! in progress.
+//!
+//! * **OD list** (opcode 1 → 2): list type 0 answers the number of objects
+//!   of list types 1..=5 (five `u16`). Types 1..=5 answer the list type
+//!   followed by the object indices in ascending order; the list is
+//!   generated from [`OBJECTS`] fragment by fragment (a cursor, no buffer),
+//!   and a fragment never splits an index. An object belongs to list 2
+//!   (RxPDO) / 3 (TxPDO) / 4 (backup) / 5 (settings) when at least one of its
+//!   entries is RxPDO-mappable / TxPDO-mappable / `backup` / `setting`.
+//! * **Object description** (3 → 4): index, data type, max subindex
+//!   ([`Object::max_sub`]), object code, name. The data type is
+//!   - VAR: the entry's type code ([`DataType::code`]);
+//!   - ARRAY: the element type (subindex 1);
+//!   - RECORD: the ETG.1000.6 DEFSTRUCT index where one exists, i.e.
+//!     `0x0021` PDO_MAPPING for 0x1600-0x17FF / 0x1A00-0x1BFF and `0x0023`
+//!     IDENTITY for 0x1018; every other record reports `0x002A`
+//!     (DEFTYPE_RECORD, the generic record type used by the Beckhoff SSC and
+//!     other slave stacks). The ESI's per-object types `DTxxxx` are names
+//!     only and have no data type index.
+//! * **Entry description** (5 → 6): index, subindex, value info, data type,
+//!   bit length, object access ([`Access::bits`](crate::od::types::Access::bits) plus 0x0040 RxPDO, 0x0080
+//!   TxPDO, 0x0100 backup, 0x0200 setting), the requested values, name.
+//!   Values, when asked for, come in the order unit type (`u32`), default,
+//!   minimum, maximum; each value takes the entry's size in whole bytes,
+//!   little-endian.
+//!   - Unit type: the ETG.1004 code as in the ESI (`ms` 0xFD030000,
+//!     `mA` 0xFD040000, `Hz` 0x00200000); other units (`0.01 %`) and no unit
+//!     give 0.
+//!   - Default: the model's default; strings as their text, zero-padded to
+//!     the entry's size.
+//!   - Minimum / maximum: the model's range where it has one, else the
+//!     type's natural range (BOOL 0..=1, BITn 0..=2ⁿ-1, integers their full
+//!     range, enumerations their smallest..=largest defined value).
+//!     VISIBLE_STRING has no range: for strings the minimum and maximum bits
+//!     are cleared in the response's value info and no bytes are sent.
+//!   - The response's value info is the request's masked to the defined
+//!     bits 3..=6 (and without min/max for strings): it says exactly which
+//!     values follow.
+//!
+//!   Gap entries (`gap: true`) are real subindices of the packed layout and
+//!   are described like any entry (`BITn`, RO, named `SubIndex 0NN`), which
+//!   keeps SDO Information and the ESI consistent.
+//! * **Errors** answer with an SDO Info error request (opcode 7, `u32`
+//!   abort code): unknown object 0x06020000, unknown subindex 0x06090011,
+//!   short or malformed requests, unknown opcodes and unknown list types
+//!   0x05040001, a description larger than [`INFO_BUFFER`] 0x06010005.
+
+use crate::od::model::{self, OBJECTS};
+use crate::od::types::{DataType, DefaultValue, Entry, Object, ObjectCode, PdoMapping};
+use crate::wire::coe::{SDO_INFO_HEADER_LEN, SdoAbortCode, SdoInfo, SdoInfoOpcode, SdoInfoRepr};
+
+/// Capacity of the buffer holding one object or entry description (or the
+/// list lengths) while it is sent in fragments.
+pub const INFO_BUFFER: usize = 160;
+
+/// Value info bits of a Get Entry Description request (ETG.1000.6 5.6.3.6).
+pub mod value_info {
+    /// Bit 3: unit type.
+    pub const UNIT: u8 = 0x08;
+    /// Bit 4: default value.
+    pub const DEFAULT: u8 = 0x10;
+    /// Bit 5: minimum value.
+    pub const MIN: u8 = 0x20;
+    /// Bit 6: maximum value.
+    pub const MAX: u8 = 0x40;
+    /// All defined bits.
+    pub const ALL: u8 = UNIT | DEFAULT | MIN | MAX;
+}
+
+/// Object access bits beyond [`Access::bits`](crate::od::types::Access::bits) (ETG.1000.6 5.6.3.6,
+/// "ObjAccess").
+pub mod access_flag {
+    /// Bit 6: mappable in an RxPDO.
+    pub const RX_PDO: u16 = 0x0040;
+    /// Bit 7: mappable in a TxPDO.
+    pub const TX_PDO: u16 = 0x0080;
+    /// Bit 8: stored for replacement (backup).
+    pub const BACKUP: u16 = 0x0100;
+    /// Bit 9: startup parameter (setting).
+    pub const SETTING: u16 = 0x0200;
+}
+
+/// Data type indices reported for RECORD objects (ETG.1000.6 DEFSTRUCT).
+pub mod record_type {
+    /// PDO_MAPPING, the PDO mapping objects 0x1600-0x17FF, 0x1A00-0x1BFF.
+    pub const PDO_MAPPING: u16 = 0x0021;
+    /// IDENTITY, object 0x1018.
+    pub const IDENTITY: u16 = 0x0023;
+    /// DEFTYPE_RECORD, every other record.
+    pub const RECORD: u16 = 0x002A;
+}
+
+/// List type 0 of Get OD List: the number of objects of each list.
+pub const LIST_LENGTHS: u16 = 0;
+
+/// An object list of Get OD List (ETG.1000.6 5.6.3.3, list types 1..=5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ListType {
+    /// `1`: all objects.
+    All,
+    /// `2`: objects with an RxPDO-mappable entry.
+    RxPdo,
+    /// `3`: objects with a TxPDO-mappable entry.
+    TxPdo,
+    /// `4`: objects stored for replacement (an entry with `backup`).
+    Backup,
+    /// `5`: startup parameters (an entry with `setting`).
+    Settings,
+}
+
+impl ListType {
+    /// The lists in list-type order, as counted by list type 0.
+    pub const LISTS: [ListType; 5] = [
+        ListType::All,
+        ListType::RxPdo,
+        ListType::TxPdo,
+        ListType::Backup,
+        ListType::Settings,
+    ];
+
+    /// The list of list type `code`, if it is one of 1..=5.
+    pub const fn from_code(code: u16) -> Option<Self> {
+        match code {
+            1 => Some(ListType::All),
+            2 => Some(ListType::RxPdo),
+            3 => Some(ListType::TxPdo),
+            4 => Some(ListType::Backup),
+            5 => Some(ListType::Settings),
+            _ => None,
+        }
+    }
+
+    /// The list type code.
+    pub const fn code(self) -> u16 {
+        match self {
+            ListType::All => 1,
+            ListType::RxPdo => 2,
+            ListType::TxPdo => 3,
+            ListType::Backup => 4,
+            ListType::Settings => 5,
+        }
+    }
+
+    /// Whether object `o` is in this list.
+    pub fn contains(self, o: &Object) -> bool {
+        let any = |f: fn(&Entry) -> bool| o.entries.iter().any(f);
+        match self {
+            ListType::All => true,
+            ListType::RxPdo => any(|e| e.pdo == PdoMapping::Rx),
+            ListType::TxPdo => any(|e| e.pdo == PdoMapping::Tx),
+            ListType::Backup => any(|e| e.backup),
+            ListType::Settings => any(|e| e.setting),
+        }
+    }
+
+    /// Number of objects of [`OBJECTS`] in this list.
+    pub fn count(self) -> usize {
+        OBJECTS.iter().filter(|o| self.contains(o)).count()
+    }
+}
+
+/// The data type an object description reports for `o` (see the module
+/// docs).
+pub fn object_data_type(o: &Object) -> u16 {
+    match o.code {
+        ObjectCode::Var => o.entries.first().map_or(0, |e| e.data_type.code()),
+        ObjectCode::Array => o
+            .entry(1)
+            .or_else(|| o.entries.first())
+            .map_or(0, |e| e.data_type.code()),
+        ObjectCode::Record => match o.index {
+            0x1018 => record_type::IDENTITY,
+            0x1600..=0x17FF | 0x1A00..=0x1BFF => record_type::PDO_MAPPING,
+            _ => record_type::RECORD,
+        },
+    }
+}
+
+/// The object access word of an entry description: [`Access::bits`](crate::od::types::Access::bits) plus
+/// the PDO, backup and setting flags of [`access_flag`].
+pub fn entry_access(e: &Entry) -> u16 {
+    let pdo = match e.pdo {
+        PdoMapping::None => 0,
+        PdoMapping::Rx => access_flag::RX_PDO,
+        PdoMapping::Tx => access_flag::TX_PDO,
+    };
+    let backup = if e.backup { access_flag::BACKUP } else { 0 };
+    let setting = if e.setting { access_flag::SETTING } else { 0 };
+    e.access.bits() | pdo | backup | setting
+}
+
+/// The ETG.1004 unit code of a unit text (0 when there is none), the same
+/// codes the ESI writes.
+pub fn unit_code(unit: &str) -> u32 {
+    match unit {
+        "ms" => 0xFD03_0000,
+        "mA" => 0xFD04_0000,
+        "Hz" => 0x0020_0000,
+        _ => 0,
+    }
+}
+
+/// Size in bytes of one value of `e` (default, minimum, maximum).
+pub fn value_len(e: &Entry) -> usize {
+    usize::from(e.bit_len).div_ceil(8)
+}
+
+/// The natural range of a data type (`None` for strings). `i128` holds
+/// every bound, UNSIGNED64 included.
+fn natural_range(t: &DataType) -> Option<(i128, i128)> {
+    let r = match t {
+        DataType::Bool => (0, 1),
+        DataType::Int8 => (i8::MIN.into(), i8::MAX.into()),
+        DataType::Int16 => (i16::MIN.into(), i16::MAX.into()),
+        DataType::Int32 => (i32::MIN.into(), i32::MAX.into()),
+        DataType::Int64 => (i64::MIN.into(), i64::MAX.into()),
+        DataType::UInt8 => (0, u8::MAX.into()),
+        DataType::UInt16 => (0, u16::MAX.into()),
+        DataType::UInt32 => (0, u32::MAX.into()),
+        DataType::UInt64 => (0, u64::MAX.into()),
+        DataType::Bits(n) => (0, (1i128 << u32::from((*n).min(64))) - 1),
+        DataType::Enum(en) => {
+            let lo = en.values.iter().map(|(v, _)| *v).min();
+            let hi = en.values.iter().map(|(v, _)| *v).max();
+            match (lo, hi) {
+                (Some(lo), Some(hi)) => (lo.into(), hi.into()),
+                _ => (0, (1i128 << u32::from(en.bit_len.min(64))) - 1),
+            }
+        }
+        DataType::VisibleString => return None,
+    };
+    Some(r)
+}
+
+/// The minimum and maximum an entry description reports: the model's range,
+/// else the type's natural range; `None` for strings.
+pub fn value_range(e: &Entry) -> Option<(i128, i128)> {
+    let (lo, hi) = natural_range(&e.data_type)?;
+    Some((e.min.map_or(lo, i128::from), e.max.map_or(hi, i128::from)))
+}
+
+/// Transfer state of the SDO Information server.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InfoState {
+    /// No response in progress.
+    Idle,
+    /// An OD list (types 1..=5) is being sent.
+    OdList {
+        /// The list.
+        list: ListType,
+        /// Position in [`OBJECTS`] from which to look for the next index.
+        cursor: usize,
+        /// Whether the list type word is still to be sent (first fragment).
+        first: bool,
+    },
+    /// A response held in the server's buffer is being sent.
+    Buffered {
+        /// Response opcode.
+        opcode: SdoInfoOpcode,
+        /// Length of the service data in the buffer.
+        len: usize,
+        /// Bytes sent so far.
+        sent: usize,
+    },
+}
+
+/// The SDO Information server of one slave.
+#[derive(Debug, Clone)]
+pub struct SdoInfoServer {
+    state: InfoState,
+    buf: [u8; INFO_BUFFER],
+}
+
+impl Default for SdoInfoServer {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl SdoInfoServer {
+    /// A server with no response in progress.
+    pub const fn new() -> Self {
+        SdoInfoServer {
+            state: InfoState::Idle,
+            buf: [0; INFO_BUFFER],
+        }
+    }
+
+    /// The transfer state.
+    pub fn state(&self) -> InfoState {
+        self.state
+    }
+
+    /// Whether fragments of a response are still to be sent.
+    pub fn busy(&self) -> bool {
+        self.state != InfoState::Idle
+    }
+
+    /// Handles an SDO Information request: `request` holds the bytes after
+    /// the CoE header. Writes the SDO Info payload (from the SDO Info header
+    /// on) of the first response fragment into `out` and returns its
+    /// length; `None` if `out` cannot hold even the smallest response.
+    /// A response still in progress is abandoned.
+    pub fn handle(&mut self, request: &[u8], out: &mut [u8]) -> Option<usize> {
+        self.state = InfoState::Idle;
+        match self.start(request) {
+            Ok(()) => self.next_fragment(out),
+            Err(code) => emit_error(code, out),
+        }
+    }
+
+    /// Writes the next fragment of the response in progress into `out` and
+    /// returns its length; `None` when no response is in progress. If `out`
+    /// cannot carry any service data the response is abandoned.
+    pub fn next_fragment(&mut self, out: &mut [u8]) -> Option<usize> {
+        let state = self.state;
+        let written = match state {
+            InfoState::Idle => None,
+            InfoState::OdList {
+                list,
+                cursor,
+                first,
+            } => self.list_fragment(list, cursor, first, out),
+            InfoState::Buffered { opcode, len, sent } => {
+                self.buffered_fragment(opcode, len, sent, out)
+            }
+        };
+        if written.is_none() {
+            self.state = InfoState::Idle;
+        }
+        written
+    }
+
+    /// Parses a request and sets up the response state.
+    fn start(&mut self, request: &[u8]) -> Result<(), SdoAbortCode> {
+        let info = SdoInfo::new_checked(request).map_err(|_| SdoAbortCode::UnknownCommand)?;
+        let data = info.payload();
+        match info.opcode() {
+            SdoInfoOpcode::GetOdListReq => {
+                let code = read_u16(data, 0).ok_or(SdoAbortCode::UnknownCommand)?;
+                if code == LIST_LENGTHS {
+                    self.buffer(SdoInfoOpcode::GetOdListResp, |w| {
+                        w.u16(LIST_LENGTHS);
+                        for list in ListType::LISTS {
+                            w.u16(u16::try_from(list.count()).unwrap_or(u16::MAX));
+                        }
+                    })
+                } else {
+                    let list = ListType::from_code(code).ok_or(SdoAbortCode::UnknownCommand)?;
+                    self.state = InfoState::OdList {
+                        list,
+                        cursor: 0,
+                        first: true,
+                    };
+                    Ok(())
+                }
+            }
+            SdoInfoOpcode::GetObjDescReq => {
+                let index = read_u16(data, 0).ok_or(SdoAbortCode::UnknownCommand)?;
+                let (_, o) = model::find(index).ok_or(SdoAbortCode::ObjectNotFound)?;
+                self.buffer(SdoInfoOpcode::GetObjDescResp, |w| {
+                    w.u16(o.index);
+                    w.u16(object_data_type(o));
+                    w.u8(o.max_sub());
+                    w.u8(o.code.code());
+                    w.bytes(o.name.as_bytes());
+                })
+            }
+            SdoInfoOpcode::GetEntryDescReq => {
+                let index = read_u16(data, 0).ok_or(SdoAbortCode::UnknownCommand)?;
+                let sub = data.get(2).copied().ok_or(SdoAbortCode::UnknownCommand)?;
+                let asked = data.get(3).copied().ok_or(SdoAbortCode::UnknownCommand)?;
+                let (_, o) = model::find(index).ok_or(SdoAbortCode::ObjectNotFound)?;
+                let e = o.entry(sub).ok_or(SdoAbortCode::SubindexNotFound)?;
+                self.buffer(SdoInfoOpcode::GetEntryDescResp, |w| {
+                    write_entry_description(w, index, e, asked);
+                })
+            }
+            _ => Err(SdoAbortCode::UnknownCommand),
+        }
+    }
+
+    /// Builds a response in the buffer and makes it the one in progress.
+    fn buffer(
+        &mut self,
+        opcode: SdoInfoOpcode,
+        build: impl FnOnce(&mut Writer<'_>),
+    ) -> Result<(), SdoAbortCode> {
+        let mut w = Writer::new(&mut self.buf);
+        build(&mut w);
+        let len = w.finish().ok_or(SdoAbortCode::ObjectTooLong)?;
+        self.state = InfoState::Buffered {
+            opcode,
+            len,
+            sent: 0,
+        };
+        Ok(())
+    }
+
+    /// One fragment of an OD list: the list type (first fragment only), then
+    /// as many whole indices as fit.
+    fn list_fragment(
+        &mut self,
+        list: ListType,
+        cursor: usize,
+        first: bool,
+        out: &mut [u8],
+    ) -> Option<usize> {
+        let (head, body) = out.split_at_mut_checked(SDO_INFO_HEADER_LEN)?;
+        // Even fragment size: the list type and every index stay whole.
+        let room = body.len() & !1;
+        if room < 2 {
+            return None;
+        }
+        let mut w = Writer::new(body.get_mut(..room)?);
+        if first {
+            w.u16(list.code());
+        }
+        let mut cursor = cursor;
+        while w.len + 2 <= room {
+            let next = OBJECTS
+                .get(cursor..)
+                .unwrap_or(&[])
+                .iter()
+                .position(|o| list.contains(o));
+            let Some(skip) = next else {
+                cursor = OBJECTS.len();
+                break;
+            };
+            let pos = cursor.saturating_add(skip);
+            w.u16(OBJECTS.get(pos).map_or(0, |o| o.index));
+            cursor = pos.saturating_add(1);
+        }
+        let len = w.finish()?;
+        let rest = OBJECTS
+            .get(cursor..)
+            .unwrap_or(&[])
+            .iter()
+            .filter(|o| list.contains(o))
+            .count()
+            .saturating_mul(2);
+        self.state = if rest == 0 {
+            InfoState::Idle
+        } else {
+            InfoState::OdList {
+                list,
+                cursor,
+                first: false,
+            }
+        };
+        emit_header(head, SdoInfoOpcode::GetOdListResp, rest, room)?;
+        Some(SDO_INFO_HEADER_LEN + len)
+    }
+
+    /// One fragment of a buffered response.
+    fn buffered_fragment(
+        &mut self,
+        opcode: SdoInfoOpcode,
+        len: usize,
+        sent: usize,
+        out: &mut [u8],
+    ) -> Option<usize> {
+        let (head, body) = out.split_at_mut_checked(SDO_INFO_HEADER_LEN)?;
+        let remaining = len.checked_sub(sent)?;
+        let chunk = body.len().min(remaining);
+        if chunk == 0 && remaining > 0 {
+            return None;
+        }
+        let end = sent.checked_add(chunk)?;
+        body.get_mut(..chunk)?
+            .copy_from_slice(self.buf.get(sent..end)?);
+        let rest = remaining - chunk;
+        self.state = if rest == 0 {
+            InfoState::Idle
+        } else {
+            InfoState::Buffered {
+                opcode,
+                len,
+                sent: end,
+            }
+        };
+        emit_header(head, opcode, rest, body.len())?;
+        Some(SDO_INFO_HEADER_LEN + chunk)
+    }
+}
+
+/// Writes the service data of an entry description (see the module docs).
+fn write_entry_description(w: &mut Writer<'_>, index: u16, e: &Entry, asked: u8) {
+    let range = value_range(e);
+    let mut info = asked & value_info::ALL;
+    if range.is_none() {
+        info &= !(value_info::MIN | value_info::MAX);
+    }
+    w.u16(index);
+    w.u8(e.sub);
+    w.u8(info);
+    w.u16(e.data_type.code());
+    w.u16(e.bit_len);
+    w.u16(entry_access(e));
+    let n = value_len(e);
+    if info & value_info::UNIT != 0 {
+        w.u32(unit_code(e.unit));
+    }
+    if info & value_info::DEFAULT != 0 {
+        match e.default {
+            DefaultValue::Int(v) => w.int(v.into(), n),
+            DefaultValue::Str(s) => {
+                let text = s.as_bytes();
+                for i in 0..n {
+                    w.u8(text.get(i).copied().unwrap_or(0));
+                }
+            }
+        }
+    }
+    if let Some((lo, hi)) = range {
+        if info & value_info::MIN != 0 {
+            w.int(lo, n);
+        }
+        if info & value_info::MAX != 0 {
+            w.int(hi, n);
+        }
+    }
+    w.bytes(e.name.as_bytes());
+}
+
+/// Writes an SDO Info error request (opcode 7) with `code`.
+fn emit_error(code: SdoAbortCode, out: &mut [u8]) -> Option<usize> {
+    let (head, body) = out.split_at_mut_checked(SDO_INFO_HEADER_LEN)?;
+    body.get_mut(..4)?
+        .copy_from_slice(&u32::from(code).to_le_bytes());
+    emit_header(head, SdoInfoOpcode::SdoInfoErrorReq, 0, 1)?;
+    Some(SDO_INFO_HEADER_LEN + 4)
+}
+
+/// Writes the SDO Info header of a fragment after which `rest` bytes of
+/// service data remain, to be sent `room` bytes per fragment.
+fn emit_header(head: &mut [u8], opcode: SdoInfoOpcode, rest: usize, room: usize) -> Option<()> {
+    if room == 0 {
+        return None;
+    }
+    let left = rest.div_ceil(room);
+    SdoInfoRepr {
+        opcode,
+        incomplete: rest > 0,
+        fragments_left: u16::try_from(left).unwrap_or(u16::MAX),
+    }
+    .emit(&mut SdoInfo::new_unchecked(head))
+    .ok()
+}
+
+/// Little-endian `u16` at `at`.
+fn read_u16(data: &[u8], at: usize) -> Option<u16> {
+    let end = at.checked_add(2)?;
+    let b = data.get(at..end)?;
+    Some(u16::from_le_bytes(b.try_into().ok()?))
+}
+
+/// Appends bytes to a buffer, remembering an overflow instead of panicking.
+struct Writer<'a> {
+    buf: &'a mut [u8],
+    len: usize,
+    overflow: bool,
+}
+
+impl<'a> Writer<'a> {
+    fn new(buf: &'a mut [u8]) -> Self {
+        Writer {
+            buf,
+            len: 0,
+            overflow: false,
+        }
+    }
+
+    fn bytes(&mut self, data: &[u8]) {
+        let end = self.len.saturating_add(data.len());
+        match self.buf.get_mut(self.len..end) {
+            Some(dst) => {
+                dst.copy_from_slice(data);
+                self.len = end;
+            }
+            None => self.overflow = true,
+        }
+    }
+
+    fn u8(&mut self, v: u8) {
+        self.bytes(&[v]);
+    }
+
+    fn u16(&mut self, v: u16) {
+        self.bytes(&v.to_le_bytes());
+    }
+
+    fn u32(&mut self, v: u32) {
+        self.bytes(&v.to_le_bytes());
+    }
+
+    /// `v` in `n` bytes, little-endian two's complement.
+    fn int(&mut self, v: i128, n: usize) {
+        let b = v.to_le_bytes();
+        let fill = if v < 0 { 0xFF } else { 0 };
+        for i in 0..n {
+            self.u8(b.get(i).copied().unwrap_or(fill));
+        }
+    }
+
+    /// The length written, or `None` if something did not fit.
+    fn finish(self) -> Option<usize> {
+        (!self.overflow).then_some(self.len)
+    }
+}
+
+#[cfg(test)]
+#[allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+mod tests {
+    use super::*;
+
+    /// An SDO Info request: header (not fragmented) and service data.
+    fn request(opcode: u8, data: &[u8]) -> Vec<u8> {
+        let mut v = vec![opcode, 0, 0, 0];
+        v.extend_from_slice(data);
+        v
+    }
+
+    /// All fragments of the response to `req`, each at most `size` bytes.
+    fn exchange(server: &mut SdoInfoServer, req: &[u8], size: usize) -> Vec<Vec<u8>> {
+        let mut out = vec![0u8; size];
+        let mut frames = Vec::new();
+        let n = server.handle(req, &mut out).expect("a response");
+        frames.push(out[..n].to_vec());
+        while let Some(n) = server.next_fragment(&mut out) {
+            frames.push(out[..n].to_vec());
+            assert!(frames.len() < 1000, "endless response");
+        }
+        assert!(!server.busy());
+        frames
+    }
+
+    /// The service data of all fragments, checking the fragment headers.
+    fn reassemble(frames: &[Vec<u8>], opcode: u8) -> Vec<u8> {
+        let mut data = Vec::new();
+        let last = frames.len() - 1;
+        for (i, f) in frames.iter().enumerate() {
+            assert_eq!(f[0] & 0x7F, opcode, "fragment {i}");
+            assert_eq!(f[0] & 0x80 != 0, i < last, "incomplete bit of {i}");
+            assert_eq!(f[1], 0);
+            assert_eq!(
+                usize::from(u16::from_le_bytes([f[2], f[3]])),
+                last - i,
+                "fragments left of {i}"
+            );
+            data.extend_from_slice(&f[4..]);
+        }
+        data
+    }
+
+    fn words(data: &[u8]) -> Vec<u16> {
+        data.chunks(2)
+            .map(|c| u16::from_le_bytes([c[0], c[1]]))
+            .collect()
+    }
+
+    fn od_list(list_type: u16, size: usize) -> Vec<u16> {
+        let mut s = SdoInfoServer::new();
+        let frames = exchange(&mut s, &request(1, &list_type.to_le_bytes()), size);
+        let w = words(&reassemble(&frames, 2));
+        assert_eq!(w[0], list_type);
+        w[1..].to_vec()
+    }
+
+    fn entry_desc(index: u16, sub: u8, info: u8) -> Vec<u8> {
+        let mut s = SdoInfoServer::new();
+        let mut req = index.to_le_bytes().to_vec();
+        req.extend([sub, info]);
+        let frames = exchange(&mut s, &request(5, &req), 128);
+        assert_eq!(frames.len(), 1);
+        frames[0].clone()
+    }
+
+    fn error_code(frame: &[u8]) -> u32 {
+        assert_eq!(frame.len(), 8);
+        assert_eq!(&frame[..4], &[0x07, 0, 0, 0]);
+        u32::from_le_bytes(frame[4..8].try_into().unwrap())
+    }
+
+    fn indices(pred: impl Fn(&Object) -> bool) -> Vec<u16> {
+        OBJECTS
+            .iter()
+            .filter(|o| pred(o))
+            .map(|o| o.index)
+            .collect()
+    }
+
+    #[test]
+    fn od_list_counts_give_the_size_of_each_list() {
+        let mut s = SdoInfoServer::new();
+        let frames = exchange(&mut s, &request(1, &[0, 0]), 128);
+        assert_eq!(frames.len(), 1);
+        let f = &frames[0];
+        assert_eq!(&f[..4], &[0x02, 0, 0, 0]);
+        let w = words(&f[4..]);
+        let want = [
+            OBJECTS.len(),
+            od_list(2, 128).len(),
+            od_list(3, 128).len(),
+            od_list(4, 128).len(),
+            od_list(5, 128).len(),
+        ];
+        assert_eq!(w[0], 0);
+        assert_eq!(
+            w[1..].iter().map(|&n| usize::from(n)).collect::<Vec<_>>(),
+            want
+        );
+        // 0x7000/0x7010/0x7020 are the only RxPDO objects; 12 settings objects.
+        assert_eq!(w[2], 3);
+        assert_eq!(w[4], 14);
+        assert_eq!(w[4], w[5]);
+    }
+
+    #[test]
+    fn all_objects_list_is_the_model_in_order_across_small_fragments() {
+        let all: Vec<u16> = OBJECTS.iter().map(|o| o.index).collect();
+        let mut s = SdoInfoServer::new();
+        let frames = exchange(&mut s, &request(1, &[1, 0]), 20);
+        assert!(frames.len() > 5, "{} fragments", frames.len());
+        let w = words(&reassemble(&frames, 2));
+        assert_eq!(w[0], 1);
+        assert_eq!(w[1..], all[..]);
+        // 16 bytes of service data per fragment: list type + 7, then 8 indices.
+        assert_eq!(frames[0].len(), 20);
+        assert_eq!(frames.len(), (2 + 2 * all.len()).div_ceil(16));
+        // Big enough for everything: one fragment.
+        assert_eq!(od_list(1, 1024), all);
+    }
+
+    #[test]
+    fn odd_fragment_sizes_never_split_an_index() {
+        let all: Vec<u16> = OBJECTS.iter().map(|o| o.index).collect();
+        for size in [6, 7, 9, 21, 33] {
+            let mut s = SdoInfoServer::new();
+            let frames = exchange(&mut s, &request(1, &[1, 0]), size);
+            assert!(frames.iter().all(|f| f.len() % 2 == 0), "size {size}");
+            assert_eq!(words(&reassemble(&frames, 2))[1..], all[..], "size {size}");
+        }
+    }
+
+    #[test]
+    fn rxpdo_list_holds_the_output_objects() {
+        assert_eq!(od_list(2, 20), [0x7000, 0x7010, 0x7020]);
+    }
+
+    #[test]
+    fn txpdo_list_holds_timestamp_inputs_and_diagnosis() {
+        assert_eq!(
+            od_list(3, 20),
+            [0x10F8, 0x6000, 0x6010, 0x6020, 0xA000, 0xA010, 0xA020]
+        );
+    }
+
+    #[test]
+    fn backup_and_settings_lists_hold_the_stored_parameters() {
+        let want =
+            indices(|o| (0x8000..=0x8FFF).contains(&o.index) || matches!(o.index, 0xF800 | 0xF80F));
+        assert_eq!(want.len(), 14);
+        assert_eq!(od_list(4, 20), want);
+        assert_eq!(od_list(5, 64), want);
+    }
+
+    #[test]
+    fn object_description_of_identity_is_a_record_of_four() {
+        let mut s = SdoInfoServer::new();
+        let frames = exchange(&mut s, &request(3, &[0x18, 0x10]), 128);
+        let mut want = vec![0x04, 0, 0, 0, 0x18, 0x10, 0x23, 0x00, 4, 0x09];
+        want.extend_from_slice(b"IDENTITY");
+        assert_eq!(frames, [want]);
+    }
+
+    #[test]
+    fn object_descriptions_report_var_array_and_record_types() {
+        let desc = |index: u16| {
+            let mut s = SdoInfoServer::new();
+            exchange(&mut s, &request(3, &index.to_le_bytes()), 128).remove(0)
+        };
+        // VAR: the entry's type; name after 10 bytes.
+        let f = desc(0x1008);
+        assert_eq!(&f[4..10], &[0x08, 0x10, 0x09, 0x00, 0, 0x07]);
+        assert_eq!(&f[10..], b"DEVICE NAME");
+        // ARRAY: the element type (UINT16), max sub 2.
+        let f = desc(0x1C13);
+        assert_eq!(&f[4..10], &[0x13, 0x1C, 0x06, 0x00, 2, 0x08]);
+        // PDO mapping record and a generic record.
+        assert_eq!(&desc(0x1A00)[6..10], &[0x21, 0x00, 0x0D, 0x09]);
+        assert_eq!(&desc(0x800D)[6..10], &[0x2A, 0x00, 0x0A, 0x09]);
+    }
+
+    #[test]
+    fn entry_description_of_current_has_unit_default_min_max() {
+        let f = entry_desc(0x800D, 0x02, 0x78);
+        let mut want = vec![0x06, 0, 0, 0];
+        want.extend([0x0D, 0x80, 0x02, 0x78]);
+        want.extend([0x06, 0x00, 16, 0]); // UINT, 16 bits
+        want.extend(0x033Fu16.to_le_bytes()); // RW | backup | setting
+        want.extend(0xFD04_0000u32.to_le_bytes()); // mA
+        want.extend(1000u16.to_le_bytes());
+        want.extend(500u16.to_le_bytes());
+        want.extend(3000u16.to_le_bytes());
+        want.extend_from_slice(b"CURRENT");
+        assert_eq!(f, want);
+    }
+
+    #[test]
+    fn entry_description_without_value_info_is_header_and_name() {
+        let f = entry_desc(0x800D, 0x02, 0x00);
+        assert_eq!(
+            &f[4..14],
+            &[0x0D, 0x80, 0x02, 0x00, 0x06, 0, 16, 0, 0x3F, 0x03]
+        );
+        assert_eq!(&f[14..], b"CURRENT");
+        // Reserved value info bits are not echoed.
+        assert_eq!(entry_desc(0x800D, 0x02, 0x87)[7], 0x00);
+    }
+
+    #[test]
+    fn entry_description_of_an_enum_reports_the_enum_type_and_its_range() {
+        let f = entry_desc(0xF800, 0x02, 0x78);
+        assert_eq!(&f[4..8], &[0x00, 0xF8, 0x02, 0x78]);
+        assert_eq!(&f[8..12], &[0x00, 0x08, 3, 0]); // DT0800EN03, 3 bits
+        assert_eq!(&f[12..14], &0x033Fu16.to_le_bytes()); // RW, backup, setting
+        assert_eq!(&f[14..18], &[0, 0, 0, 0]); // no unit
+        assert_eq!(&f[18..21], &[1, 1, 2]); // default DIRECTIONAL, 1..=2
+        assert_eq!(&f[21..], b"FUNCTION");
+    }
+
+    #[test]
+    fn entry_description_of_a_write_only_entry_has_access_0x0038() {
+        let f = entry_desc(0xF801, 0x01, 0x00);
+        assert_eq!(&f[8..14], &[0x07, 0x00, 32, 0, 0x38, 0x00]);
+        assert_eq!(&f[14..], b"PASSWORD");
+    }
+
+    #[test]
+    fn entry_description_of_a_gap_is_a_read_only_bit_field() {
+        let f = entry_desc(0x6000, 0x02, 0x78);
+        // BIT7, 7 bits, RO; natural range 0..=127 in one byte.
+        assert_eq!(&f[8..14], &[0x36, 0x00, 7, 0, 0x07, 0x00]);
+        assert_eq!(&f[14..21], &[0, 0, 0, 0, 0, 0, 127]);
+        assert_eq!(&f[21..], b"SubIndex 002");
+    }
+
+    #[test]
+    fn entry_description_of_pdo_entries_sets_the_mapping_bits() {
+        let f = entry_desc(0x7000, 0x03, 0x60);
+        assert_eq!(&f[8..14], &[0x04, 0x00, 32, 0, 0x7F, 0x00]);
+        assert_eq!(&f[14..18], &i32::MIN.to_le_bytes());
+        assert_eq!(&f[18..22], &i32::MAX.to_le_bytes());
+        let f = entry_desc(0x10F8, 0x00, 0x40);
+        assert_eq!(&f[8..14], &[0x1B, 0x00, 64, 0, 0x87, 0x00]);
+        assert_eq!(&f[14..22], &[0xFF; 8]); // UINT64 maximum
+        assert_eq!(&f[22..], b"Timestamp Object");
+    }
+
+    #[test]
+    fn entry_description_of_a_string_sends_its_text_and_no_range() {
+        let f = entry_desc(0x1008, 0x00, 0x78);
+        assert_eq!(f[7], 0x18); // min/max dropped
+        assert_eq!(&f[8..14], &[0x09, 0x00, 104, 0, 0x07, 0x00]);
+        assert_eq!(&f[18..31], b"PAM-199-P-ETC");
+        assert_eq!(&f[31..], b"DEVICE NAME");
+    }
+
+    #[test]
+    fn signed_values_are_sign_extended_to_the_entry_size() {
+        let f = entry_desc(0x8006, 0x01, 0x70);
+        assert_eq!(&f[14..20], &[0xF0, 0xD8, 0xF0, 0xD8, 0x10, 0x27]); // -10000 x2, 10000
+    }
+
+    #[test]
+    fn unknown_object_answers_object_does_not_exist() {
+        let mut s = SdoInfoServer::new();
+        let mut out = [0u8; 64];
+        let n = s.handle(&request(3, &[0x02, 0x10]), &mut out).unwrap();
+        assert_eq!(error_code(&out[..n]), 0x0602_0000);
+        let n = s
+            .handle(&request(5, &[0x00, 0x08, 0, 0]), &mut out)
+            .unwrap();
+        assert_eq!(error_code(&out[..n]), 0x0602_0000); // enum types are not objects
+        assert!(!s.busy());
+    }
+
+    #[test]
+    fn unknown_or_absent_subindex_answers_subindex_does_not_exist() {
+        for (index, sub) in [(0x1018u16, 5u8), (0x8002, 1), (0x1000, 1)] {
+            let mut req = index.to_le_bytes().to_vec();
+            req.extend([sub, 0]);
+            let mut s = SdoInfoServer::new();
+            let mut out = [0u8; 64];
+            let n = s.handle(&request(5, &req), &mut out).unwrap();
+            assert_eq!(error_code(&out[..n]), 0x0609_0011, "{index:#06x}:{sub}");
+        }
+    }
+
+    #[test]
+    fn truncated_or_unknown_requests_answer_unknown_command() {
+        let mut s = SdoInfoServer::new();
+        let mut out = [0u8; 64];
+        for req in [
+            vec![],
+            vec![0x01, 0, 0],
+            request(1, &[]),
+            request(1, &[1]),
+            request(3, &[0x18]),
+            request(5, &[0x18, 0x10, 0x01]),
+            request(1, &[6, 0]), // unknown list type
+            request(2, &[1, 0]), // a response opcode
+            request(0x7F, &[]),  // unknown opcode
+        ] {
+            let n = s.handle(&req, &mut out).unwrap();
+            assert_eq!(error_code(&out[..n]), 0x0504_0001, "{req:02x?}");
+        }
+    }
+
+    #[test]
+    fn fragments_left_count_down_to_zero() {
+        let mut s = SdoInfoServer::new();
+        let mut out = [0u8; 10]; // 6 bytes of service data per fragment
+        let n = s.handle(&request(1, &[1, 0]), &mut out).unwrap();
+        assert_eq!(n, 10);
+        let total = 2 + 2 * OBJECTS.len();
+        let count = total.div_ceil(6);
+        let mut left = vec![u16::from_le_bytes([out[2], out[3]])];
+        assert!(out[0] & 0x80 != 0 && s.busy());
+        while s.next_fragment(&mut out).is_some() {
+            left.push(u16::from_le_bytes([out[2], out[3]]));
+        }
+        let want: Vec<u16> = (0..count as u16).rev().collect();
+        assert_eq!(left, want);
+        assert_eq!(out[0], 0x02); // last: incomplete bit clear
+        assert_eq!(s.next_fragment(&mut out), None);
+    }
+
+    #[test]
+    fn buffered_descriptions_fragment_too() {
+        let whole = entry_desc(0x800D, 0x02, 0x78);
+        let mut s = SdoInfoServer::new();
+        let frames = exchange(&mut s, &request(5, &[0x0D, 0x80, 0x02, 0x78]), 9);
+        assert_eq!(frames.len(), (whole.len() - 4).div_ceil(5));
+        assert_eq!(reassemble(&frames, 6), whole[4..]);
+    }
+
+    #[test]
+    fn a_new_request_abandons_the_pending_response() {
+        let mut s = SdoInfoServer::new();
+        let mut out = [0u8; 12];
+        s.handle(&request(1, &[1, 0]), &mut out).unwrap();
+        assert!(s.busy());
+        // 0x1000's description: 6 + 11 bytes in fragments of 8, 8, 1.
+        let n = s.handle(&request(3, &[0x00, 0x10]), &mut out).unwrap();
+        assert_eq!(&out[..n], b"\x84\x00\x02\x00\x00\x10\x07\x00\x00\x07DE");
+        let n = s.next_fragment(&mut out).unwrap();
+        assert_eq!(&out[..n], b"\x84\x00\x01\x00VICE TYP");
+        let n = s.next_fragment(&mut out).unwrap();
+        assert_eq!(&out[..n], b"\x04\x00\x00\x00E");
+        assert_eq!(s.next_fragment(&mut out), None);
+    }
+
+    #[test]
+    fn too_small_output_gives_no_response_and_no_state() {
+        let mut s = SdoInfoServer::new();
+        let mut out = [0u8; 5];
+        assert_eq!(s.handle(&request(1, &[1, 0]), &mut out), None);
+        assert!(!s.busy());
+        assert_eq!(s.handle(&request(3, &[0x02, 0x10]), &mut out), None);
+        let mut big = [0u8; 20];
+        s.handle(&request(1, &[1, 0]), &mut big).unwrap();
+        assert!(s.busy());
+        assert_eq!(s.next_fragment(&mut out), None);
+        assert!(!s.busy());
+    }
+
+    #[test]
+    fn every_entry_has_a_description_that_fits_the_buffer() {
+        let mut s = SdoInfoServer::new();
+        let mut out = [0u8; 4 + INFO_BUFFER];
+        for o in OBJECTS {
+            for e in o.entries {
+                let mut req = o.index.to_le_bytes().to_vec();
+                req.extend([e.sub, value_info::ALL]);
+                let n = s.handle(&request(5, &req), &mut out).unwrap();
+                assert_eq!(out[0], 0x06, "{:#06x}:{}", o.index, e.sub);
+                assert!(out[n - e.name.len()..n] == *e.name.as_bytes());
+            }
+        }
+    }
+}
