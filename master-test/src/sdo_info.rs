@@ -142,10 +142,11 @@ impl Reassembly {
             )));
         }
         let left = view.fragments_left();
-        if let Some(before) = self.left {
-            if before.checked_sub(1) != Some(left) {
+        match self.left {
+            Some(before) if before.checked_sub(1) != Some(left) => {
                 return Err(protocol(format!("fragments left {left} after {before}")));
             }
+            _ => {}
         }
         if view.incomplete() != (left > 0) {
             return Err(protocol(format!(
@@ -272,7 +273,7 @@ pub async fn entry_description(
 
 /// Decodes the service data of a Get OD List response.
 pub fn parse_od_list(list_type: u16, data: &[u8]) -> Result<Vec<u16>, ClientError> {
-    if data.len() < 2 || data.len() % 2 != 0 {
+    if data.len() < 2 || data.len() & 1 != 0 {
         return Err(protocol(format!("OD list of {} bytes", data.len())));
     }
     let words: Vec<u16> = data

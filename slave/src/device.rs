@@ -16,6 +16,7 @@ use crate::esc::soft::{FrameOutcome, SII_SIZE, SoftEsc};
 use crate::esc::{Esc, EscError};
 use crate::hal::{MemNv, NvStorage};
 use crate::mailbox::MailboxServer;
+use crate::od::complete;
 use crate::od::model;
 use crate::od::store::{self, ObjectStore};
 use crate::od::types::{DataType, PdoMapping};
@@ -672,7 +673,7 @@ impl<E: Esc, P: PowerStage, N: NvStorage> ObjectAccess for OdAccess<'_, E, P, N>
         out: &mut [u8],
     ) -> Result<usize, SdoAbortCode> {
         if complete_access {
-            return Err(SdoAbortCode::CompleteAccessNotSupported);
+            return complete::upload(&self.slave.store, index, sub, out);
         }
         self.slave.store.upload(index, sub, out)
     }
@@ -685,7 +686,7 @@ impl<E: Esc, P: PowerStage, N: NvStorage> ObjectAccess for OdAccess<'_, E, P, N>
         data: &[u8],
     ) -> Result<(), SdoAbortCode> {
         if complete_access {
-            return Err(SdoAbortCode::CompleteAccessNotSupported);
+            return self.complete_download(index, sub, data);
         }
         let (flat, entry) = store::lookup(index, sub)?;
         let value = ObjectStore::check(entry, data, self.state)?;
@@ -740,6 +741,52 @@ impl<E: Esc, P: PowerStage, N: NvStorage> ObjectAccess for OdAccess<'_, E, P, N>
             }
         }
         self.slave.store.set_value(flat, value);
+        Ok(())
+    }
+}
+
+impl<E: Esc, P: PowerStage, N: NvStorage> OdAccess<'_, E, P, N> {
+    /// Complete download: every member checked first, then all applied.
+    fn complete_download(&mut self, index: u16, sub: u8, data: &[u8]) -> Result<(), SdoAbortCode> {
+        if index == 0xF801 {
+            // Commands and the password are written one at a time.
+            return Err(SdoAbortCode::CompleteAccessNotSupported);
+        }
+        if index == 0xF80F && !self.slave.unlocked {
+            return Err(SdoAbortCode::UnsupportedAccess);
+        }
+        let changes = complete::check_download(&self.slave.store, index, sub, data, self.state)?;
+        let new_value = |s: u8| -> Option<i64> {
+            let (flat, _) = model::find_entry(index, s)?;
+            changes.iter().find(|(f, _)| *f == flat).map(|(_, v)| *v)
+        };
+        if index == 0x1C12 || index == 0x1C13 {
+            let dir = if index == 0x1C12 {
+                Direction::Outputs
+            } else {
+                Direction::Inputs
+            };
+            let (lo, hi) = dir.pdo_range();
+            let count = new_value(0).or(self.slave.store.get(index, 0)).unwrap_or(0);
+            for s in 1..=count.clamp(0, 255) as u8 {
+                let pdo = new_value(s).or(self.slave.store.get(index, s)).unwrap_or(0) as u16;
+                if pdo < lo || pdo > hi || model::find(pdo).is_none() {
+                    return Err(SdoAbortCode::ValueRange);
+                }
+            }
+        }
+        if matches!(index, 0x800D | 0x801D | 0x802D) {
+            let acc = new_value(7).or(self.slave.store.get(index, 7)) == Some(1);
+            let gains_change = [9u8, 10]
+                .iter()
+                .any(|s| new_value(*s).is_some_and(|v| Some(v) != self.slave.store.get(index, *s)));
+            if acc && gains_change {
+                return Err(SdoAbortCode::LocalControl);
+            }
+        }
+        for (flat, value) in changes {
+            self.slave.store.set_value(flat, value);
+        }
         Ok(())
     }
 }

@@ -5,6 +5,7 @@
 mod amplifier;
 mod bring_up;
 mod capture;
+mod coe;
 mod common;
 mod sdo;
 mod sii;

@@ -235,10 +235,11 @@ impl SdoServer {
                 if last {
                     self.state = SdoState::Idle;
                     if end != total {
+                        // The segments did not add up to the announced size.
                         return Reply::Abort {
                             index,
                             sub,
-                            code: SdoAbortCode::LengthTooLow,
+                            code: SdoAbortCode::LengthMismatch,
                         };
                     }
                     let d = self.buf.get(..total).unwrap_or(&[]);
@@ -378,4 +379,327 @@ enum Reply {
 
 fn emit(r: &SdoResponse<'_>, out: &mut [u8]) -> Result<usize, MailboxErrorCode> {
     r.emit(out).map_err(|_| MailboxErrorCode::NoMoreMemory)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One 100-byte object at 0x2000:00 and a 2-byte one at 0x2001:00.
+    struct Od {
+        big: [u8; 100],
+        small: [u8; 2],
+        writes: u32,
+    }
+
+    impl ObjectAccess for Od {
+        fn sdo_upload(
+            &mut self,
+            index: u16,
+            _sub: u8,
+            _ca: bool,
+            out: &mut [u8],
+        ) -> Result<usize, SdoAbortCode> {
+            let src: &[u8] = match index {
+                0x2000 => &self.big,
+                0x2001 => &self.small,
+                _ => return Err(SdoAbortCode::ObjectNotFound),
+            };
+            out[..src.len()].copy_from_slice(src);
+            Ok(src.len())
+        }
+        fn sdo_download(
+            &mut self,
+            index: u16,
+            _sub: u8,
+            _ca: bool,
+            data: &[u8],
+        ) -> Result<(), SdoAbortCode> {
+            self.writes += 1;
+            match index {
+                0x2000 if data.len() == 100 => self.big.copy_from_slice(data),
+                0x2000 => return Err(SdoAbortCode::LengthMismatch),
+                _ => return Err(SdoAbortCode::ObjectNotFound),
+            }
+            Ok(())
+        }
+    }
+
+    fn od() -> Od {
+        let mut big = [0u8; 100];
+        for (i, b) in big.iter_mut().enumerate() {
+            *b = i as u8;
+        }
+        Od {
+            big,
+            small: [1, 2],
+            writes: 0,
+        }
+    }
+
+    fn ask(srv: &mut SdoServer, od: &mut Od, req: SdoRequest<'_>, room: usize) -> Vec<u8> {
+        let mut raw = [0u8; 64];
+        let n = req.emit(&mut raw).unwrap();
+        let mut out = vec![0u8; room];
+        let len = srv.handle(&raw[..n], &mut out, od).unwrap().unwrap();
+        out.truncate(len);
+        out
+    }
+
+    #[test]
+    fn upload_longer_than_the_mailbox_is_segmented_with_toggles() {
+        let (mut srv, mut od) = (SdoServer::default(), od());
+        let r = ask(
+            &mut srv,
+            &mut od,
+            SdoRequest::InitiateUpload {
+                index: 0x2000,
+                sub: 0,
+                complete_access: false,
+            },
+            30,
+        );
+        let SdoResponse::UploadNormal {
+            complete_size,
+            data,
+            ..
+        } = SdoResponse::parse(&r).unwrap()
+        else {
+            panic!("normal upload expected");
+        };
+        assert_eq!(complete_size, 100);
+        let mut got = data.to_vec();
+        let mut toggle = false;
+        loop {
+            let r = ask(&mut srv, &mut od, SdoRequest::UploadSegment { toggle }, 30);
+            let SdoResponse::UploadSegment {
+                toggle: t,
+                last,
+                data,
+            } = SdoResponse::parse(&r).unwrap()
+            else {
+                panic!("segment expected");
+            };
+            assert_eq!(t, toggle);
+            got.extend_from_slice(data);
+            toggle = !toggle;
+            if last {
+                break;
+            }
+        }
+        assert_eq!(got, od.big.to_vec());
+        assert_eq!(srv.state(), SdoState::Idle);
+    }
+
+    #[test]
+    fn short_objects_upload_expedited() {
+        let (mut srv, mut od) = (SdoServer::default(), od());
+        let r = ask(
+            &mut srv,
+            &mut od,
+            SdoRequest::InitiateUpload {
+                index: 0x2001,
+                sub: 0,
+                complete_access: false,
+            },
+            30,
+        );
+        assert!(matches!(
+            SdoResponse::parse(&r).unwrap(),
+            SdoResponse::UploadExpedited { len: 2, .. }
+        ));
+    }
+
+    #[test]
+    fn segmented_download_is_stored_only_when_complete() {
+        let (mut srv, mut od) = (SdoServer::default(), od());
+        let data = [7u8; 100];
+        let init = SdoRequest::InitiateDownload {
+            index: 0x2000,
+            sub: 0,
+            complete_access: false,
+            kind: DownloadKind::Normal {
+                complete_size: 100,
+                data: &data[..20],
+            },
+        };
+        ask(&mut srv, &mut od, init, 64);
+        ask(
+            &mut srv,
+            &mut od,
+            SdoRequest::DownloadSegment {
+                toggle: false,
+                last: false,
+                data: &data[20..60],
+            },
+            64,
+        );
+        assert_eq!(od.writes, 0, "nothing stored mid-transfer");
+        let r = ask(
+            &mut srv,
+            &mut od,
+            SdoRequest::DownloadSegment {
+                toggle: true,
+                last: true,
+                data: &data[60..],
+            },
+            64,
+        );
+        assert_eq!(
+            SdoResponse::parse(&r).unwrap(),
+            SdoResponse::DownloadSegmentAck { toggle: true }
+        );
+        assert_eq!(od.big, data);
+    }
+
+    #[test]
+    fn toggle_error_aborts_0503_0000_and_leaves_the_object() {
+        let (mut srv, mut od) = (SdoServer::default(), od());
+        let data = [9u8; 100];
+        let init = SdoRequest::InitiateDownload {
+            index: 0x2000,
+            sub: 0,
+            complete_access: false,
+            kind: DownloadKind::Normal {
+                complete_size: 100,
+                data: &data[..20],
+            },
+        };
+        ask(&mut srv, &mut od, init, 64);
+        let r = ask(
+            &mut srv,
+            &mut od,
+            SdoRequest::DownloadSegment {
+                toggle: true,
+                last: false,
+                data: &data[20..40],
+            },
+            64,
+        );
+        assert!(matches!(
+            SdoResponse::parse(&r).unwrap(),
+            SdoResponse::Abort {
+                code: SdoAbortCode::ToggleBit,
+                ..
+            }
+        ));
+        assert_eq!(od.big[0], 0);
+        assert_eq!(srv.state(), SdoState::Idle);
+    }
+
+    #[test]
+    fn a_new_request_during_a_segmented_transfer_aborts_0504_0000() {
+        let (mut srv, mut od) = (SdoServer::default(), od());
+        let data = [9u8; 100];
+        let init = SdoRequest::InitiateDownload {
+            index: 0x2000,
+            sub: 0,
+            complete_access: false,
+            kind: DownloadKind::Normal {
+                complete_size: 100,
+                data: &data[..20],
+            },
+        };
+        ask(&mut srv, &mut od, init, 64);
+        let r = ask(
+            &mut srv,
+            &mut od,
+            SdoRequest::InitiateUpload {
+                index: 0x2001,
+                sub: 0,
+                complete_access: false,
+            },
+            64,
+        );
+        assert!(matches!(
+            SdoResponse::parse(&r).unwrap(),
+            SdoResponse::Abort {
+                code: SdoAbortCode::Timeout,
+                ..
+            }
+        ));
+        assert_eq!(od.writes, 0);
+        // The next request is served normally.
+        let r = ask(
+            &mut srv,
+            &mut od,
+            SdoRequest::InitiateUpload {
+                index: 0x2001,
+                sub: 0,
+                complete_access: false,
+            },
+            64,
+        );
+        assert!(matches!(
+            SdoResponse::parse(&r).unwrap(),
+            SdoResponse::UploadExpedited { .. }
+        ));
+    }
+
+    #[test]
+    fn segments_without_a_transfer_abort_0504_0001() {
+        let (mut srv, mut od) = (SdoServer::default(), od());
+        let r = ask(
+            &mut srv,
+            &mut od,
+            SdoRequest::UploadSegment { toggle: false },
+            64,
+        );
+        assert!(matches!(
+            SdoResponse::parse(&r).unwrap(),
+            SdoResponse::Abort {
+                code: SdoAbortCode::UnknownCommand,
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn early_last_segment_aborts_with_length_mismatch() {
+        let (mut srv, mut od) = (SdoServer::default(), od());
+        let data = [9u8; 100];
+        let init = SdoRequest::InitiateDownload {
+            index: 0x2000,
+            sub: 0,
+            complete_access: false,
+            kind: DownloadKind::Normal {
+                complete_size: 100,
+                data: &data[..20],
+            },
+        };
+        ask(&mut srv, &mut od, init, 64);
+        let r = ask(
+            &mut srv,
+            &mut od,
+            SdoRequest::DownloadSegment {
+                toggle: false,
+                last: true,
+                data: &data[20..30],
+            },
+            64,
+        );
+        assert!(matches!(
+            SdoResponse::parse(&r).unwrap(),
+            SdoResponse::Abort {
+                code: SdoAbortCode::LengthMismatch,
+                ..
+            }
+        ));
+        assert_eq!(od.writes, 0);
+    }
+
+    #[test]
+    fn garbage_requests_do_not_panic() {
+        let (mut srv, mut od) = (SdoServer::default(), od());
+        let mut out = [0u8; 16];
+        for len in 0..12 {
+            let req = [0xFFu8; 12];
+            let _ = srv.handle(&req[..len], &mut out, &mut od);
+        }
+        let _ = srv.handle(
+            &[0x21, 0, 0x20, 0, 0xFF, 0xFF, 0xFF, 0xFF],
+            &mut [0u8; 4],
+            &mut od,
+        );
+    }
 }

@@ -4,6 +4,7 @@
 //! The ESI, the SII, SDO Information, the PDO mapping and the application all
 //! read [`model::OBJECTS`]; nothing about an object is written twice.
 
+pub mod complete;
 pub mod model;
 pub mod store;
 pub mod types;

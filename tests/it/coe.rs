@@ -1,0 +1,180 @@
+//! CoE through the test master's own mailbox client: complete access,
+//! segmented transfers, mailbox errors and counters.
+
+use master_test::VirtualBus;
+use master_test::mailbox::{ClientError, MailboxClient, MailboxGeometry};
+use pam_slave::wire::coe::SdoAbortCode;
+use pam_slave::wire::mailbox::{MailboxErrorCode, MailboxType};
+
+#[test]
+fn complete_access_reads_and_writes_all_42_curve_points_in_one_transfer() {
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let sd = group.subdevice(md, 0).expect("slave");
+        let mut c = MailboxClient::new(md, sd.configured_address(), MailboxGeometry::standard());
+        let img = c.sdo_upload(0x8006, 0, true).await.expect("CA upload");
+        assert_eq!(img.len(), 86);
+        assert_eq!((img[0], img[1]), (42, 0));
+        assert_eq!(i16::from_le_bytes([img[2], img[3]]), -10000);
+        let mut new = img.clone();
+        for i in 0..42 {
+            let v = (i as i16 - 21) * 300;
+            new[2 + 2 * i..4 + 2 * i].copy_from_slice(&v.to_le_bytes());
+        }
+        c.sdo_download(0x8006, 0, true, &new)
+            .await
+            .expect("CA download");
+        assert_eq!(c.sdo_upload(0x8006, 0, true).await.expect("read back"), new);
+        let p: i16 = sd.sdo_read(0x8006, 0x2A).await.expect("single read");
+        assert_eq!(p, 20 * 300);
+        // One point out of range: refused and nothing changes.
+        let mut bad = new.clone();
+        bad[4..6].copy_from_slice(&(-12000i16).to_le_bytes());
+        let e = c
+            .sdo_download(0x8006, 0, true, &bad)
+            .await
+            .expect_err("out of range");
+        assert_eq!(e.abort_code(), Some(0x0609_0032));
+        assert_eq!(c.sdo_upload(0x8006, 0, true).await.expect("unchanged"), new);
+    });
+}
+
+#[test]
+fn pdo_assignment_complete_access_is_accepted_in_preop_only() {
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let station = group.subdevice(md, 0).expect("slave").configured_address();
+        let mut c = MailboxClient::new(md, station, MailboxGeometry::standard());
+        // 0x1C13 = { 0x1A00, 0x1A02 } written whole in PRE-OP.
+        c.sdo_download(0x1C13, 0, true, &[2, 0, 0x00, 0x1A, 0x02, 0x1A])
+            .await
+            .expect("PRE-OP");
+        c.sdo_download(0x1C12, 0, true, &[1, 0, 0x00, 0x16])
+            .await
+            .expect("PRE-OP");
+        let e = c
+            .sdo_download(0x1C13, 0, true, &[2, 0, 0x00, 0x1A, 0x34, 0x12])
+            .await
+            .expect_err("0x1234 is no TxPDO");
+        assert_eq!(e.abort_code(), Some(0x0609_0030));
+        let group = group.into_safe_op(md).await.expect("safe-op");
+        for (state, index, img) in [
+            ("SAFE-OP", 0x1C13, &[2u8, 0, 0x00, 0x1A, 0x02, 0x1A][..]),
+            ("SAFE-OP", 0x1C12, &[1u8, 0, 0x00, 0x16][..]),
+        ] {
+            let e = c.sdo_download(index, 0, true, img).await.expect_err(state);
+            assert_eq!(e.abort_code(), Some(0x0800_0022), "{state} {index:#x}");
+        }
+        let group = group.into_op(md).await.expect("op");
+        let e = c
+            .sdo_download(0x1C13, 0, true, &[2, 0, 0x00, 0x1A, 0x02, 0x1A])
+            .await
+            .expect_err("OP");
+        assert_eq!(e.abort_code(), Some(0x0800_0022));
+        drop(group);
+    });
+}
+
+#[test]
+fn segmented_download_writes_and_an_interrupted_one_leaves_the_object_unchanged() {
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let station = group.subdevice(md, 0).expect("slave").configured_address();
+        let mut c = MailboxClient::new(md, station, MailboxGeometry::standard());
+        // Every RW entry through the segmented path: RA:UP:A (UDINT).
+        c.sdo_download_with(0x8002, 2, false, &5000u32.to_le_bytes(), true)
+            .await
+            .expect("segmented download");
+        assert_eq!(
+            c.sdo_upload(0x8002, 2, false).await.unwrap(),
+            5000u32.to_le_bytes()
+        );
+        // Interrupted: initiate with 4 of 4 announced bytes missing, then a
+        // new request abandons it.
+        c.begin_download(0x8002, 3, 4, &[]).await.expect("initiate");
+        let e = c
+            .sdo_upload(0x8002, 3, false)
+            .await
+            .expect_err("abandoned transfer");
+        assert_eq!(e.abort_code(), Some(u32::from(SdoAbortCode::Timeout)));
+        assert_eq!(
+            c.sdo_upload(0x8002, 3, false).await.unwrap(),
+            100u32.to_le_bytes(),
+            "unchanged"
+        );
+        // A wrong toggle bit aborts 0x05030000 and leaves the object.
+        c.begin_download(0x8002, 3, 4, &[]).await.expect("initiate");
+        let e = c
+            .download_segment(true, true, &[1, 0, 0, 0])
+            .await
+            .expect_err("toggle");
+        assert_eq!(e.abort_code(), Some(0x0503_0000));
+        assert_eq!(
+            c.sdo_upload(0x8002, 3, false).await.unwrap(),
+            100u32.to_le_bytes()
+        );
+    });
+}
+
+#[test]
+fn malformed_mailboxes_get_error_replies_and_repeated_counters_run_once() {
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let station = group.subdevice(md, 0).expect("slave").configured_address();
+        let mut c = MailboxClient::new(md, station, MailboxGeometry::standard());
+        // Length field beyond the mailbox.
+        let mut buf = vec![0u8; 128];
+        buf[0] = 0xFF;
+        buf[5] = 0x03 | (1 << 4);
+        c.write_buffer(&buf).await.expect("write");
+        let m = c.receive().await.expect("reply");
+        assert_eq!(m.kind, MailboxType::Error);
+        assert_eq!(
+            u16::from_le_bytes([m.payload[2], m.payload[3]]),
+            0x08,
+            "invalid size"
+        );
+        // Unknown mailbox type.
+        c.send(MailboxType::Unknown(0x0E), &[1, 2, 3])
+            .await
+            .expect("send");
+        let m = c.receive().await.expect("reply");
+        assert_eq!(m.kind, MailboxType::Error);
+        // CoE service that does not exist.
+        c.send(MailboxType::CoE, &[0x00, 0xF0, 0, 0, 0, 0, 0, 0, 0, 0])
+            .await
+            .expect("send");
+        let m = c.receive().await.expect("reply");
+        assert_eq!(m.kind, MailboxType::Error);
+        // The same counter twice: the second write is not executed.
+        let req = |v: u16| {
+            let mut p = vec![0x00, 0x20, 0x2B, 0x0D, 0x80, 0x02];
+            p.extend_from_slice(&v.to_le_bytes());
+            p.extend_from_slice(&[0, 0]);
+            p
+        };
+        c.send_raw(MailboxType::CoE, 5, &req(2100))
+            .await
+            .expect("send");
+        c.receive().await.expect("ack");
+        c.send_raw(MailboxType::CoE, 5, &req(2900))
+            .await
+            .expect("send");
+        let v = c.sdo_upload(0x800D, 2, false).await.expect("read");
+        assert_eq!(
+            v,
+            2100u16.to_le_bytes(),
+            "repeated counter not executed twice"
+        );
+        let e = ClientError::Mailbox(MailboxErrorCode::InvalidSize);
+        assert!(e.to_string().contains("mailbox error"));
+    });
+}
