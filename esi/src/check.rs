@@ -408,7 +408,7 @@ mod tests {
     fn flipped_capability_is_reported_against_the_sii() {
         let (_, sii) = ours();
         let caps = Capabilities {
-            complete_access: true,
+            complete_access: false,
             ..Capabilities::default()
         };
         let esi = String::from_utf8(generate(&caps).unwrap()).unwrap();

@@ -60,10 +60,10 @@ pub struct Capabilities {
 impl Default for Capabilities {
     fn default() -> Self {
         Capabilities {
-            sdo_info: false,
+            sdo_info: true,
             pdo_assign: true,
             pdo_config: false,
-            complete_access: false,
+            complete_access: true,
             segmented_sdo: true,
         }
     }
@@ -1128,7 +1128,8 @@ mod tests {
         assert_eq!(coe.attr("SegmentedSdo"), Some("1"));
         assert!(device(&doc).path("Mailbox/FoE").is_some());
         assert_eq!(caps.coe_details(), 0x01 | 0x02 | 0x04 | 0x20);
-        assert_eq!(Capabilities::default().coe_details(), 0x05);
+        // The defaults are what the slave implements (and its SII says).
+        assert_eq!(Capabilities::default().coe_details(), 0x27);
     }
 
     #[test]

@@ -6,6 +6,7 @@
 
 pub mod link;
 pub mod mailbox;
+pub mod sdo_info;
 
 use ethercrab::{MainDevice, MainDeviceConfig, PduStorage, RetryBehaviour, Timeouts};
 use link::{Chain, Clock, Link, SharedChain};

@@ -243,9 +243,10 @@ fn encode_sii(out: &mut [u8]) -> Result<usize, sii::SiiError> {
             image: "",
             order: DEVICE_NAME,
             name: DEVICE_NAME,
-            // SDO (bit 0) and PDO assignment (bit 2); the rest is advertised
-            // as the CoE services become available.
-            coe_details: 0x01 | 0x04,
+            // SDO (bit 0), SDO Information (bit 1), PDO assignment (bit 2),
+            // complete access (bit 5). PDO configuration (bit 3) is not
+            // offered: the mappings are fixed.
+            coe_details: 0x01 | 0x02 | 0x04 | 0x20,
             foe_details: 0x00,
             eoe_details: 0x00,
             // Identity in AL status code: no; safe-op: yes.
@@ -599,7 +600,21 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
         self.deliver_pending()?;
         // One request at a time: a new request waits in SM0 until the
         // previous response has left.
-        if self.pending.is_some() || !self.sm_full(0)? {
+        if self.pending.is_some() {
+            return Ok(());
+        }
+        if !self.sm_full(0)? {
+            // Nothing new: continue a response that spans several mailboxes.
+            let (_, inp) = self.mailbox_layout();
+            let max = usize::from(inp.1).min(MAX_MAILBOX);
+            let mut response = [0u8; MAX_MAILBOX];
+            let produced = response
+                .get_mut(..max)
+                .and_then(|r| self.mailbox.next_pending(r));
+            if let Some(len) = produced {
+                self.pending = Some((len, response));
+                self.deliver_pending()?;
+            }
             return Ok(());
         }
         let (out, inp) = self.mailbox_layout();

@@ -69,6 +69,14 @@ impl MailboxServer {
         }
     }
 
+    /// The next part of a response that spans several mailboxes (SDO
+    /// Information fragments), framed for SM1; `None` when nothing is due.
+    pub fn next_pending(&mut self, out: &mut [u8]) -> Option<usize> {
+        let body = out.get_mut(HEADER_LEN..)?;
+        let n = self.coe.next_fragment(body)?;
+        self.frame(out, MailboxType::CoE, n)
+    }
+
     /// Writes the mailbox header for a `len`-byte payload already in place.
     fn frame(&mut self, out: &mut [u8], kind: MailboxType, len: usize) -> Option<usize> {
         let repr = MailboxRepr {

@@ -178,3 +178,95 @@ fn malformed_mailboxes_get_error_replies_and_repeated_counters_run_once() {
         assert!(e.to_string().contains("mailbox error"));
     });
 }
+
+/// A valid value other than the default for an RW entry, as bytes.
+fn other_value(e: &pam_slave::od::types::Entry) -> Option<Vec<u8>> {
+    use pam_slave::od::types::{DataType, DefaultValue};
+    let DefaultValue::Int(d) = e.default else {
+        return None;
+    };
+    let v = match e.data_type {
+        DataType::Bool => 1 - d,
+        DataType::Enum(en) => en.values.iter().map(|(v, _)| *v).find(|v| *v != d)?,
+        _ => match (e.min, e.max) {
+            (_, Some(max)) if max != d => max,
+            (Some(min), _) if min != d => min,
+            _ => d ^ 1,
+        },
+    };
+    let n = usize::from(e.bit_len).div_ceil(8);
+    Some(v.to_le_bytes()[..n].to_vec())
+}
+
+#[test]
+fn every_entry_reads_its_default_and_every_rw_entry_round_trips_both_paths() {
+    use pam_slave::od::model;
+    use pam_slave::od::store::ObjectStore;
+    use pam_slave::od::types::Access;
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let station = group.subdevice(md, 0).expect("slave").configured_address();
+        let mut c = MailboxClient::new(md, station, MailboxGeometry::standard());
+        let defaults = ObjectStore::new();
+        let (mut read, mut written) = (0, 0);
+        for obj in model::OBJECTS {
+            for e in obj.entries {
+                if e.gap || !e.access.readable() || obj.index == 0x10F8 {
+                    continue;
+                }
+                let (flat, _) = model::find_entry(obj.index, e.sub).unwrap();
+                let mut want = [0u8; 64];
+                let n = defaults.encode(flat, e, &mut want).unwrap();
+                let got = c.sdo_upload(obj.index, e.sub, false).await.expect("upload");
+                assert_eq!(got, &want[..n], "{:#06x}:{} default", obj.index, e.sub);
+                read += 1;
+            }
+        }
+        for obj in model::OBJECTS {
+            // Commands, password-gated settings and PDO assignment have
+            // their own tests; ACC locks the controller gains.
+            if matches!(obj.index, 0xF801 | 0xF80F | 0x1C12 | 0x1C13) {
+                continue;
+            }
+            for e in obj.entries {
+                let gains =
+                    matches!(obj.index, 0x800D | 0x801D | 0x802D) && matches!(e.sub, 9 | 10);
+                if e.gap || e.access != Access::Rw || gains {
+                    continue;
+                }
+                let v = other_value(e).expect("every RW entry here is numeric");
+                for segmented in [false, true] {
+                    c.sdo_download_with(obj.index, e.sub, false, &v, segmented)
+                        .await
+                        .unwrap_or_else(|err| panic!("{:#06x}:{} write: {err}", obj.index, e.sub));
+                    let back = c
+                        .sdo_upload(obj.index, e.sub, false)
+                        .await
+                        .expect("read back");
+                    assert_eq!(
+                        back, v,
+                        "{:#06x}:{} segmented={segmented}",
+                        obj.index, e.sub
+                    );
+                    let (flat, _) = model::find_entry(obj.index, e.sub).unwrap();
+                    let mut d = [0u8; 8];
+                    let n = defaults.encode(flat, e, &mut d).unwrap();
+                    c.sdo_download_with(obj.index, e.sub, false, &d[..n], !segmented)
+                        .await
+                        .expect("restore");
+                }
+                written += 1;
+            }
+        }
+        let readable = model::OBJECTS
+            .iter()
+            .filter(|o| o.index != 0x10F8)
+            .flat_map(|o| o.entries.iter())
+            .filter(|e| !e.gap && e.access.readable())
+            .count();
+        assert_eq!(read, readable, "every readable entry was read");
+        assert!(written > 100, "{written} RW entries written on both paths");
+    });
+}

@@ -7,6 +7,7 @@ mod bring_up;
 mod capture;
 mod coe;
 mod common;
+mod consistency;
 mod sdo;
 mod sii;
 mod veth;

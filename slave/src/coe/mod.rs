@@ -6,6 +6,7 @@
 //! no object values and knows nothing of the ESC.
 
 pub mod sdo;
+pub mod sdo_info;
 
 use crate::wire::coe::{CoeHeader, CoeService, SdoAbortCode};
 use crate::wire::mailbox::MailboxErrorCode;
@@ -37,6 +38,7 @@ pub trait ObjectAccess {
 #[derive(Debug, Default)]
 pub struct CoeServer {
     sdo: sdo::SdoServer,
+    info: sdo_info::SdoInfoServer,
 }
 
 impl CoeServer {
@@ -67,7 +69,29 @@ impl CoeServer {
                 CoeHeader::emit_into(head, 0, CoeService::SdoResponse);
                 Ok(Some(n + CoeHeader::<&[u8]>::HEADER_LEN))
             }
+            CoeService::SdoInformation => {
+                let (head, rest) = out
+                    .split_at_mut_checked(CoeHeader::<&[u8]>::HEADER_LEN)
+                    .ok_or(MailboxErrorCode::NoMoreMemory)?;
+                let Some(n) = self.info.handle(body, rest) else {
+                    return Ok(None);
+                };
+                CoeHeader::emit_into(head, 0, CoeService::SdoInformation);
+                Ok(Some(n + CoeHeader::<&[u8]>::HEADER_LEN))
+            }
             _ => Err(MailboxErrorCode::ServiceNotSupported),
         }
+    }
+
+    /// The next fragment of an SDO Information response in progress (CoE
+    /// header onwards), if any.
+    pub fn next_fragment(&mut self, out: &mut [u8]) -> Option<usize> {
+        if !self.info.busy() {
+            return None;
+        }
+        let (head, rest) = out.split_at_mut_checked(CoeHeader::<&[u8]>::HEADER_LEN)?;
+        let n = self.info.next_fragment(rest)?;
+        CoeHeader::emit_into(head, 0, CoeService::SdoInformation);
+        Some(n + CoeHeader::<&[u8]>::HEADER_LEN)
     }
 }

@@ -1,0 +1,279 @@
+//! One source of truth: the generated ESI, the model and what the live
+//! slave reports over SDO Information and SDO must agree.
+
+use master_test::VirtualBus;
+use master_test::mailbox::{MailboxClient, MailboxGeometry};
+use master_test::sdo_info::{entry_description, object_description, od_list};
+use pam_esi::xml::{Element, hex_binary, hex_dec};
+use pam_slave::od::model;
+use std::collections::BTreeMap;
+
+/// CoE data type code of an ESI type name.
+fn type_code(name: &str) -> Option<u16> {
+    Some(match name {
+        "BOOL" => 0x01,
+        "SINT" => 0x02,
+        "INT" => 0x03,
+        "DINT" => 0x04,
+        "USINT" => 0x05,
+        "UINT" => 0x06,
+        "UDINT" => 0x07,
+        "LINT" => 0x15,
+        "ULINT" => 0x1B,
+        n if n.starts_with("STRING(") => 0x09,
+        n if n.starts_with("BIT") => 0x2F + n[3..].parse::<u16>().ok()?,
+        n if n.starts_with("DT08") && n.contains("EN") => u16::from_str_radix(&n[2..6], 16).ok()?,
+        _ => return None,
+    })
+}
+
+/// One entry as the ESI describes it.
+#[derive(Debug)]
+struct EsiEntry {
+    name: String,
+    type_name: String,
+    bit_size: u16,
+    access: String,
+    default: Option<Vec<u8>>,
+}
+
+/// index -> (object name, sub -> entry)
+fn esi_dictionary(doc: &Element) -> BTreeMap<u16, (String, BTreeMap<u8, EsiEntry>)> {
+    let dev = doc.path("Descriptions/Devices/Device").expect("device");
+    let dict = dev.path("Profile/Dictionary").expect("dictionary");
+    let types: BTreeMap<String, &Element> = dict
+        .path("DataTypes")
+        .expect("data types")
+        .children_named("DataType")
+        .map(|t| (t.text_at("Name").unwrap_or("").to_string(), t))
+        .collect();
+    let mut out = BTreeMap::new();
+    for obj in dict
+        .path("Objects")
+        .expect("objects")
+        .children_named("Object")
+    {
+        let index = hex_dec(obj.text_at("Index").unwrap()).unwrap() as u16;
+        let name = obj.text_at("Name").unwrap().to_string();
+        let type_name = obj.text_at("Type").unwrap().to_string();
+        let mut entries = BTreeMap::new();
+        let access = obj.text_at("Flags/Access").unwrap_or("").to_string();
+        match types
+            .get(&type_name)
+            .filter(|t| t.child("SubItem").is_some())
+        {
+            None => {
+                let default = obj
+                    .text_at("Info/DefaultData")
+                    .and_then(hex_binary)
+                    .or_else(|| {
+                        obj.text_at("Info/DefaultString")
+                            .map(|s| s.as_bytes().to_vec())
+                    });
+                entries.insert(
+                    0,
+                    EsiEntry {
+                        name: name.clone(),
+                        type_name: type_name.clone(),
+                        bit_size: obj.text_at("BitSize").unwrap().parse().unwrap(),
+                        access,
+                        default,
+                    },
+                );
+            }
+            Some(t) => {
+                // Arrays: the element type holds "Elements"; sub-items list
+                // SubIndex 000 and the elements.
+                let defaults: Vec<Option<Vec<u8>>> = obj
+                    .path("Info")
+                    .map(|i| {
+                        i.children_named("SubItem")
+                            .map(|s| s.text_at("Info/DefaultData").and_then(hex_binary))
+                            .collect()
+                    })
+                    .unwrap_or_default();
+                let mut pos = 0;
+                for si in t.children_named("SubItem") {
+                    let sub_name = si.text_at("Name").unwrap().to_string();
+                    let ty = si.text_at("Type").unwrap().to_string();
+                    let bits: u16 = si.text_at("BitSize").unwrap().parse().unwrap();
+                    let acc = si.text_at("Flags/Access").unwrap_or("").to_string();
+                    match si.text_at("SubIdx") {
+                        Some(idx) => {
+                            entries.insert(
+                                idx.parse::<u8>().unwrap(),
+                                EsiEntry {
+                                    name: sub_name,
+                                    type_name: ty,
+                                    bit_size: bits,
+                                    access: acc,
+                                    default: defaults.get(pos).cloned().flatten(),
+                                },
+                            );
+                            pos += 1;
+                        }
+                        None => {
+                            // Array elements: type DTxxxxARR with ArrayInfo.
+                            let arr = types.get(&ty).expect("array type");
+                            let elem = arr.text_at("BaseType").unwrap().to_string();
+                            let ebits: u16 = types
+                                .get(&elem)
+                                .and_then(|e| e.text_at("BitSize"))
+                                .unwrap_or("0")
+                                .parse()
+                                .unwrap();
+                            let lbound: u8 =
+                                arr.text_at("ArrayInfo/LBound").unwrap().parse().unwrap();
+                            let n: u8 = arr.text_at("ArrayInfo/Elements").unwrap().parse().unwrap();
+                            for k in 0..n {
+                                entries.insert(
+                                    lbound + k,
+                                    EsiEntry {
+                                        name: String::new(),
+                                        type_name: elem.clone(),
+                                        bit_size: ebits,
+                                        access: acc.clone(),
+                                        default: defaults.get(pos).cloned().flatten(),
+                                    },
+                                );
+                                pos += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        out.insert(index, (name, entries));
+    }
+    out
+}
+
+fn access_bits(esi: &str) -> Option<u16> {
+    match esi {
+        "ro" => Some(0x07),
+        "rw" => Some(0x3F),
+        "wo" => Some(0x38),
+        _ => None,
+    }
+}
+
+#[test]
+fn esi_dictionary_equals_what_sdo_information_reports_live() {
+    let xml = pam_esi::generate(&pam_esi::Capabilities::default()).expect("ESI");
+    let doc = pam_esi::xml::parse(std::str::from_utf8(&xml).unwrap()).expect("parse");
+    let esi = esi_dictionary(&doc);
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let station = group.subdevice(md, 0).expect("slave").configured_address();
+        let mut c = MailboxClient::new(md, station, MailboxGeometry::standard());
+        let live: Vec<u16> = od_list(&mut c, 1).await.expect("OD list");
+        let esi_indices: Vec<u16> = esi.keys().copied().collect();
+        assert_eq!(live, esi_indices, "object lists");
+        let model_indices: Vec<u16> = model::OBJECTS.iter().map(|o| o.index).collect();
+        assert_eq!(live, model_indices);
+        let mut checked = 0;
+        for (index, (name, entries)) in &esi {
+            let info = object_description(&mut c, *index)
+                .await
+                .expect("object description");
+            assert_eq!(&info.name, name, "{index:#06x} name");
+            assert_eq!(
+                info.max_sub,
+                *entries.keys().max().unwrap(),
+                "{index:#06x} max subindex"
+            );
+            for (sub, e) in entries {
+                let live = entry_description(&mut c, *index, *sub, 0x10)
+                    .await
+                    .expect("entry");
+                if !e.name.is_empty() && entries.len() > 1 {
+                    assert_eq!(live.name, e.name, "{index:#06x}:{sub} name");
+                }
+                assert_eq!(live.bit_len, e.bit_size, "{index:#06x}:{sub} bit size");
+                if let Some(code) = type_code(&e.type_name) {
+                    assert_eq!(
+                        live.data_type, code,
+                        "{index:#06x}:{sub} type {}",
+                        e.type_name
+                    );
+                }
+                if let Some(bits) = access_bits(&e.access) {
+                    assert_eq!(
+                        live.access & 0x38 != 0,
+                        bits & 0x38 != 0,
+                        "{index:#06x}:{sub} write"
+                    );
+                    assert_eq!(
+                        live.access & 0x07 != 0,
+                        bits & 0x07 != 0,
+                        "{index:#06x}:{sub} read"
+                    );
+                }
+                if let (Some(d), Some(ld)) = (&e.default, &live.default) {
+                    assert_eq!(d, ld, "{index:#06x}:{sub} default");
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked > 280, "only {checked} entries compared");
+    });
+}
+
+#[test]
+fn esi_pdo_sets_equal_the_live_mapping_and_assignment_objects() {
+    let xml = pam_esi::generate(&pam_esi::Capabilities::default()).expect("ESI");
+    let doc = pam_esi::xml::parse(std::str::from_utf8(&xml).unwrap()).expect("parse");
+    let dev = doc.path("Descriptions/Devices/Device").expect("device");
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let sd = group.subdevice(md, 0).expect("slave");
+        let mut defaults = (Vec::new(), Vec::new());
+        for (tag, list) in [("RxPdo", 0), ("TxPdo", 1)] {
+            for pdo in dev.children_named(tag) {
+                let index = hex_dec(pdo.text_at("Index").unwrap()).unwrap() as u16;
+                let entries: Vec<u32> = pdo
+                    .children_named("Entry")
+                    .map(|e| {
+                        let i = hex_dec(e.text_at("Index").unwrap()).unwrap() as u32;
+                        let s = e.text_at("SubIndex").map_or(0, |s| hex_dec(s).unwrap()) as u32;
+                        let b: u32 = e.text_at("BitLen").unwrap().parse().unwrap();
+                        (i << 16) | (s << 8) | b
+                    })
+                    .collect();
+                let n: u8 = sd.sdo_read(index, 0).await.expect("count");
+                assert_eq!(usize::from(n), entries.len(), "{index:#06x} entry count");
+                for (k, want) in entries.iter().enumerate() {
+                    let got: u32 = sd.sdo_read(index, k as u8 + 1).await.expect("mapping");
+                    assert_eq!(got, *want, "{index:#06x}:{}", k + 1);
+                }
+                if pdo.attr("Sm").is_some() {
+                    if list == 0 {
+                        defaults.0.push(index);
+                    } else {
+                        defaults.1.push(index);
+                    }
+                }
+            }
+        }
+        // The default set (Sm attribute in the ESI) is the live assignment.
+        for (assign, want) in [(0x1C12u16, &defaults.0), (0x1C13, &defaults.1)] {
+            let n: u8 = sd.sdo_read(assign, 0).await.expect("count");
+            let mut live = Vec::new();
+            for k in 1..=n {
+                live.push(sd.sdo_read::<u16>(assign, k).await.expect("pdo"));
+            }
+            assert_eq!(&live, want, "{assign:#06x}");
+        }
+        // The alternative set (independent mode) is assignable and maps the
+        // same as its ESI description: write it and read it back.
+        sd.sdo_write(0x1C12, 1, 0x1601u16)
+            .await
+            .expect("IND outputs");
+        let v: u16 = sd.sdo_read(0x1C12, 1).await.expect("read");
+        assert_eq!(v, 0x1601);
+    });
+}
