@@ -37,6 +37,9 @@ pub enum BusError {
     /// The PDU storage was already split.
     #[error("PDU storage already in use")]
     Storage,
+    /// Not every slave reached OP within 10 s of cyclic exchange.
+    #[error("not every slave reached OP within 10 s")]
+    NotOp,
 }
 
 /// Timeouts suited to the in-process link on a busy CI machine.
@@ -112,5 +115,27 @@ impl VirtualBus {
         Ok(md
             .init_single_group::<MAX_SUBDEVICES, PDI_LEN>(ethercrab::std::ethercat_now)
             .await?)
+    }
+}
+
+/// Brings a PRE-OP group to OP the way a real master does for devices
+/// with a SyncManager watchdog: request OP and keep exchanging process
+/// data (fresh outputs every `cycle`) until every slave reports OP.
+pub async fn into_op_cyclic(
+    group: Group<ethercrab::subdevice_group::PreOp>,
+    md: &MainDevice<'_>,
+    cycle: Duration,
+) -> Result<Group<ethercrab::subdevice_group::Op>, BusError> {
+    let group = group.into_safe_op(md).await?.request_into_op(md).await?;
+    let deadline = std::time::Instant::now() + Duration::from_secs(10);
+    loop {
+        let resp = group.tx_rx(md).await?;
+        if resp.all_op() {
+            return Ok(group);
+        }
+        if std::time::Instant::now() > deadline {
+            return Err(BusError::NotOp);
+        }
+        smol::Timer::after(cycle).await;
     }
 }

@@ -1,9 +1,20 @@
 //! `master-test`: the demo and tools for software PAM-199 slaves on the
 //! built-in virtual EtherCAT link.
+//!
+//! * `demo` (the default): OP, SDO parameters, a set-point.
+//! * `sdo read|write INDEX:SUB [VALUE]`: one entry, typed by the slave's
+//!   own SDO Information.
+//! * `od dump [--json]`: the live object dictionary, like TwinCAT's
+//!   CoE-Online tab.
+
+mod cli;
 
 use clap::{Parser, Subcommand};
 use master_test::VirtualBus;
 use master_test::link::lock;
+use master_test::mailbox::{ClientError, MailboxClient, MailboxGeometry};
+use master_test::sdo_info::{self, EntryInfo, value_info};
+use std::io::Write as _;
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -38,6 +49,60 @@ enum Cmd {
         #[arg(long)]
         pcap: Option<std::path::PathBuf>,
     },
+    /// Read or write one object entry over CoE SDO (one slave in PRE-OP).
+    ///
+    /// Values are typed by the slave's own SDO Information (Get Entry
+    /// Description): data type, bit length, access, unit.
+    Sdo {
+        #[command(subcommand)]
+        op: SdoCmd,
+    },
+    /// Browse the live object dictionary (one slave in PRE-OP).
+    Od {
+        #[command(subcommand)]
+        op: OdCmd,
+    },
+}
+
+#[derive(Subcommand)]
+enum SdoCmd {
+    /// Upload INDEX:SUB and print its value with name, unit and type.
+    ///
+    /// Integers print in decimal (signed where the type is), enumerations
+    /// as `TEXT (value)`, BOOL as true/false, strings as text.
+    Read {
+        /// Object address: hex index with or without 0x, subindex decimal
+        /// or 0x-hex (`0x800D:02`, `800D:2`, `8006:0x2A`).
+        address: String,
+        /// Print the uploaded bytes in hex instead of the typed value.
+        #[arg(long)]
+        raw: bool,
+    },
+    /// Parse VALUE for the entry's type, download it, read it back.
+    ///
+    /// Integers in decimal or 0x-hex (negative for signed types),
+    /// enumerations by text or number, BOOL as true/false/1/0, strings as
+    /// text. The value is encoded in the entry's byte size and downloaded
+    /// expedited (up to 4 bytes) or normal.
+    Write {
+        /// Object address, as for `sdo read`.
+        address: String,
+        /// The value to write.
+        #[arg(allow_hyphen_values = true)]
+        value: String,
+    },
+}
+
+#[derive(Subcommand)]
+enum OdCmd {
+    /// Every object of the OD list (all objects) with every subindex:
+    /// name, type, access, unit and the current value.
+    Dump {
+        /// Print a JSON array of objects with their entries (including
+        /// default, minimum and maximum) instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -57,6 +122,15 @@ fn main() -> ExitCode {
             cycles,
             pcap,
         } => smol::block_on(demo(slaves, current, command, cycles, pcap.as_deref())),
+        Cmd::Sdo {
+            op: SdoCmd::Read { address, raw },
+        } => smol::block_on(sdo_read(&address, raw)),
+        Cmd::Sdo {
+            op: SdoCmd::Write { address, value },
+        } => smol::block_on(sdo_write(&address, &value)),
+        Cmd::Od {
+            op: OdCmd::Dump { json },
+        } => smol::block_on(od_dump(json)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -183,6 +257,238 @@ async fn demo(
         );
     }
     Ok(())
+}
+
+type BoxError = Box<dyn std::error::Error>;
+
+/// Runs `f` with a mailbox client for the one slave of a fresh virtual bus
+/// in PRE-OP.
+async fn with_client<T>(
+    f: impl AsyncFnOnce(&mut MailboxClient<'_>) -> Result<T, BoxError>,
+) -> Result<T, BoxError> {
+    let bus = VirtualBus::new(1)?;
+    let md = &*bus.maindevice;
+    let group = bus.init().await?;
+    let station = group
+        .subdevice(md, 0)
+        .map_err(|e| format!("no slave on the virtual bus: {e}"))?
+        .configured_address();
+    let mut client = MailboxClient::new(md, station, MailboxGeometry::standard());
+    f(&mut client).await
+}
+
+/// `0x800D:02 CURRENT = 1000 mA  (UINT, RW)`.
+/// Without `unit` (raw bytes) the unit is left out.
+fn describe(e: &EntryInfo, value: &str, unit: bool) -> String {
+    let unit = if unit { cli::unit_text(e.unit) } else { "" };
+    let unit = if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    };
+    format!(
+        "0x{:04X}:{:02X} {} = {value}{unit}  ({}, {})",
+        e.index,
+        e.sub,
+        e.name,
+        cli::type_name(e.data_type),
+        cli::access_text(e.access)
+    )
+}
+
+async fn sdo_read(address: &str, raw: bool) -> Result<(), BoxError> {
+    let (index, sub) = cli::parse_address(address)?;
+    with_client(async |c| {
+        let e = sdo_info::entry_description(c, index, sub, value_info::UNIT).await?;
+        let bytes = c.sdo_upload(index, sub, false).await?;
+        let shown = if raw {
+            cli::hex(&bytes)
+        } else {
+            cli::show(&cli::decode(e.data_type, e.bit_len, &bytes), e.bit_len)
+        };
+        println!("{}", describe(&e, &shown, !raw));
+        Ok(())
+    })
+    .await
+}
+
+async fn sdo_write(address: &str, value: &str) -> Result<(), BoxError> {
+    let (index, sub) = cli::parse_address(address)?;
+    with_client(async |c| {
+        let e = sdo_info::entry_description(c, index, sub, value_info::UNIT).await?;
+        let bytes = cli::parse_value(e.data_type, e.bit_len, value).map_err(|m| {
+            format!(
+                "bad value for 0x{index:04X}:{sub:02X} {} ({}): {m}",
+                e.name,
+                cli::type_name(e.data_type)
+            )
+        })?;
+        let how = if bytes.len() <= 4 {
+            "expedited"
+        } else {
+            "normal"
+        };
+        println!(
+            "0x{:04X}:{sub:02X} {} := {} ({}, {how} download)",
+            index,
+            e.name,
+            cli::format_value(e.data_type, e.bit_len, &bytes),
+            cli::hex(&bytes)
+        );
+        c.sdo_download(index, sub, false, &bytes).await?;
+        let back = c.sdo_upload(index, sub, false).await?;
+        let shown = cli::show(&cli::decode(e.data_type, e.bit_len, &back), e.bit_len);
+        println!("{}", describe(&e, &shown, true));
+        Ok(())
+    })
+    .await
+}
+
+/// One described entry of `od dump` with its value (or why there is none).
+struct DumpEntry {
+    info: EntryInfo,
+    /// The value, or why there is none (`write-only`, an abort).
+    value: Result<cli::Value, String>,
+}
+
+async fn od_dump(json: bool) -> Result<(), BoxError> {
+    let result = with_client(async |c| {
+        let stdout = std::io::stdout();
+        let mut out = std::io::BufWriter::new(stdout.lock());
+        let objects = sdo_info::od_list(c, sdo_info::list_type::ALL).await?;
+        if json {
+            writeln!(out, "[")?;
+        } else {
+            writeln!(
+                out,
+                "{:<9}  {:<28} {:<11} {:<3} {:<4} Value",
+                "Index", "Name", "Type", "Acc", "Unit"
+            )?;
+        }
+        for (n, &index) in objects.iter().enumerate() {
+            let obj = sdo_info::object_description(c, index).await?;
+            let mut entries = Vec::new();
+            for sub in 0..=obj.max_sub {
+                // Absent subindices have no description: skip them.
+                let Ok(info) = sdo_info::entry_description(c, index, sub, value_info::ALL).await
+                else {
+                    continue;
+                };
+                let value = if info.access & 0x07 == 0 {
+                    Err("write-only".to_string())
+                } else {
+                    match c.sdo_upload(index, sub, false).await {
+                        Ok(b) => Ok(cli::decode(info.data_type, info.bit_len, &b)),
+                        Err(ClientError::Abort { code, .. }) => Err(format!("abort {code}")),
+                        Err(e) => Err(e.to_string()),
+                    }
+                };
+                entries.push(DumpEntry { info, value });
+            }
+            if json {
+                let last = n + 1 == objects.len();
+                write_json_object(&mut out, &obj, &entries, last)?;
+            } else {
+                writeln!(
+                    out,
+                    "{:04X}       {:<28} [{}]",
+                    obj.index,
+                    obj.name,
+                    cli::object_code_text(obj.object_code)
+                )?;
+                for d in &entries {
+                    let e = &d.info;
+                    let value = match &d.value {
+                        Ok(v) => cli::show(v, e.bit_len),
+                        Err(s) => format!("({s})"),
+                    };
+                    writeln!(
+                        out,
+                        "  {:04X}:{:02X}  {:<28} {:<11} {:<3} {:<4} {value}",
+                        e.index,
+                        e.sub,
+                        e.name,
+                        cli::type_name(e.data_type),
+                        cli::access_text(e.access),
+                        cli::unit_text(e.unit)
+                    )?;
+                }
+            }
+        }
+        if json {
+            writeln!(out, "]")?;
+        }
+        out.flush()?;
+        Ok(())
+    })
+    .await;
+    // `od dump | head` closes the pipe early: that is not an error.
+    match result {
+        Err(e)
+            if e.downcast_ref::<std::io::Error>()
+                .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe) =>
+        {
+            Ok(())
+        }
+        other => other,
+    }
+}
+
+/// Writes one object of `od dump --json` (entries one per line).
+fn write_json_object(
+    out: &mut impl std::io::Write,
+    obj: &sdo_info::ObjectInfo,
+    entries: &[DumpEntry],
+    last: bool,
+) -> std::io::Result<()> {
+    let opt = |v: &Option<Vec<u8>>, e: &EntryInfo| {
+        v.as_deref().map_or_else(
+            || "null".to_string(),
+            |b| cli::decode(e.data_type, e.bit_len, b).to_json(),
+        )
+    };
+    writeln!(out, "  {{")?;
+    writeln!(out, "    \"index\": {},", obj.index)?;
+    writeln!(out, "    \"name\": {},", cli::json_str(&obj.name))?;
+    writeln!(out, "    \"object_code\": {},", obj.object_code)?;
+    writeln!(out, "    \"entries\": [")?;
+    for (i, d) in entries.iter().enumerate() {
+        let e = &d.info;
+        let mut line = format!(
+            "{{ \"sub\": {}, \"name\": {}, \"type\": {}, \"type_code\": {}, \"bit_len\": {}, \
+             \"access\": \"{}\", \"unit\": \"{}\", \"default\": {}, \"min\": {}, \"max\": {}, \
+             \"value\": ",
+            e.sub,
+            cli::json_str(&e.name),
+            cli::json_str(&cli::type_name(e.data_type)),
+            e.data_type,
+            e.bit_len,
+            cli::access_text(e.access),
+            cli::unit_text(e.unit),
+            opt(&e.default, e),
+            opt(&e.min, e),
+            opt(&e.max, e),
+        );
+        match &d.value {
+            Ok(v) => {
+                line.push_str(&v.to_json());
+                if let cli::Value::Enum { text: Some(t), .. } = v {
+                    line.push_str(&format!(", \"value_text\": {}", cli::json_str(t)));
+                }
+            }
+            Err(s) => {
+                line.push_str("null");
+                if e.access & 0x07 != 0 {
+                    line.push_str(&format!(", \"error\": {}", cli::json_str(s)));
+                }
+            }
+        }
+        line.push_str(" }");
+        let comma = if i + 1 == entries.len() { "" } else { "," };
+        writeln!(out, "      {line}{comma}")?;
+    }
+    writeln!(out, "    ]")?;
+    writeln!(out, "  }}{}", if last { "" } else { "," })
 }
 
 /// Decodes the directional input image (0x1A00 + 0x1A02) as one line.

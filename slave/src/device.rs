@@ -21,7 +21,7 @@ use crate::od::model;
 use crate::od::store::{self, ObjectStore};
 use crate::od::types::{DataType, PdoMapping};
 use crate::params::{self, STORAGE_SIZE, Stored};
-use crate::pdo::{Direction, MAX_IMAGE, PdoError, ProcessImage};
+use crate::pdo::{Direction, MAX_IMAGE, PdoError, PdoMode, ProcessImage};
 use crate::sii;
 use crate::wire::coe::SdoAbortCode;
 
@@ -262,6 +262,29 @@ fn encode_sii(out: &mut [u8]) -> Result<usize, sii::SiiError> {
     sii::encode(&cfg, out)
 }
 
+/// The PDO mode F800:02 FUNCTION selects.
+fn function_mode(store: &ObjectStore) -> PdoMode {
+    if store.get(0xF800, 2) == Some(2) {
+        PdoMode::Independent
+    } else {
+        PdoMode::Directional
+    }
+}
+
+/// The extended default assignment of a mode (manual 7.1, "Directional
+/// Mode (Extended)" / "Independent Mode (Extended)").
+fn select_assignment(store: &mut ObjectStore, mode: PdoMode) {
+    let (rx, tx) = match mode {
+        PdoMode::Directional => (0x1600, [0x1A00, 0x1A02]),
+        PdoMode::Independent => (0x1601, [0x1A01, 0x1A03]),
+    };
+    store.set(0x1C12, 0, 1);
+    store.set(0x1C12, 1, rx);
+    store.set(0x1C13, 0, 2);
+    store.set(0x1C13, 1, tx[0]);
+    store.set(0x1C13, 2, tx[1]);
+}
+
 /// The PAM-199 firmware on an ESC reached through the PDI, driving the
 /// solenoids through a [`PowerStage`] and keeping its parameters in an
 /// [`NvStorage`].
@@ -284,6 +307,8 @@ pub struct Slave<E: Esc, P: PowerStage = SimPowerStage, N: NvStorage = MemNv<STO
     mailbox: MailboxServer,
     /// A response waiting for SM1 to become free.
     pending: Option<(usize, [u8; MAX_MAILBOX])>,
+    /// The last response written to SM1, for the repeat service.
+    last_sent: Option<(usize, [u8; MAX_MAILBOX])>,
     now_ns: u64,
 }
 
@@ -353,6 +378,16 @@ impl<E: Esc> TransitionChecks for Checks<'_, E> {
                 return Err(AlStatusCode::InvalidInputConfig);
             }
         }
+        // The assignment must match F800:02 FUNCTION (writing FUNCTION in
+        // PRE-OP selects the matching assignment; a later hand-written
+        // assignment of the other mode is refused here).
+        let function = function_mode(self.store);
+        if outputs.mode().is_some_and(|m| m != function) {
+            return Err(AlStatusCode::InvalidOutputConfig);
+        }
+        if inputs.mode().is_some_and(|m| m != function) {
+            return Err(AlStatusCode::InvalidInputConfig);
+        }
         let sm2 = read_sm(self.esc, 2).map_err(|_| AlStatusCode::InvalidOutputConfig)?;
         let sm3 = read_sm(self.esc, 3).map_err(|_| AlStatusCode::InvalidInputConfig)?;
         let out_ok = if outputs.byte_len() == 0 {
@@ -382,6 +417,13 @@ impl<E: Esc> TransitionChecks for Checks<'_, E> {
     }
 
     fn check_outputs(&mut self) -> Result<(), AlStatusCode> {
+        // SAFE-OP -> OP needs valid outputs: an expired SyncManager watchdog
+        // is re-armed only by fresh outputs from the master.
+        let time = self.esc.read_u16(reg::WATCHDOG_TIME_PD).unwrap_or(0);
+        let status = self.esc.read_u16(reg::WATCHDOG_STATUS_PD).unwrap_or(1);
+        if time != 0 && status & 1 == 0 {
+            return Err(AlStatusCode::SmWatchdog);
+        }
         Ok(())
     }
 }
@@ -418,6 +460,7 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
             inputs: ProcessImage::default(),
             mailbox: MailboxServer::new(),
             pending: None,
+            last_sent: None,
             now_ns: 0,
         }
     }
@@ -509,6 +552,7 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
             let control = self.esc.read_u16(reg::AL_CONTROL)?;
             self.al_control(control)?;
         }
+        self.supervise()?;
         if matches!(
             self.al.state,
             AlState::PreOp | AlState::SafeOp | AlState::Op | AlState::Boot
@@ -528,6 +572,82 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
         Ok(())
     }
 
+    /// Changes state on the device's own account (error indication set).
+    fn local_error(&mut self, state: AlState, code: AlStatusCode) -> Result<(), EscError> {
+        if self.al.state == AlState::Op && state != AlState::Op {
+            self.safe_outputs();
+        }
+        if matches!(state, AlState::Init) {
+            self.pending = None;
+            self.last_sent = None;
+            self.mailbox = MailboxServer::new();
+        }
+        self.al = AlStatus {
+            state,
+            error: true,
+            code,
+        };
+        self.esc.write_u16(reg::AL_STATUS_CODE, code.code())?;
+        self.esc.write_u16(reg::AL_STATUS, self.al.register())
+    }
+
+    /// Watches what can end a state without a request: the SyncManager
+    /// watchdog in OP (-> SAFE-OP, 0x001B), a changed mailbox SM above INIT
+    /// (-> INIT, 0x0016 / 0x0015 in BOOT) and a changed process-data SM in
+    /// SAFE-OP/OP (-> PRE-OP, 0x001D / 0x001E).
+    fn supervise(&mut self) -> Result<(), EscError> {
+        if self.al.state == AlState::Op {
+            let time = self.esc.read_u16(reg::WATCHDOG_TIME_PD)?;
+            let status = self.esc.read_u16(reg::WATCHDOG_STATUS_PD)?;
+            if time != 0 && status & 1 == 0 {
+                return self.local_error(AlState::SafeOp, AlStatusCode::SmWatchdog);
+            }
+        }
+        if self.al.state != AlState::Init {
+            let boot = self.al.state == AlState::Boot;
+            let (out, inp) = self.mailbox_layout();
+            let mut checks = Checks {
+                esc: &mut self.esc,
+                store: &self.store,
+                images: None,
+            };
+            if !checks.mailbox_matches(out, inp) {
+                let code = if boot {
+                    AlStatusCode::InvalidMailboxBoot
+                } else {
+                    AlStatusCode::InvalidMailboxPreOp
+                };
+                return self.local_error(AlState::Init, code);
+            }
+        }
+        if matches!(self.al.state, AlState::SafeOp | AlState::Op) {
+            let sm2 = read_sm(&mut self.esc, 2)?;
+            let sm3 = read_sm(&mut self.esc, 3)?;
+            let out_ok = self.outputs.byte_len() == 0
+                || (sm2.3
+                    && sm2.0 == LAYOUT.pd_out
+                    && usize::from(sm2.1) == self.outputs.byte_len());
+            let in_ok = self.inputs.byte_len() == 0
+                || (sm3.3 && sm3.0 == LAYOUT.pd_in && usize::from(sm3.1) == self.inputs.byte_len());
+            if !out_ok {
+                return self.local_error(AlState::PreOp, AlStatusCode::InvalidOutputConfig);
+            }
+            if !in_ok {
+                return self.local_error(AlState::PreOp, AlStatusCode::InvalidInputConfig);
+            }
+        }
+        Ok(())
+    }
+
+    /// RUN and ERR LED patterns (manual 4.1); `pdi_watchdog_expired` comes
+    /// from the ESC.
+    pub fn led_patterns(
+        &self,
+        pdi_watchdog_expired: bool,
+    ) -> (crate::led::LedPattern, crate::led::LedPattern) {
+        crate::led::patterns(&self.al, pdi_watchdog_expired)
+    }
+
     fn al_control(&mut self, control: u16) -> Result<(), EscError> {
         let before = self.al;
         let mut checks = Checks {
@@ -545,6 +665,7 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
         }
         if matches!(after.state, AlState::Init | AlState::Boot) && before.state != after.state {
             self.pending = None;
+            self.last_sent = None;
             self.mailbox = MailboxServer::new();
         }
         self.al = after;
@@ -592,11 +713,40 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
             if let Some(f) = frame.get(..n) {
                 self.esc.write(inp.0, f)?;
             }
+            self.last_sent = Some((len, frame));
         }
         Ok(())
     }
 
+    /// Mailbox repeat (ETG.1000.4 SyncManager repeat): when the master
+    /// toggles the repeat request bit of SM1 (activate byte bit 1), the
+    /// last response is put into SM1 again and the repeat acknowledge bit
+    /// (PDI control bit 1) is toggled to match.
+    fn serve_repeat(&mut self) -> Result<(), EscError> {
+        let base = reg::sm(1).ok_or(EscError::OutOfRange { addr: 0, len: 0 })?;
+        let request = self.esc.read_u8(base + smr::ACTIVATE)? & smr::ACTIVATE_REPEAT;
+        let pdi = self.esc.read_u8(base + smr::PDI_CONTROL)?;
+        if request == pdi & smr::PDI_REPEAT_ACK {
+            return Ok(());
+        }
+        if !self.sm_full(1)? {
+            if let Some((_, frame)) = &self.last_sent {
+                let (_, inp) = self.mailbox_layout();
+                let n = usize::from(inp.1).min(MAX_MAILBOX);
+                let copy = *frame;
+                if let Some(f) = copy.get(..n) {
+                    self.esc.write(inp.0, f)?;
+                }
+            }
+        }
+        self.esc.write(
+            base + smr::PDI_CONTROL,
+            &[(pdi & !smr::PDI_REPEAT_ACK) | request],
+        )
+    }
+
     fn serve_mailbox(&mut self) -> Result<(), EscError> {
+        self.serve_repeat()?;
         self.deliver_pending()?;
         // One request at a time: a new request waits in SM0 until the
         // previous response has left.
@@ -728,6 +878,17 @@ impl<E: Esc, P: PowerStage, N: NvStorage> ObjectAccess for OdAccess<'_, E, P, N>
         if index == 0xF80F && !self.slave.unlocked {
             return Err(SdoAbortCode::UnsupportedAccess);
         }
+        // F800:02 FUNCTION changes the process image: PRE-OP only, and it
+        // selects the matching extended PDO assignment.
+        if index == 0xF800 && sub == 2 {
+            if self.state != AlState::PreOp {
+                return Err(SdoAbortCode::InvalidState);
+            }
+            self.slave.store.set_value(flat, value);
+            let mode = function_mode(&self.slave.store);
+            select_assignment(&mut self.slave.store, mode);
+            return Ok(());
+        }
         // Manual 6.4.5: with ACC = ON the controller gains follow the PWM
         // frequency and cannot be set by the user.
         if matches!(index, 0x800D | 0x801D | 0x802D)
@@ -799,8 +960,23 @@ impl<E: Esc, P: PowerStage, N: NvStorage> OdAccess<'_, E, P, N> {
                 return Err(SdoAbortCode::LocalControl);
             }
         }
+        let old_mode = function_mode(&self.slave.store);
+        if index == 0xF800 {
+            let new_mode = match new_value(2) {
+                Some(2) => PdoMode::Independent,
+                Some(_) => PdoMode::Directional,
+                None => old_mode,
+            };
+            if new_mode != old_mode && self.state != AlState::PreOp {
+                return Err(SdoAbortCode::InvalidState);
+            }
+        }
         for (flat, value) in changes {
             self.slave.store.set_value(flat, value);
+        }
+        let mode = function_mode(&self.slave.store);
+        if mode != old_mode {
+            select_assignment(&mut self.slave.store, mode);
         }
         Ok(())
     }
@@ -813,6 +989,8 @@ pub type ImageError = PdoError;
 pub struct SoftSlave {
     inner: Slave<SoftEsc, SimPowerStage, MemNv<STORAGE_SIZE>>,
     port1_link: bool,
+    stalled: bool,
+    now_ns: u64,
 }
 
 impl core::fmt::Debug for SoftSlave {
@@ -834,6 +1012,8 @@ impl SoftSlave {
         SoftSlave {
             inner: Slave::new(SoftEsc::new(&sii), SimPowerStage::new(), MemNv::new()),
             port1_link: false,
+            stalled: false,
+            now_ns: 0,
         }
     }
 
@@ -851,10 +1031,42 @@ impl SoftSlave {
         self.inner.esc.process_frame(frame)
     }
 
-    /// Runs the firmware once. A PDI failure cannot happen on the software
-    /// ESC; should it, the poll is retried at the next call.
+    /// Runs the ESC's watchdogs and then the firmware once. A PDI failure
+    /// cannot happen on the software ESC; should it, the poll is retried at
+    /// the next call. While the firmware is stalled
+    /// ([`SoftSlave::set_stalled`]) only the ESC runs; once its PDI
+    /// watchdog expires the outputs go to the safe state.
     pub fn poll(&mut self, now_ns: u64) {
+        self.inner.esc.update_watchdogs(now_ns);
+        if self.stalled {
+            if self.inner.esc.pdi_watchdog_expired() {
+                self.inner.stage.disable();
+            }
+            return;
+        }
         let _ = self.inner.poll(now_ns);
+        // Stamp the firmware's PDI accesses with the time they happened.
+        self.inner.esc.update_watchdogs(now_ns);
+        self.now_ns = now_ns;
+    }
+
+    /// Simulates the application task stalling (it stops serving the ESC)
+    /// or resuming.
+    pub fn set_stalled(&mut self, stalled: bool) {
+        self.stalled = stalled;
+    }
+
+    /// RUN and ERR LED patterns now.
+    pub fn led_patterns(&self) -> (crate::led::LedPattern, crate::led::LedPattern) {
+        self.inner
+            .led_patterns(self.inner.esc.pdi_watchdog_expired())
+    }
+
+    /// Whether RUN and ERR are lit at the last poll's time.
+    pub fn leds(&self) -> (bool, bool) {
+        let (run, err) = self.led_patterns();
+        let t = self.now_ns / 1_000_000;
+        (run.is_on(t), err.is_on(t))
     }
 
     /// Sets whether port 1 has a link (every slave but the last).

@@ -31,6 +31,7 @@ pub mod foe;
 pub mod hal;
 #[cfg(feature = "std")]
 pub mod host;
+pub mod led;
 pub mod mailbox;
 pub mod od;
 pub mod params;

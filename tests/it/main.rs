@@ -10,4 +10,5 @@ mod common;
 mod consistency;
 mod sdo;
 mod sii;
+mod state;
 mod veth;

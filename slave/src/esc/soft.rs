@@ -121,6 +121,18 @@ pub struct SoftEsc {
     /// Cached 0x0010 / 0x0012 for configured addressing (hot path).
     station: u16,
     alias: u16,
+    /// An output SM with watchdog trigger was completed since the last
+    /// watchdog update.
+    wd_sm_trigger: bool,
+    /// Time the SM watchdog was last re-armed (None: not armed yet).
+    wd_sm_armed_at: Option<u64>,
+    /// The PDI accessed the ESC since the last watchdog update.
+    pdi_touched: bool,
+    /// Time of the last PDI access seen by the watchdog.
+    wd_pdi_at: Option<u64>,
+    /// The master wrote a watchdog divider or time: both watchdogs restart
+    /// their count at the next update.
+    wd_restart: bool,
 }
 
 impl core::fmt::Debug for SoftEsc {
@@ -147,6 +159,11 @@ impl SoftEsc {
             sm_written: 0,
             station: 0,
             alias: 0,
+            wd_sm_trigger: false,
+            wd_sm_armed_at: None,
+            pdi_touched: false,
+            wd_pdi_at: None,
+            wd_restart: false,
         };
         let n = sii.len().min(SII_SIZE);
         if let (Some(dst), Some(src)) = (esc.sii.get_mut(..n), sii.get(..n)) {
@@ -165,6 +182,10 @@ impl SoftEsc {
         self.fmmu_active = 0;
         self.sm_active = 0;
         self.sm_written = 0;
+        self.wd_sm_trigger = false;
+        self.wd_sm_armed_at = None;
+        self.pdi_touched = false;
+        self.wd_pdi_at = None;
         self.set_u8(reg::TYPE, 0x11);
         self.set_u8(reg::REVISION, 0x02);
         self.set_u8(reg::FMMU_COUNT, FMMU_COUNT as u8);
@@ -223,6 +244,60 @@ impl SoftEsc {
     pub fn set_pdi_watchdog_ok(&mut self, ok: bool) {
         let dl = self.mem_u16(reg::DL_STATUS);
         self.set_u16(reg::DL_STATUS, if ok { dl | 0x0002 } else { dl & !0x0002 });
+    }
+
+    /// Watchdog base tick in ns: (0x0400 + 2) x 40 ns (manual 5.11).
+    pub fn watchdog_base_ns(&self) -> u64 {
+        (u64::from(self.mem_u16(reg::WATCHDOG_DIVIDER)) + 2) * 40
+    }
+
+    /// Runs the ESC's watchdogs at time `now_ns`, as silicon does on its
+    /// own clock. The SyncManager (process data) watchdog is re-armed by
+    /// every completed write of an output SM with the watchdog trigger bit
+    /// and expires after 0x0420 base ticks: 0x0440 bit 0 clears and
+    /// 0x0442 counts. The PDI watchdog is re-armed by every PDI access and
+    /// expires after 0x0410 base ticks: DL status bit 1 clears and 0x0443
+    /// counts. A time of 0 disables a watchdog.
+    pub fn update_watchdogs(&mut self, now_ns: u64) {
+        let base = self.watchdog_base_ns();
+        if core::mem::take(&mut self.wd_restart) {
+            if self.wd_sm_armed_at.is_some() {
+                self.wd_sm_armed_at = Some(now_ns);
+            }
+            self.wd_pdi_at = Some(now_ns);
+        }
+        if core::mem::take(&mut self.wd_sm_trigger) {
+            self.wd_sm_armed_at = Some(now_ns);
+            let st = self.mem_u16(reg::WATCHDOG_STATUS_PD) | 0x0001;
+            self.set_u16(reg::WATCHDOG_STATUS_PD, st);
+        }
+        let pd_ticks = u64::from(self.mem_u16(reg::WATCHDOG_TIME_PD));
+        if let Some(armed) = self.wd_sm_armed_at {
+            let expired = pd_ticks != 0 && now_ns.saturating_sub(armed) >= pd_ticks * base;
+            let status = self.mem_u16(reg::WATCHDOG_STATUS_PD);
+            if expired && status & 1 != 0 {
+                self.set_u16(reg::WATCHDOG_STATUS_PD, status & !1);
+                let c = self.mem_u8(reg::WATCHDOG_COUNTER_PD).saturating_add(1);
+                self.set_u8(reg::WATCHDOG_COUNTER_PD, c);
+            }
+        }
+        if core::mem::take(&mut self.pdi_touched) || self.wd_pdi_at.is_none() {
+            self.wd_pdi_at = Some(now_ns);
+            self.set_pdi_watchdog_ok(true);
+        }
+        let pdi_ticks = u64::from(self.mem_u16(reg::WATCHDOG_TIME_PDI));
+        let last = self.wd_pdi_at.unwrap_or(now_ns);
+        let dl = self.mem_u16(reg::DL_STATUS);
+        if pdi_ticks != 0 && now_ns.saturating_sub(last) >= pdi_ticks * base && dl & 0x0002 != 0 {
+            self.set_pdi_watchdog_ok(false);
+            let c = self.mem_u8(reg::WATCHDOG_COUNTER_PDI).saturating_add(1);
+            self.set_u8(reg::WATCHDOG_COUNTER_PDI, c);
+        }
+    }
+
+    /// Whether the PDI watchdog has expired (DL status bit 1 clear).
+    pub fn pdi_watchdog_expired(&self) -> bool {
+        self.mem_u16(reg::DL_STATUS) & 0x0002 == 0
     }
 
     /// The SII image as the EEPROM holds it (including master writes).
@@ -616,6 +691,9 @@ impl SoftEsc {
         self.set_sm_status(n, status);
         if !sm.is_mailbox() {
             self.sm_written |= 1 << n;
+            if sm.control & smr::WATCHDOG_TRIGGER != 0 {
+                self.wd_sm_trigger = true;
+            }
         }
         self.raise_al_event(reg::al_event_sm(n as u8));
     }
@@ -640,7 +718,10 @@ impl SoftEsc {
                 }
                 // Error counters: any write clears.
                 0x0300..=0x0313 | 0x0442..=0x0443 => self.set_u8(a, 0),
-                0x0400..=0x0401 | 0x0410..=0x0411 | 0x0420..=0x0421 => self.set_u8(a, v),
+                0x0400..=0x0401 | 0x0410..=0x0411 | 0x0420..=0x0421 => {
+                    self.set_u8(a, v);
+                    self.wd_restart = true;
+                }
                 0x0500..=0x0501 => self.set_u8(a, v),
                 0x0502 => {
                     // Bit 6 (read size) is read-only; bits 0 and 7 writable.
@@ -741,6 +822,13 @@ impl SoftEsc {
             || old.enabled != new.enabled
         {
             self.set_sm_status(n, 0);
+            // A (re)configured output SM with watchdog trigger restarts the
+            // process-data watchdog: unarmed until the first output write.
+            if new.enabled && new.control & smr::WATCHDOG_TRIGGER != 0 {
+                self.wd_sm_armed_at = None;
+                let st = self.mem_u16(reg::WATCHDOG_STATUS_PD) | 1;
+                self.set_u16(reg::WATCHDOG_STATUS_PD, st);
+            }
         }
     }
 
@@ -907,6 +995,7 @@ impl SoftEsc {
 
 impl Esc for SoftEsc {
     fn read(&mut self, addr: u16, buf: &mut [u8]) -> Result<(), EscError> {
+        self.pdi_touched = true;
         let a = u32::from(addr);
         let b = a + buf.len() as u32;
         if b as usize > MEM_SIZE {
@@ -944,6 +1033,7 @@ impl Esc for SoftEsc {
     }
 
     fn write(&mut self, addr: u16, data: &[u8]) -> Result<(), EscError> {
+        self.pdi_touched = true;
         let a = u32::from(addr);
         let b = a + data.len() as u32;
         if b as usize > MEM_SIZE {
@@ -1309,6 +1399,92 @@ mod tests {
         e.process_frame(&mut f);
         assert_eq!(wkc(&f, &r[0]), 0);
         assert_eq!(f[14..], before[14..]);
+    }
+
+    #[test]
+    fn sm_watchdog_expires_after_1000_ticks_of_100_us_and_rearms_on_output_writes() {
+        let mut e = esc();
+        configure_process_data(&mut e);
+        assert_eq!(e.watchdog_base_ns(), 100_000, "default 2498 gives 100 us");
+        let (mut f, _) = frame(&[(Command::Lrw, 0, &[1, 2, 0, 0])]);
+        e.process_frame(&mut f);
+        e.update_watchdogs(0);
+        e.update_watchdogs(99_999_999);
+        assert_eq!(
+            e.mem_u16(reg::WATCHDOG_STATUS_PD) & 1,
+            1,
+            "not yet at 99.99 ms"
+        );
+        e.update_watchdogs(100_000_000);
+        assert_eq!(
+            e.mem_u16(reg::WATCHDOG_STATUS_PD) & 1,
+            0,
+            "expired at 100 ms"
+        );
+        assert_eq!(e.mem_u8(reg::WATCHDOG_COUNTER_PD), 1);
+        e.update_watchdogs(300_000_000);
+        assert_eq!(e.mem_u8(reg::WATCHDOG_COUNTER_PD), 1, "counted once");
+        let (mut f, _) = frame(&[(Command::Lrw, 0, &[1, 2, 0, 0])]);
+        e.process_frame(&mut f);
+        e.update_watchdogs(300_000_001);
+        assert_eq!(
+            e.mem_u16(reg::WATCHDOG_STATUS_PD) & 1,
+            1,
+            "fresh outputs re-arm"
+        );
+    }
+
+    #[test]
+    fn watchdog_time_zero_disables_and_the_divider_scales_the_tick() {
+        let mut e = esc();
+        configure_process_data(&mut e);
+        let (mut f, _) = frame(&[(Command::Bwr, phys(0, reg::WATCHDOG_TIME_PD), &[0, 0])]);
+        e.process_frame(&mut f);
+        let (mut f, _) = frame(&[(Command::Lrw, 0, &[1, 2, 0, 0])]);
+        e.process_frame(&mut f);
+        e.update_watchdogs(0);
+        e.update_watchdogs(10_000_000_000);
+        assert_eq!(e.mem_u16(reg::WATCHDOG_STATUS_PD) & 1, 1, "0 disables");
+        // Divider 4998: 200 us ticks; 1000 ticks = 200 ms.
+        let (mut f, _) = frame(&[
+            (
+                Command::Bwr,
+                phys(0, reg::WATCHDOG_TIME_PD),
+                &1000u16.to_le_bytes(),
+            ),
+            (
+                Command::Bwr,
+                phys(0, reg::WATCHDOG_DIVIDER),
+                &4998u16.to_le_bytes(),
+            ),
+            (Command::Lrw, 0, &[1, 2, 0, 0]),
+        ]);
+        e.process_frame(&mut f);
+        e.update_watchdogs(20_000_000_000);
+        e.update_watchdogs(20_199_000_000);
+        assert_eq!(e.mem_u16(reg::WATCHDOG_STATUS_PD) & 1, 1);
+        e.update_watchdogs(20_200_000_000);
+        assert_eq!(e.mem_u16(reg::WATCHDOG_STATUS_PD) & 1, 0);
+    }
+
+    #[test]
+    fn pdi_watchdog_expires_when_the_firmware_stops_accessing_the_esc() {
+        let mut e = esc();
+        e.read_u16(reg::AL_CONTROL).unwrap();
+        e.update_watchdogs(0);
+        e.update_watchdogs(50_000_000);
+        assert!(!e.pdi_watchdog_expired());
+        e.update_watchdogs(100_000_000);
+        assert!(e.pdi_watchdog_expired());
+        assert_eq!(e.mem_u8(reg::WATCHDOG_COUNTER_PDI), 1);
+        assert_eq!(
+            e.mem_u16(reg::DL_STATUS) & 0x0002,
+            0,
+            "visible to the master"
+        );
+        e.read_u16(reg::AL_CONTROL).unwrap();
+        e.update_watchdogs(100_000_001);
+        assert!(!e.pdi_watchdog_expired());
     }
 
     #[test]
