@@ -97,6 +97,7 @@ pub struct MailboxClient<'a> {
     station: u16,
     geometry: MailboxGeometry,
     counter: u8,
+    started: bool,
     /// How long to wait for a response.
     pub timeout: Duration,
 }
@@ -109,6 +110,7 @@ impl<'a> MailboxClient<'a> {
             station,
             geometry,
             counter: 0,
+            started: false,
             timeout: Duration::from_secs(2),
         }
     }
@@ -116,8 +118,16 @@ impl<'a> MailboxClient<'a> {
     /// Sends one mailbox message of `kind` with `payload`, using the next
     /// counter value. Returns the counter used.
     pub async fn send(&mut self, kind: MailboxType, payload: &[u8]) -> Result<u8, ClientError> {
-        self.counter = next_counter(self.counter);
-        let counter = self.counter;
+        // The first message goes out with counter 0 ("not used"): another
+        // master (ethercrab) may have used any counter before, and a slave
+        // ignores a message that repeats its last counter.
+        let counter = if self.started {
+            self.counter = next_counter(self.counter);
+            self.counter
+        } else {
+            self.started = true;
+            0
+        };
         self.send_raw(kind, counter, payload).await?;
         Ok(counter)
     }

@@ -11,6 +11,7 @@ use crate::al::{self, AlState, AlStatus, AlStatusCode, TransitionChecks};
 use crate::app::amplifier::Amplifier;
 use crate::app::power_stage::{PowerStage, SimPowerStage};
 use crate::coe::ObjectAccess;
+use crate::coe::emergency::{Emergencies, FaultState};
 use crate::esc::registers::{self as reg, sm as smr};
 use crate::esc::soft::{FrameOutcome, SII_SIZE, SoftEsc};
 use crate::esc::{Esc, EscError};
@@ -309,6 +310,8 @@ pub struct Slave<E: Esc, P: PowerStage = SimPowerStage, N: NvStorage = MemNv<STO
     pending: Option<(usize, [u8; MAX_MAILBOX])>,
     /// The last response written to SM1, for the repeat service.
     last_sent: Option<(usize, [u8; MAX_MAILBOX])>,
+    emergencies: Emergencies,
+    emergencies_enabled: bool,
     now_ns: u64,
 }
 
@@ -461,6 +464,8 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
             mailbox: MailboxServer::new(),
             pending: None,
             last_sent: None,
+            emergencies: Emergencies::default(),
+            emergencies_enabled: true,
             now_ns: 0,
         }
     }
@@ -566,6 +571,7 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
         let outputs_valid = self.al.state == AlState::Op;
         self.amplifier
             .run_until(&mut self.store, &mut self.stage, now_ns, outputs_valid);
+        self.update_error_register();
         if pd {
             self.write_inputs()?;
         }
@@ -639,6 +645,39 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
         Ok(())
     }
 
+    /// Sends CoE Emergency messages (default on). Masters that cannot take
+    /// an unsolicited emergency in the mailbox (ethercrab 0.7.1 fails when
+    /// one arrives instead of an SDO response) may switch them off; 0x1001
+    /// is kept either way.
+    pub fn set_emergencies(&mut self, enabled: bool) {
+        self.emergencies_enabled = enabled;
+    }
+
+    /// Emergencies waiting for the master.
+    pub fn emergencies_waiting(&self) -> usize {
+        self.emergencies.len()
+    }
+
+    /// Derives the fault state from the diagnosis objects and the AL
+    /// status, queues emergencies for new faults and writes 0x1001.
+    fn update_error_register(&mut self) {
+        let d = |i: u16, s: u8| self.store.get(i, s) == Some(1);
+        let state = FaultState {
+            short: [d(0xA010, 1), d(0xA020, 1)],
+            open: [d(0xA010, 2), d(0xA020, 2)],
+            overvoltage: d(0xA000, 3),
+            undervoltage: d(0xA000, 2),
+            overtemperature: d(0xA000, 4),
+            eeprom: d(0xA000, 1),
+            watchdog: self.al.error && self.al.code == AlStatusCode::SmWatchdog,
+        };
+        let reg = self.emergencies.update(state, self.al.code.code());
+        self.store.set(0x1001, 0, i64::from(reg));
+        if !self.emergencies_enabled {
+            while self.emergencies.pop_into(&mut [0u8; 16]).is_some() {}
+        }
+    }
+
     /// RUN and ERR LED patterns (manual 4.1); `pdi_watchdog_expired` comes
     /// from the ESC.
     pub fn led_patterns(
@@ -656,6 +695,9 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
             images: None,
         };
         let after = al::transition(before, control, &mut checks);
+        if after.error && !before.error && before.state == AlState::PreOp && (control & 0x0F) == 4 {
+            self.emergencies.transition_refused(after.code.code());
+        }
         if let Some((o, i)) = checks.images.take() {
             self.outputs = o;
             self.inputs = i;
@@ -758,9 +800,16 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
             let (_, inp) = self.mailbox_layout();
             let max = usize::from(inp.1).min(MAX_MAILBOX);
             let mut response = [0u8; MAX_MAILBOX];
-            let produced = response
+            let mut produced = response
                 .get_mut(..max)
                 .and_then(|r| self.mailbox.next_pending(r));
+            if produced.is_none() && self.emergencies_enabled && !self.emergencies.is_empty() {
+                produced = response.get_mut(..max).and_then(|r| {
+                    let body = r.get_mut(crate::wire::mailbox::HEADER_LEN..)?;
+                    let n = self.emergencies.pop_into(body)?;
+                    self.mailbox.frame_coe(r, n)
+                });
+            }
             if let Some(len) = produced {
                 self.pending = Some((len, response));
                 self.deliver_pending()?;
@@ -1048,6 +1097,12 @@ impl SoftSlave {
         // Stamp the firmware's PDI accesses with the time they happened.
         self.inner.esc.update_watchdogs(now_ns);
         self.now_ns = now_ns;
+    }
+
+    /// Switches CoE Emergency messages on or off (see
+    /// [`Slave::set_emergencies`]).
+    pub fn set_emergencies(&mut self, enabled: bool) {
+        self.inner.set_emergencies(enabled);
     }
 
     /// Simulates the application task stalling (it stops serving the ESC)

@@ -77,6 +77,12 @@ impl MailboxServer {
         self.frame(out, MailboxType::CoE, n)
     }
 
+    /// Frames a CoE payload of `len` bytes already written after the
+    /// mailbox header in `out` (emergencies); returns the total length.
+    pub fn frame_coe(&mut self, out: &mut [u8], len: usize) -> Option<usize> {
+        self.frame(out, MailboxType::CoE, len)
+    }
+
     /// Writes the mailbox header for a `len`-byte payload already in place.
     fn frame(&mut self, out: &mut [u8], kind: MailboxType, len: usize) -> Option<usize> {
         let repr = MailboxRepr {

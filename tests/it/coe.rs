@@ -270,3 +270,49 @@ fn every_entry_reads_its_default_and_every_rw_entry_round_trips_both_paths() {
         assert!(written > 100, "{written} RW entries written on both paths");
     });
 }
+
+#[test]
+fn an_injected_fault_produces_an_emergency_the_master_decodes() {
+    use master_test::link::lock;
+    use pam_slave::app::power_stage::{Fault, Solenoid};
+    use pam_slave::wire::coe::{CoeHeader, CoeService, Emergency, EmergencyRepr};
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let station = group.subdevice(md, 0).expect("slave").configured_address();
+        let group = group.into_op(md).await.expect("op");
+        for _ in 0..50 {
+            let sd = group.subdevice(md, 0).unwrap();
+            let mut out = sd.outputs_raw_mut();
+            out[0] = 1;
+            out[1..5].copy_from_slice(&5000i32.to_le_bytes());
+            drop(out);
+            group.tx_rx(md).await.unwrap();
+            smol::Timer::after(std::time::Duration::from_millis(1)).await;
+        }
+        lock(&bus.chain).slaves_mut()[0]
+            .slave_mut()
+            .stage_mut()
+            .inject(Fault::ShortCircuit(Solenoid::A));
+        let mut c = MailboxClient::new(md, station, MailboxGeometry::standard());
+        let mut got = None;
+        for _ in 0..20 {
+            group.tx_rx(md).await.unwrap();
+            if let Ok(m) = c.receive().await {
+                got = Some(m);
+                break;
+            }
+        }
+        let m = got.expect("an emergency arrives");
+        assert_eq!(m.kind, MailboxType::CoE);
+        let coe = CoeHeader::new_checked(&m.payload[..]).unwrap();
+        assert_eq!(coe.service(), CoeService::Emergency);
+        let e = EmergencyRepr::parse(&Emergency::new_checked(&m.payload[2..]).unwrap()).unwrap();
+        assert_eq!(e.error_code, 0x2320, "short circuit");
+        assert_eq!(e.error_register, 0x03, "generic + current");
+        assert_eq!(e.data[0], 1, "solenoid A");
+        let reg = c.sdo_upload(0x1001, 0, false).await.expect("0x1001");
+        assert_eq!(reg, [0x03], "error register consistent");
+    });
+}

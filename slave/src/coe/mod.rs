@@ -5,6 +5,7 @@
 //! [`ObjectAccess`] trait that the device implements, so this layer holds
 //! no object values and knows nothing of the ESC.
 
+pub mod emergency;
 pub mod sdo;
 pub mod sdo_info;
 
