@@ -176,7 +176,7 @@ async fn demo(
             id.revision
         );
     }
-    println!("state: PRE-OP");
+    println!("state: PRE-OP   LEDs {}", leds(&bus));
     for sd in group.iter(md) {
         sd.sdo_write(0x800D, 2, current).await?;
         let back: u16 = sd.sdo_read(0x800D, 2).await?;
@@ -196,7 +196,7 @@ async fn demo(
         }
     }
     let group = group.into_op(md).await?;
-    println!("state: OP");
+    println!("state: OP       LEDs {}", leds(&bus));
     println!(
         "driving ENABLE=1, COMMAND VALUE={command} ({:.1} % of IO_BASE 10000) for {cycles} ms",
         f64::from(command) / 100.0
@@ -247,7 +247,7 @@ async fn demo(
     let group = group.into_safe_op(md).await?;
     let group = group.into_pre_op(md).await?;
     let _ = group.into_init(md).await?;
-    println!("state: INIT (done)");
+    println!("state: INIT (done)   LEDs {}", leds(&bus));
     if let Some(p) = pcap {
         drop(bus);
         println!(
@@ -489,6 +489,18 @@ fn write_json_object(
     }
     writeln!(out, "    ]")?;
     writeln!(out, "  }}{}", if last { "" } else { "," })
+}
+
+/// RUN / ERR LED patterns of the first slave (manual 4.1).
+fn leds(bus: &VirtualBus) -> String {
+    let chain = lock(&bus.chain);
+    match chain.slaves().first() {
+        Some(s) => {
+            let (run, err) = s.led_patterns();
+            format!("RUN {}, ERR {}", run.name(), err.name())
+        }
+        None => String::new(),
+    }
 }
 
 /// Decodes the directional input image (0x1A00 + 0x1A02) as one line.
