@@ -15,8 +15,11 @@ use crate::wire::mailbox::{
 #[derive(Debug, Default)]
 pub struct MailboxServer {
     coe: CoeServer,
-    /// Counter of the last request processed (1..7), to drop repeats.
-    last_counter: Option<u8>,
+    /// Counter and content checksum of the last request processed, to drop
+    /// repeats: a retransmission carries the same counter and the same
+    /// bytes (two masters' sequences may share a counter value with
+    /// different content, which is not a repeat).
+    last_request: Option<(u8, u32)>,
     /// Counter of the last response sent (1..7).
     tx_counter: u8,
 }
@@ -49,12 +52,14 @@ impl MailboxServer {
             Err(_) => return self.error_reply(out, MailboxErrorCode::InvalidSize),
         };
         let counter = mbx.counter();
-        if counter != 0 && self.last_counter == Some(counter) {
-            // A repeated counter: the master sent the same mailbox again;
-            // it is not executed twice.
+        let digest =
+            crate::firmware::crc32(mbx.payload()) ^ u32::from(u8::from(mbx.mailbox_type()));
+        if counter != 0 && self.last_request == Some((counter, digest)) {
+            // A repeated mailbox (same counter, same content): the master
+            // sent it again; it is not executed twice.
             return None;
         }
-        self.last_counter = (counter != 0).then_some(counter);
+        self.last_request = (counter != 0).then_some((counter, digest));
         let header_len = HEADER_LEN;
         match mbx.mailbox_type() {
             MailboxType::CoE => {

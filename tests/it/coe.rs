@@ -154,26 +154,28 @@ fn malformed_mailboxes_get_error_replies_and_repeated_counters_run_once() {
             .expect("send");
         let m = c.receive().await.expect("reply");
         assert_eq!(m.kind, MailboxType::Error);
-        // The same counter twice: the second write is not executed.
-        let req = |v: u16| {
-            let mut p = vec![0x00, 0x20, 0x2B, 0x0D, 0x80, 0x02];
-            p.extend_from_slice(&v.to_le_bytes());
-            p.extend_from_slice(&[0, 0]);
-            p
-        };
-        c.send_raw(MailboxType::CoE, 5, &req(2100))
-            .await
-            .expect("send");
+        // The same mailbox twice (counter and content): executed once. SAVE
+        // shows it: a second execution would write the EEPROM again (and be
+        // refused by the SAVE rate limit).
+        let save = [0x00, 0x20, 0x23, 0x01, 0xF8, 0x02, 1, 0, 0, 0];
+        c.send_raw(MailboxType::CoE, 5, &save).await.expect("send");
         c.receive().await.expect("ack");
-        c.send_raw(MailboxType::CoE, 5, &req(2900))
+        c.send_raw(MailboxType::CoE, 5, &save)
             .await
-            .expect("send");
-        let v = c.sdo_upload(0x800D, 2, false).await.expect("read");
-        assert_eq!(
-            v,
-            2100u16.to_le_bytes(),
-            "repeated counter not executed twice"
+            .expect("send again");
+        assert!(
+            c.receive().await.is_err(),
+            "no second response: not executed again"
         );
+        let writes = master_test::link::lock(&bus.chain).slaves()[0]
+            .slave()
+            .nv()
+            .write_count();
+        assert_eq!(writes, 1, "EEPROM written once");
+        // Same counter, different content (another master's sequence): served.
+        let read = [0x00, 0x20, 0x40, 0x18, 0x10, 0x02, 0, 0, 0, 0];
+        c.send_raw(MailboxType::CoE, 5, &read).await.expect("send");
+        assert!(c.receive().await.is_ok(), "not taken for a repeat");
         let e = ClientError::Mailbox(MailboxErrorCode::InvalidSize);
         assert!(e.to_string().contains("mailbox error"));
     });
