@@ -82,6 +82,15 @@ impl VirtualBus {
         clock: Clock,
         pcap: Option<&std::path::Path>,
     ) -> Result<Self, BusError> {
+        Self::with_chain(Chain::new(n), clock, pcap)
+    }
+
+    /// A bus over a prepared line of slaves.
+    pub fn with_chain(
+        chain: Chain,
+        clock: Clock,
+        pcap: Option<&std::path::Path>,
+    ) -> Result<Self, BusError> {
         let pcap = pcap
             .map(pam_slave::host::pcap::PcapWriter::create)
             .transpose()?;
@@ -98,7 +107,7 @@ impl VirtualBus {
                 retry_behaviour: RetryBehaviour::None,
             },
         ));
-        let chain = Arc::new(Mutex::new(Chain::new(n)));
+        let chain = Arc::new(Mutex::new(chain));
         let link = Link::spawn(tx, rx, chain.clone(), clock.clone(), pcap)?;
         Ok(VirtualBus {
             maindevice,

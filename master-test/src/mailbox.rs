@@ -83,7 +83,11 @@ pub struct MailboxGeometry {
 impl MailboxGeometry {
     /// The PAM-199's standard mailbox.
     pub fn standard() -> Self {
-        let l = pam_slave::device::LAYOUT;
+        Self::of(&pam_slave::device::LAYOUT)
+    }
+
+    /// The standard mailbox of a memory layout.
+    pub fn of(l: &pam_slave::device::MemoryLayout) -> Self {
         MailboxGeometry {
             out: l.mbx_out,
             inp: l.mbx_in,

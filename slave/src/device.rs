@@ -54,6 +54,7 @@ pub struct MemoryLayout {
 
 /// The default layout: 128-byte standard mailboxes at 0x1000/0x1080, 1 KiB
 /// bootstrap mailboxes at 0x1000/0x1400, outputs at 0x1100, inputs at 0x1180.
+/// Other standard mailbox sizes: [`MemoryLayout::with_mailbox_size`].
 pub const LAYOUT: MemoryLayout = MemoryLayout {
     mbx_out: (0x1000, 128),
     mbx_in: (0x1080, 128),
@@ -62,6 +63,28 @@ pub const LAYOUT: MemoryLayout = MemoryLayout {
     pd_out: 0x1100,
     pd_in: 0x1180,
 };
+
+impl MemoryLayout {
+    /// The default layout with standard mailboxes of `size` bytes each
+    /// (16..=[`MAX_MAILBOX`]): SM0 at 0x1000, SM1 right after it, process
+    /// data after both. The bootstrap mailbox stays 1 KiB at 0x1000/0x1400.
+    pub const fn with_mailbox_size(size: u16) -> Option<Self> {
+        if size < 16 || size as usize > MAX_MAILBOX {
+            return None;
+        }
+        let out = 0x1000;
+        let inp = out + size;
+        let pd_out = inp + size;
+        Some(MemoryLayout {
+            mbx_out: (out, size),
+            mbx_in: (inp, size),
+            boot_out: LAYOUT.boot_out,
+            boot_in: LAYOUT.boot_in,
+            pd_out,
+            pd_in: pd_out + MAX_IMAGE as u16,
+        })
+    }
+}
 
 /// SM control bytes as the SII advertises them.
 const SM_CONTROL: [u8; 4] = [0x26, 0x22, 0x64, 0x20];
@@ -84,13 +107,19 @@ pub const COMMAND_ACK_NS: u64 = 500_000_000;
 /// with abort 0x08000021 (local control).
 pub const SAVE_MIN_INTERVAL_NS: u64 = 1_000_000_000;
 
-/// The SII EEPROM image of the device, encoded from the object dictionary.
+/// The SII EEPROM image of the device, encoded from the object dictionary,
+/// for the default [`LAYOUT`].
 pub fn sii_image() -> [u8; SII_SIZE] {
+    sii_image_for(&LAYOUT)
+}
+
+/// The SII image for a memory layout (mailbox sizes and offsets).
+pub fn sii_image_for(layout: &MemoryLayout) -> [u8; SII_SIZE] {
     let mut out = [0xFFu8; SII_SIZE];
     // The encoder only fails on a model that does not fit the EEPROM; the
     // unit tests guarantee it fits, and an unencodable model yields a blank
     // (all 0xFF) EEPROM that no master accepts.
-    let _ = encode_sii(&mut out);
+    let _ = encode_sii(layout, &mut out);
     out
 }
 
@@ -135,7 +164,7 @@ fn sii_type(t: &DataType) -> u8 {
     (t.code() & 0xFF) as u8
 }
 
-fn encode_sii(out: &mut [u8]) -> Result<usize, sii::SiiError> {
+fn encode_sii(layout: &MemoryLayout, out: &mut [u8]) -> Result<usize, sii::SiiError> {
     const RX: [(u16, Option<u8>); 2] = [(0x1600, Some(2)), (0x1601, None)];
     const TX: [(u16, Option<u8>); 4] = [
         (0x1A00, Some(3)),
@@ -178,28 +207,28 @@ fn encode_sii(out: &mut [u8]) -> Result<usize, sii::SiiError> {
         .map_or(0, |i| i.byte_len()) as u16;
     let sms = [
         sii::SiiSyncManager {
-            start: LAYOUT.mbx_out.0,
-            length: LAYOUT.mbx_out.1,
+            start: layout.mbx_out.0,
+            length: layout.mbx_out.1,
             control: SM_CONTROL[0],
             enable: 0x01,
             sm_type: sii::SmType::MailboxOut,
         },
         sii::SiiSyncManager {
-            start: LAYOUT.mbx_in.0,
-            length: LAYOUT.mbx_in.1,
+            start: layout.mbx_in.0,
+            length: layout.mbx_in.1,
             control: SM_CONTROL[1],
             enable: 0x01,
             sm_type: sii::SmType::MailboxIn,
         },
         sii::SiiSyncManager {
-            start: LAYOUT.pd_out,
+            start: layout.pd_out,
             length: out_len,
             control: SM_CONTROL[2],
             enable: 0x01,
             sm_type: sii::SmType::ProcessOut,
         },
         sii::SiiSyncManager {
-            start: LAYOUT.pd_in,
+            start: layout.pd_in,
             length: in_len,
             control: SM_CONTROL[3],
             enable: 0x01,
@@ -225,16 +254,16 @@ fn encode_sii(out: &mut [u8]) -> Result<usize, sii::SiiError> {
             serial: 0,
         },
         bootstrap_mailbox: sii::SiiMailbox {
-            rx_offset: LAYOUT.boot_out.0,
-            rx_size: LAYOUT.boot_out.1,
-            tx_offset: LAYOUT.boot_in.0,
-            tx_size: LAYOUT.boot_in.1,
+            rx_offset: layout.boot_out.0,
+            rx_size: layout.boot_out.1,
+            tx_offset: layout.boot_in.0,
+            tx_size: layout.boot_in.1,
         },
         standard_mailbox: sii::SiiMailbox {
-            rx_offset: LAYOUT.mbx_out.0,
-            rx_size: LAYOUT.mbx_out.1,
-            tx_offset: LAYOUT.mbx_in.0,
-            tx_size: LAYOUT.mbx_in.1,
+            rx_offset: layout.mbx_out.0,
+            rx_size: layout.mbx_out.1,
+            tx_offset: layout.mbx_in.0,
+            tx_size: layout.mbx_in.1,
         },
         // CoE | FoE.
         mailbox_protocols: 0x0004 | 0x0008,
@@ -291,6 +320,7 @@ fn select_assignment(store: &mut ObjectStore, mode: PdoMode) {
 /// [`NvStorage`].
 pub struct Slave<E: Esc, P: PowerStage = SimPowerStage, N: NvStorage = MemNv<STORAGE_SIZE>> {
     esc: E,
+    layout: MemoryLayout,
     stage: P,
     nv: N,
     /// What the parameter storage held at power-on.
@@ -327,6 +357,7 @@ impl<E: Esc, P: PowerStage, N: NvStorage> core::fmt::Debug for Slave<E, P, N> {
 struct Checks<'a, E: Esc> {
     esc: &'a mut E,
     store: &'a ObjectStore,
+    layout: MemoryLayout,
     images: Option<(ProcessImage, ProcessImage)>,
 }
 
@@ -356,7 +387,7 @@ impl<E: Esc> Checks<'_, E> {
 
 impl<E: Esc> TransitionChecks for Checks<'_, E> {
     fn check_mailbox(&mut self) -> Result<(), AlStatusCode> {
-        if self.mailbox_matches(LAYOUT.mbx_out, LAYOUT.mbx_in) {
+        if self.mailbox_matches(self.layout.mbx_out, self.layout.mbx_in) {
             Ok(())
         } else {
             Err(AlStatusCode::InvalidMailboxPreOp)
@@ -364,7 +395,7 @@ impl<E: Esc> TransitionChecks for Checks<'_, E> {
     }
 
     fn check_boot_mailbox(&mut self) -> Result<(), AlStatusCode> {
-        if self.mailbox_matches(LAYOUT.boot_out, LAYOUT.boot_in) {
+        if self.mailbox_matches(self.layout.boot_out, self.layout.boot_in) {
             Ok(())
         } else {
             Err(AlStatusCode::InvalidMailboxBoot)
@@ -397,7 +428,7 @@ impl<E: Esc> TransitionChecks for Checks<'_, E> {
             !sm2.3
         } else {
             sm2.3
-                && sm2.0 == LAYOUT.pd_out
+                && sm2.0 == self.layout.pd_out
                 && usize::from(sm2.1) == outputs.byte_len()
                 && sm2.2 & 0x0F == SM_CONTROL[2] & 0x0F
         };
@@ -408,7 +439,7 @@ impl<E: Esc> TransitionChecks for Checks<'_, E> {
             !sm3.3
         } else {
             sm3.3
-                && sm3.0 == LAYOUT.pd_in
+                && sm3.0 == self.layout.pd_in
                 && usize::from(sm3.1) == inputs.byte_len()
                 && sm3.2 & 0x0F == SM_CONTROL[3] & 0x0F
         };
@@ -450,6 +481,7 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
         }
         Slave {
             esc,
+            layout: LAYOUT,
             stage,
             nv,
             stored_at_power_on,
@@ -468,6 +500,16 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
             emergencies_enabled: true,
             now_ns: 0,
         }
+    }
+
+    /// Uses `layout` (it must match the SII the ESC serves).
+    pub fn set_layout(&mut self, layout: MemoryLayout) {
+        self.layout = layout;
+    }
+
+    /// The memory layout (mailboxes, process data buffers).
+    pub fn layout(&self) -> &MemoryLayout {
+        &self.layout
     }
 
     /// The ESC.
@@ -615,6 +657,7 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
             let mut checks = Checks {
                 esc: &mut self.esc,
                 store: &self.store,
+                layout: self.layout,
                 images: None,
             };
             if !checks.mailbox_matches(out, inp) {
@@ -631,10 +674,12 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
             let sm3 = read_sm(&mut self.esc, 3)?;
             let out_ok = self.outputs.byte_len() == 0
                 || (sm2.3
-                    && sm2.0 == LAYOUT.pd_out
+                    && sm2.0 == self.layout.pd_out
                     && usize::from(sm2.1) == self.outputs.byte_len());
             let in_ok = self.inputs.byte_len() == 0
-                || (sm3.3 && sm3.0 == LAYOUT.pd_in && usize::from(sm3.1) == self.inputs.byte_len());
+                || (sm3.3
+                    && sm3.0 == self.layout.pd_in
+                    && usize::from(sm3.1) == self.inputs.byte_len());
             if !out_ok {
                 return self.local_error(AlState::PreOp, AlStatusCode::InvalidOutputConfig);
             }
@@ -692,6 +737,7 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
         let mut checks = Checks {
             esc: &mut self.esc,
             store: &self.store,
+            layout: self.layout,
             images: None,
         };
         let after = al::transition(before, control, &mut checks);
@@ -732,9 +778,9 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
 
     fn mailbox_layout(&self) -> ((u16, u16), (u16, u16)) {
         if self.al.state == AlState::Boot {
-            (LAYOUT.boot_out, LAYOUT.boot_in)
+            (self.layout.boot_out, self.layout.boot_in)
         } else {
-            (LAYOUT.mbx_out, LAYOUT.mbx_in)
+            (self.layout.mbx_out, self.layout.mbx_in)
         }
     }
 
@@ -849,7 +895,7 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
         if events & reg::al_event_sm(2) != 0 && self.outputs.byte_len() > 0 {
             let n = self.outputs.byte_len();
             if let Some(b) = buf.get_mut(..n) {
-                self.esc.read(LAYOUT.pd_out, b)?;
+                self.esc.read(self.layout.pd_out, b)?;
                 if self.al.state == AlState::Op {
                     self.outputs.unpack(&mut self.store, b);
                 }
@@ -864,7 +910,7 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
             let mut inb = [0u8; MAX_IMAGE];
             if let Some(b) = inb.get_mut(..n) {
                 self.inputs.pack(&self.store, b);
-                self.esc.write(LAYOUT.pd_in, b)?;
+                self.esc.write(self.layout.pd_in, b)?;
             }
         }
         Ok(())
@@ -1066,12 +1112,28 @@ impl SoftSlave {
         }
     }
 
+    /// A slave whose standard mailboxes have another layout (the SII it
+    /// serves says so, so masters configure SM0/SM1 accordingly).
+    pub fn with_layout(layout: MemoryLayout) -> Self {
+        let sii = sii_image_for(&layout);
+        let mut inner = Slave::new(SoftEsc::new(&sii), SimPowerStage::new(), MemNv::new());
+        inner.set_layout(layout);
+        SoftSlave {
+            inner,
+            port1_link: false,
+            stalled: false,
+            now_ns: 0,
+        }
+    }
+
     /// A power cycle: ESC, firmware and power stage restart; the parameter
     /// storage (EEPROM) keeps what was saved.
     pub fn power_cycle(&mut self) {
         let nv = core::mem::take(self.inner.nv_mut());
-        let sii = sii_image();
+        let layout = self.inner.layout;
+        let sii = sii_image_for(&layout);
         self.inner = Slave::new(SoftEsc::new(&sii), SimPowerStage::new(), nv);
+        self.inner.set_layout(layout);
         self.inner.esc.set_port1_link(self.port1_link);
     }
 

@@ -318,3 +318,49 @@ fn an_injected_fault_produces_an_emergency_the_master_decodes() {
         assert_eq!(reg, [0x03], "error register consistent");
     });
 }
+
+#[test]
+fn a_48_byte_mailbox_is_advertised_in_the_sii_and_long_uploads_are_segmented() {
+    use master_test::link::{Chain, Clock};
+    use pam_slave::device::{MemoryLayout, SoftSlave};
+    let layout = MemoryLayout::with_mailbox_size(48).expect("valid size");
+    assert!(MemoryLayout::with_mailbox_size(8).is_none());
+    assert!(MemoryLayout::with_mailbox_size(4096).is_none());
+    smol::block_on(async {
+        let chain = Chain::with_slaves(vec![SoftSlave::with_layout(layout)]);
+        let bus = VirtualBus::with_chain(chain, Clock::real(), None).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus
+            .init()
+            .await
+            .expect("ethercrab reads the small mailbox from the SII");
+        let sd = group.subdevice(md, 0).expect("slave");
+        let product: u32 = sd
+            .sdo_read(0x1018, 2)
+            .await
+            .expect("expedited via ethercrab");
+        assert_eq!(product, 0x00C7_03F3);
+        let mut c = MailboxClient::new(md, sd.configured_address(), MailboxGeometry::of(&layout));
+        // 86 bytes do not fit a 48-byte mailbox: normal upload + segments.
+        let img = c
+            .sdo_upload(0x8006, 0, true)
+            .await
+            .expect("segmented upload");
+        assert_eq!(img.len(), 86);
+        assert_eq!(i16::from_le_bytes([img[84], img[85]]), 10000);
+        let name = c
+            .sdo_upload(0x1008, 0, false)
+            .await
+            .expect("13-byte string");
+        assert_eq!(name, b"PAM-199-P-ETC");
+        // And a segmented download of the same 86 bytes.
+        c.sdo_download(0x8006, 0, true, &img)
+            .await
+            .expect("segmented download");
+        let group = group
+            .into_op(md)
+            .await
+            .expect("process data with the moved buffers");
+        assert_eq!(group.tx_rx(md).await.expect("cycle").working_counter, 3);
+    });
+}

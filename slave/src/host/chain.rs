@@ -35,7 +35,12 @@ impl Chain {
     /// `n` PAM-199 slaves in their power-on state; every slave but the last
     /// reports a link on port 1.
     pub fn new(n: usize) -> Self {
-        let mut slaves: Vec<SoftSlave> = (0..n).map(|_| SoftSlave::new()).collect();
+        Self::with_slaves((0..n).map(|_| SoftSlave::new()).collect())
+    }
+
+    /// A line of the given slaves (e.g. built with
+    /// [`SoftSlave::with_layout`]), first to last.
+    pub fn with_slaves(mut slaves: Vec<SoftSlave>) -> Self {
         let last = slaves.len().saturating_sub(1);
         for (i, s) in slaves.iter_mut().enumerate() {
             s.set_port1_link(i != last);
