@@ -4,6 +4,7 @@
 //! ([`link`]) to a chain of software slaves: real EtherCAT frames, no
 //! sockets, no root. Integration tests and the demo CLI use it.
 
+pub mod foe;
 pub mod link;
 pub mod mailbox;
 pub mod sdo_info;

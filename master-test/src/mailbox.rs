@@ -48,9 +48,25 @@ pub enum ClientError {
     /// The request does not fit into the mailbox.
     #[error("request of {0} bytes does not fit the mailbox")]
     TooLong(usize),
+    /// The slave refused a file transfer with a FoE error.
+    #[error("FoE error {code:#06x}: {text}")]
+    Foe {
+        /// FoE error code (0x8000..).
+        code: u32,
+        /// The slave's error text.
+        text: String,
+    },
 }
 
 impl ClientError {
+    /// The FoE error code, if this is a FoE error.
+    pub fn foe_code(&self) -> Option<u32> {
+        match self {
+            ClientError::Foe { code, .. } => Some(*code),
+            _ => None,
+        }
+    }
+
     /// The SDO abort code, if this is an abort.
     pub fn abort_code(&self) -> Option<u32> {
         match self {
@@ -81,6 +97,15 @@ pub struct MailboxGeometry {
 }
 
 impl MailboxGeometry {
+    /// The PAM-199's bootstrap mailbox (BOOT state).
+    pub fn bootstrap() -> Self {
+        let l = pam_slave::device::LAYOUT;
+        MailboxGeometry {
+            out: l.boot_out,
+            inp: l.boot_in,
+        }
+    }
+
     /// The PAM-199's standard mailbox.
     pub fn standard() -> Self {
         Self::of(&pam_slave::device::LAYOUT)
@@ -117,6 +142,11 @@ impl<'a> MailboxClient<'a> {
             started: false,
             timeout: Duration::from_secs(2),
         }
+    }
+
+    /// Largest payload of one message (mailbox size minus the header).
+    pub fn max_payload(&self) -> usize {
+        usize::from(self.geometry.out.1.min(self.geometry.inp.1)).saturating_sub(HEADER_LEN)
     }
 
     /// Sends one mailbox message of `kind` with `payload`, using the next

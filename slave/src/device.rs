@@ -15,6 +15,8 @@ use crate::coe::emergency::{Emergencies, FaultState};
 use crate::esc::registers::{self as reg, sm as smr};
 use crate::esc::soft::{FrameOutcome, SII_SIZE, SoftEsc};
 use crate::esc::{Esc, EscError};
+use crate::firmware::{self, DeviceIdentity, ImageStore};
+use crate::foe::FoeContext;
 use crate::hal::{MemNv, NvStorage};
 use crate::mailbox::MailboxServer;
 use crate::od::complete;
@@ -542,6 +544,20 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
         &self.amplifier
     }
 
+    /// The running firmware version (0x100A SOFTWARE VERSION).
+    pub fn firmware_version(&self) -> heapless::String<32> {
+        let mut v = heapless::String::new();
+        if let Some((flat, _)) = model::find_entry(0x100A, 0) {
+            let _ = v.push_str(self.store.string(flat).unwrap_or(""));
+        }
+        v
+    }
+
+    /// Sets 0x100A to the version the bootloader started.
+    pub fn set_firmware_version(&mut self, version: &str) -> bool {
+        self.store.set_string(0x100A, 0, version)
+    }
+
     /// The parameter storage.
     pub fn nv(&self) -> &N {
         &self.nv
@@ -586,6 +602,17 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
     /// Runs the firmware once at time `now_ns`: AL control, mailbox,
     /// process data. Returns an error only if the PDI itself fails.
     pub fn poll(&mut self, now_ns: u64) -> Result<(), EscError> {
+        self.poll_with(now_ns, None)
+    }
+
+    /// [`Slave::poll`] with the firmware image store: FoE writes go there
+    /// (in BOOT) and BOOT→INIT marks a downloaded image pending for the
+    /// bootloader. Without a store FoE answers "unsupported protocol".
+    pub fn poll_with<'s>(
+        &mut self,
+        now_ns: u64,
+        mut images: Option<&mut (dyn ImageStore + 's)>,
+    ) -> Result<(), EscError> {
         self.now_ns = now_ns;
         self.store.set(0x10F8, 0, now_ns as i64);
         if let Some((index, sub, until)) = self.ack {
@@ -597,14 +624,22 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
         let events = self.esc.read_u32(reg::AL_EVENT_REQUEST)?;
         if events & reg::AL_EVENT_AL_CONTROL != 0 {
             let control = self.esc.read_u16(reg::AL_CONTROL)?;
+            let before = self.al.state;
             self.al_control(control)?;
+            if before == AlState::Boot && self.al.state == AlState::Init {
+                // Manual 5.10: "change to Init, the bootloader copies the new
+                // software": the downloaded image becomes pending.
+                if let Some(st) = images.as_deref_mut() {
+                    let _ = firmware::commit_pending(st);
+                }
+            }
         }
         self.supervise()?;
         if matches!(
             self.al.state,
             AlState::PreOp | AlState::SafeOp | AlState::Op | AlState::Boot
         ) {
-            self.serve_mailbox()?;
+            self.serve_mailbox(images.as_deref_mut())?;
         }
         let pd = matches!(self.al.state, AlState::SafeOp | AlState::Op);
         if pd {
@@ -833,7 +868,10 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
         )
     }
 
-    fn serve_mailbox(&mut self) -> Result<(), EscError> {
+    fn serve_mailbox<'s>(
+        &mut self,
+        images: Option<&mut (dyn ImageStore + 's)>,
+    ) -> Result<(), EscError> {
         self.serve_repeat()?;
         self.deliver_pending()?;
         // One request at a time: a new request waits in SM0 until the
@@ -873,8 +911,25 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
         let max = usize::from(inp.1).min(MAX_MAILBOX);
         let state = self.al.state;
         let mut mailbox = core::mem::take(&mut self.mailbox);
+        let version = self.firmware_version();
+        let mut ctx = images.map(|store| FoeContext {
+            store,
+            identity: DeviceIdentity {
+                vendor_id: VENDOR_ID,
+                product_code: PRODUCT_CODE,
+                revision: REVISION,
+            },
+            version: version.as_str(),
+            in_boot: state == AlState::Boot,
+            busy: false,
+        });
         let produced = match response.get_mut(..max) {
-            Some(resp) => mailbox.handle(req, resp, &mut OdAccess { slave: self, state }),
+            Some(resp) => mailbox.handle(
+                req,
+                resp,
+                &mut OdAccess { slave: self, state },
+                ctx.as_mut(),
+            ),
             None => None,
         };
         self.mailbox = mailbox;
@@ -1148,6 +1203,12 @@ impl SoftSlave {
     /// ([`SoftSlave::set_stalled`]) only the ESC runs; once its PDI
     /// watchdog expires the outputs go to the safe state.
     pub fn poll(&mut self, now_ns: u64) {
+        self.poll_with(now_ns, None);
+    }
+
+    /// [`SoftSlave::poll`] with the firmware image store (see
+    /// [`Slave::poll_with`]).
+    pub fn poll_with<'s>(&mut self, now_ns: u64, images: Option<&mut (dyn ImageStore + 's)>) {
         self.inner.esc.update_watchdogs(now_ns);
         if self.stalled {
             if self.inner.esc.pdi_watchdog_expired() {
@@ -1155,7 +1216,7 @@ impl SoftSlave {
             }
             return;
         }
-        let _ = self.inner.poll(now_ns);
+        let _ = self.inner.poll_with(now_ns, images);
         // Stamp the firmware's PDI accesses with the time they happened.
         self.inner.esc.update_watchdogs(now_ns);
         self.now_ns = now_ns;

@@ -6,6 +6,8 @@
 //! (SM1). It knows nothing of the ESC: the device moves the bytes.
 
 use crate::coe::{CoeServer, ObjectAccess};
+use crate::foe::{FoeContext, FoeServer};
+use crate::wire::foe::FoeRepr;
 use crate::wire::mailbox::{
     HEADER_LEN, Mailbox, MailboxError, MailboxErrorCode, MailboxErrorRepr, MailboxRepr,
     MailboxType, next_counter,
@@ -15,6 +17,7 @@ use crate::wire::mailbox::{
 #[derive(Debug, Default)]
 pub struct MailboxServer {
     coe: CoeServer,
+    foe: FoeServer,
     /// Counter and content checksum of the last request processed, to drop
     /// repeats: a retransmission carries the same counter and the same
     /// bytes (two masters' sequences may share a counter value with
@@ -43,6 +46,7 @@ impl MailboxServer {
         request: &[u8],
         out: &mut [u8],
         od: &mut impl ObjectAccess,
+        foe: Option<&mut FoeContext<'_>>,
     ) -> Option<usize> {
         let mbx = match Mailbox::new_checked(request) {
             Ok(m) => m,
@@ -70,8 +74,25 @@ impl MailboxServer {
                     Err(code) => self.error_reply(out, code),
                 }
             }
+            MailboxType::FoE => {
+                // Without an image store the device offers no FoE.
+                let Some(ctx) = foe else {
+                    return self.error_reply(out, MailboxErrorCode::UnsupportedProtocol);
+                };
+                let Ok(req) = FoeRepr::parse(mbx.payload()) else {
+                    return self.error_reply(out, MailboxErrorCode::SizeTooShort);
+                };
+                let body = out.get_mut(header_len..)?;
+                let n = self.foe.handle(req, ctx, body)?;
+                self.frame(out, MailboxType::FoE, n)
+            }
             _ => self.error_reply(out, MailboxErrorCode::UnsupportedProtocol),
         }
+    }
+
+    /// Drops a FoE transfer in progress (state change, link loss).
+    pub fn abort_foe(&mut self) {
+        self.foe.abort();
     }
 
     /// The next part of a response that spans several mailboxes (SDO

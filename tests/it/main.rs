@@ -8,6 +8,7 @@ mod capture;
 mod coe;
 mod common;
 mod consistency;
+mod foe;
 mod sdo;
 mod sii;
 mod state;

@@ -11,12 +11,32 @@
 
 use crate::device::SoftSlave;
 use crate::esc::soft::FrameOutcome;
+use crate::firmware::{self, FirmwareVersion};
+use crate::host::image_store::VecStore;
 use crate::wire::ecat::{Addressing, Command, Datagram, DatagramCursor, EcatFrame, FrameType};
 use crate::wire::ethernet::{ETHERTYPE_ETHERCAT, EthernetFrame};
+
+/// Slot capacity of a software slave's firmware store (2 MiB).
+pub const IMAGE_SLOT_CAPACITY: usize = 2 * 1024 * 1024;
+
+/// Version of the factory firmware a software slave starts with (the
+/// manual's 0x100A default).
+pub const FACTORY_VERSION: &str = "10";
+
+fn factory_image_store() -> VecStore {
+    let mut store = VecStore::new(IMAGE_SLOT_CAPACITY);
+    let payload = b"PAM-199-P-ETC simulated firmware 10";
+    if let Some(v) = FirmwareVersion::new(FACTORY_VERSION) {
+        let _ = firmware::provision(&mut store, v, payload);
+    }
+    store
+}
 
 /// A line of software slaves, first to last.
 pub struct Chain {
     slaves: Vec<SoftSlave>,
+    /// Each slave's firmware image store (A/B slots).
+    images: Vec<VecStore>,
     frames: u64,
     /// (station address or alias, slave position), sorted.
     addresses: Vec<(u16, usize)>,
@@ -45,8 +65,10 @@ impl Chain {
         for (i, s) in slaves.iter_mut().enumerate() {
             s.set_port1_link(i != last);
         }
+        let images = slaves.iter().map(|_| factory_image_store()).collect();
         let mut chain = Chain {
             slaves,
+            images,
             frames: 0,
             addresses: Vec::new(),
         };
@@ -171,9 +193,33 @@ impl Chain {
 
     /// Runs every slave's firmware once.
     pub fn poll(&mut self, now_ns: u64) {
-        for s in &mut self.slaves {
-            s.poll(now_ns);
+        for (s, img) in self.slaves.iter_mut().zip(self.images.iter_mut()) {
+            s.poll_with(now_ns, Some(img));
         }
+    }
+
+    /// A simulated power cycle of slave `i`: ESC and firmware restart, the
+    /// bootloader starts the pending image if one was downloaded and
+    /// committed (its CRC verified, else the old one), and 0x100A reports
+    /// the version that runs. Parameters (EEPROM) are kept. Returns the
+    /// version, or `None` for a bad index.
+    pub fn power_cycle(&mut self, i: usize) -> Option<String> {
+        let slave = self.slaves.get_mut(i)?;
+        let store = self.images.get_mut(i)?;
+        slave.power_cycle();
+        let decision = firmware::power_on(store);
+        // The start check of the simulated firmware is its CRC, already
+        // verified by the bootloader: confirm the trial image.
+        let _ = firmware::confirm_boot(store);
+        let version = decision.version.as_str().to_string();
+        slave.slave_mut().set_firmware_version(&version);
+        self.reindex();
+        Some(version)
+    }
+
+    /// The firmware image store of slave `i`.
+    pub fn image_store(&self, i: usize) -> Option<&VecStore> {
+        self.images.get(i)
     }
 
     /// The slaves.

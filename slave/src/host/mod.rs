@@ -5,5 +5,6 @@
 //! from a host operating system.
 
 pub mod chain;
+pub mod image_store;
 pub mod pcap;
 pub mod raw;

@@ -1,0 +1,196 @@
+//! File access over EtherCAT (ETG.1000.6 FoE) on the raw mailbox client,
+//! and the AL transitions around a firmware update (manual 5.10: BOOT,
+//! download, INIT).
+
+use crate::mailbox::{ClientError, MailboxClient};
+use ethercrab::{Command, MainDevice};
+use pam_slave::wire::foe::{FoeRepr, HEADER_LEN};
+use pam_slave::wire::mailbox::MailboxType;
+use std::time::{Duration, Instant};
+
+fn reply(payload: &[u8]) -> Result<FoeRepr<'_>, ClientError> {
+    FoeRepr::parse(payload).map_err(|e| ClientError::Protocol(e.to_string()))
+}
+
+fn foe_error(code: u32, text: &[u8]) -> ClientError {
+    ClientError::Foe {
+        code,
+        text: String::from_utf8_lossy(text).into_owned(),
+    }
+}
+
+async fn exchange(
+    client: &mut MailboxClient<'_>,
+    req: &FoeRepr<'_>,
+) -> Result<Vec<u8>, ClientError> {
+    let mut buf = vec![0u8; req.buffer_len()];
+    req.emit(&mut buf)
+        .map_err(|e| ClientError::Protocol(e.to_string()))?;
+    client.send(MailboxType::FoE, &buf).await?;
+    loop {
+        let m = client.receive().await?;
+        match m.kind {
+            MailboxType::FoE => return Ok(m.payload),
+            // Emergencies may arrive meanwhile.
+            MailboxType::CoE => continue,
+            other => return Err(ClientError::Protocol(format!("mailbox type {other:?}"))),
+        }
+    }
+}
+
+/// Writes `data` as file `name` (FoE write request, DATA packets of the
+/// mailbox size, each acknowledged; BUSY answers are retried). `progress`
+/// gets (bytes sent, total).
+pub async fn write(
+    client: &mut MailboxClient<'_>,
+    name: &str,
+    password: u32,
+    data: &[u8],
+    mut progress: impl FnMut(usize, usize),
+) -> Result<(), ClientError> {
+    write_partial(client, name, password, data, data.len(), &mut progress).await
+}
+
+/// Like [`write`] but stops after `stop_after` bytes without ending the
+/// file (a master that gives up midway; for tests).
+pub async fn write_partial(
+    client: &mut MailboxClient<'_>,
+    name: &str,
+    password: u32,
+    data: &[u8],
+    stop_after: usize,
+    progress: &mut impl FnMut(usize, usize),
+) -> Result<(), ClientError> {
+    let seg = client.max_payload().saturating_sub(HEADER_LEN).max(1);
+    let wrq = FoeRepr::WriteRequest {
+        password,
+        name: name.as_bytes(),
+    };
+    let r = exchange(client, &wrq).await?;
+    match reply(&r)? {
+        FoeRepr::Ack { packet: 0 } => {}
+        FoeRepr::Error { code, text } => return Err(foe_error(code.into(), text)),
+        other => {
+            return Err(ClientError::Protocol(format!(
+                "after write request: {other:?}"
+            )));
+        }
+    }
+    let mut sent = 0usize;
+    let mut packet = 1u32;
+    loop {
+        let end = (sent + seg).min(data.len());
+        if sent >= stop_after && stop_after < data.len() {
+            return Ok(());
+        }
+        let chunk = &data[sent..end];
+        let r = exchange(
+            client,
+            &FoeRepr::Data {
+                packet,
+                data: chunk,
+            },
+        )
+        .await?;
+        match reply(&r)? {
+            FoeRepr::Ack { packet: p } if p == packet => {}
+            FoeRepr::Busy { .. } => {
+                smol::Timer::after(Duration::from_millis(1)).await;
+                continue;
+            }
+            FoeRepr::Error { code, text } => return Err(foe_error(code.into(), text)),
+            other => {
+                return Err(ClientError::Protocol(format!(
+                    "after DATA {packet}: {other:?}"
+                )));
+            }
+        }
+        sent = end;
+        progress(sent, data.len());
+        packet += 1;
+        // A packet shorter than the maximum ends the file (an empty one
+        // when the length is a multiple of the packet size).
+        if chunk.len() < seg {
+            return Ok(());
+        }
+    }
+}
+
+/// Reads file `name` (FoE read request; each DATA packet acknowledged).
+pub async fn read(
+    client: &mut MailboxClient<'_>,
+    name: &str,
+    password: u32,
+) -> Result<Vec<u8>, ClientError> {
+    let seg = client.max_payload().saturating_sub(HEADER_LEN).max(1);
+    let mut r = exchange(
+        client,
+        &FoeRepr::ReadRequest {
+            password,
+            name: name.as_bytes(),
+        },
+    )
+    .await?;
+    let mut out = Vec::new();
+    loop {
+        match reply(&r)? {
+            FoeRepr::Data { packet, data } => {
+                out.extend_from_slice(data);
+                let last = data.len() < seg;
+                let ack = FoeRepr::Ack { packet };
+                if last {
+                    let mut buf = vec![0u8; ack.buffer_len()];
+                    ack.emit(&mut buf)
+                        .map_err(|e| ClientError::Protocol(e.to_string()))?;
+                    client.send(MailboxType::FoE, &buf).await?;
+                    return Ok(out);
+                }
+                r = exchange(client, &ack).await?;
+            }
+            FoeRepr::Error { code, text } => return Err(foe_error(code.into(), text)),
+            other => return Err(ClientError::Protocol(format!("read: {other:?}"))),
+        }
+    }
+}
+
+/// Requests AL state `state` (0x0120) and waits until 0x0130 shows it.
+/// Fails with the AL status code when the slave refuses.
+pub async fn request_state(
+    md: &MainDevice<'_>,
+    station: u16,
+    state: u16,
+) -> Result<(), ClientError> {
+    Command::fpwr(station, 0x0120).send(md, state).await?;
+    let start = Instant::now();
+    loop {
+        let st: u16 = Command::fprd(station, 0x0130).receive(md).await?;
+        if st & 0x1F == state & 0x0F {
+            return Ok(());
+        }
+        if st & 0x10 != 0 {
+            let code: u16 = Command::fprd(station, 0x0134).receive(md).await?;
+            return Err(ClientError::Protocol(format!(
+                "AL status {st:#06x}, code {code:#06x}"
+            )));
+        }
+        if start.elapsed() > Duration::from_secs(5) {
+            return Err(ClientError::Timeout(Duration::from_secs(5)));
+        }
+        smol::Timer::after(Duration::from_micros(200)).await;
+    }
+}
+
+/// INIT, SM0/SM1 set to the bootstrap mailbox from the SII, then BOOT.
+pub async fn enter_boot(md: &MainDevice<'_>, station: u16) -> Result<(), ClientError> {
+    request_state(md, station, 0x11).await?;
+    let l = pam_slave::device::LAYOUT;
+    for (n, (start, len), control) in [(0u16, l.boot_out, 0x26u8), (1, l.boot_in, 0x22)] {
+        let mut b = [0u8; 8];
+        b[0..2].copy_from_slice(&start.to_le_bytes());
+        b[2..4].copy_from_slice(&len.to_le_bytes());
+        b[4] = control;
+        b[6] = 1;
+        Command::fpwr(station, 0x0800 + 8 * n).send(md, b).await?;
+    }
+    request_state(md, station, 0x03).await
+}
