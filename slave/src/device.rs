@@ -279,7 +279,7 @@ fn encode_sii(layout: &MemoryLayout, out: &mut [u8]) -> Result<usize, sii::SiiEr
             // complete access (bit 5). PDO configuration (bit 3) is not
             // offered: the mappings are fixed.
             coe_details: 0x01 | 0x02 | 0x04 | 0x20,
-            foe_details: 0x00,
+            foe_details: 0x01,
             eoe_details: 0x00,
             // Identity in AL status code: no; safe-op: yes.
             flags: 0x01,
