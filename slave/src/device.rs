@@ -639,7 +639,7 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
             self.al.state,
             AlState::PreOp | AlState::SafeOp | AlState::Op | AlState::Boot
         ) {
-            self.serve_mailbox(images.as_deref_mut())?;
+            self.serve_mailbox(images)?;
         }
         let pd = matches!(self.al.state, AlState::SafeOp | AlState::Op);
         if pd {

@@ -74,7 +74,7 @@ impl ImageStore for VecStore {
         }
         let n = buf.len().min(self.capacity - offset);
         let s = self.slot(slot);
-        for (i, b) in buf[..n].iter_mut().enumerate() {
+        for (i, b) in buf.iter_mut().take(n).enumerate() {
             *b = s.get(offset + i).copied().unwrap_or(0xFF);
         }
         Ok(n)
