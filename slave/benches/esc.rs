@@ -30,11 +30,13 @@ fn pass(line: &mut [SoftEsc], frame: &mut [u8]) {
     }
 }
 
-/// Configures station address, SM2/SM3 and FMMU0/1 as ethercrab does:
-/// each slave's 5 output bytes then 14 input bytes, back to back.
-fn configure(line: &mut [SoftEsc]) {
-    let mut buf = vec![0u8; 2048];
-    for i in 0..line.len() as u16 {
+/// The frames that configure slave `i` of a line as ethercrab does:
+/// station address, SM2/SM3 and FMMU0/1 (each slave's 5 output bytes then
+/// 14 input bytes, back to back).
+fn config_frames(n: usize) -> Vec<Vec<u8>> {
+    let mut frames = Vec::new();
+    for i in 0..n as u16 {
+        let mut buf = vec![0u8; 2048];
         let mut b = FrameBuilder::new(&mut buf, [0x10; 6]).expect("buffer");
         let station = 0x1000 + i;
         let adp = 0u16.wrapping_sub(i) as u32;
@@ -65,7 +67,16 @@ fn configure(line: &mut [SoftEsc]) {
         b.push(Command::Apwr, adp | (0x0610 << 16), &f1)
             .expect("fits");
         let len = b.finish();
-        pass(line, &mut buf[..len]);
+        buf.truncate(len);
+        frames.push(buf);
+    }
+    frames
+}
+
+/// Configures a line of ESCs.
+fn configure(line: &mut [SoftEsc]) {
+    for mut f in config_frames(line.len()) {
+        pass(line, &mut f);
     }
 }
 
@@ -122,42 +133,10 @@ fn wkc_sum(frame: &[u8]) -> u32 {
         .sum()
 }
 
-/// Configures a `Chain` (the virtual link's line) like `configure`, through
-/// the same frames.
+/// Configures a `Chain` (the virtual link's line) with the same frames.
 fn configure_chain(chain: &mut Chain, n: usize) {
-    let mut buf = vec![0u8; 2048];
-    for i in 0..n as u16 {
-        let mut b = FrameBuilder::new(&mut buf, [0x10; 6]).expect("buffer");
-        let station = 0x1000 + i;
-        let adp = 0u16.wrapping_sub(i) as u32;
-        b.push(Command::Apwr, adp | (0x0010 << 16), &station.to_le_bytes())
-            .expect("fits");
-        let sm2 = [0x00, 0x11, OUT as u8, 0, 0x64, 0, 1, 0];
-        let sm3 = [0x80, 0x11, IN as u8, 0, 0x20, 0, 1, 0];
-        b.push(Command::Apwr, adp | (0x0810 << 16), &sm2)
-            .expect("fits");
-        b.push(Command::Apwr, adp | (0x0818 << 16), &sm3)
-            .expect("fits");
-        let log_out = u32::from(i) * u32::from(OUT + IN);
-        let log_in = log_out + u32::from(OUT);
-        let mut f0 = [0u8; 16];
-        f0[0..4].copy_from_slice(&log_out.to_le_bytes());
-        f0[4..6].copy_from_slice(&OUT.to_le_bytes());
-        f0[7] = 7;
-        f0[8..10].copy_from_slice(&0x1100u16.to_le_bytes());
-        f0[11] = 2;
-        f0[12] = 1;
-        let mut f1 = f0;
-        f1[0..4].copy_from_slice(&log_in.to_le_bytes());
-        f1[4..6].copy_from_slice(&IN.to_le_bytes());
-        f1[8..10].copy_from_slice(&0x1180u16.to_le_bytes());
-        f1[11] = 1;
-        b.push(Command::Apwr, adp | (0x0600 << 16), &f0)
-            .expect("fits");
-        b.push(Command::Apwr, adp | (0x0610 << 16), &f1)
-            .expect("fits");
-        let len = b.finish();
-        chain.process_frame(&mut buf[..len]);
+    for mut f in config_frames(n) {
+        chain.process_frame(&mut f);
     }
 }
 

@@ -72,42 +72,24 @@ pub const DEFAULT_R_OHM: f32 = 6.0;
 /// Default coil inductance.
 pub const DEFAULT_L_H: f32 = 0.03;
 
-/// PWM frequency table DT0803EN05: (frequency in Hz, enum code).
-pub const PWM_TABLE: [(u16, u8); 20] = [
-    (60, 0x11),
-    (70, 0x0E),
-    (80, 0x0B),
-    (100, 0x08),
-    (120, 0x05),
-    (150, 0x02),
-    (200, 0x13),
-    (250, 0x10),
-    (400, 0x0D),
-    (500, 0x0A),
-    (600, 0x07),
-    (800, 0x04),
-    (1000, 0x01),
-    (1200, 0x12),
-    (1500, 0x0F),
-    (2000, 0x0C),
-    (2500, 0x09),
-    (3000, 0x06),
-    (6000, 0x03),
-    (10000, 0x14),
-];
+/// The PWM frequencies of DT0803EN05 as (frequency in Hz, enum code), read
+/// from the object dictionary's one description of the enumeration.
+pub fn pwm_table() -> impl Iterator<Item = (u16, u8)> {
+    crate::od::model::DT0803EN05
+        .values
+        .iter()
+        .filter_map(|(code, text)| Some((text.parse::<u16>().ok()?, u8::try_from(*code).ok()?)))
+}
 
 /// The PWM frequency in Hz for a DT0803EN05 code; `None` for unknown codes.
 pub fn pwm_from_code(code: u8) -> Option<u16> {
-    PWM_TABLE
-        .iter()
-        .find(|(_, c)| *c == code)
-        .map(|(hz, _)| *hz)
+    pwm_table().find(|(_, c)| *c == code).map(|(hz, _)| hz)
 }
 
 /// The DT0803EN05 code for a PWM frequency in Hz; `None` if the frequency
 /// is not selectable.
 pub fn pwm_code(hz: u16) -> Option<u8> {
-    PWM_TABLE.iter().find(|(f, _)| *f == hz).map(|(_, c)| *c)
+    pwm_table().find(|(f, _)| *f == hz).map(|(_, c)| c)
 }
 
 /// One of the two outputs.
@@ -198,7 +180,7 @@ pub struct StageParams {
     pub dampl: u16,
     /// DFREQ: dither frequency in Hz (50..400).
     pub dfreq: u16,
-    /// PWM frequency in Hz (one of [`PWM_TABLE`]).
+    /// PWM frequency in Hz (one of [`pwm_table`]).
     pub pwm_hz: u16,
     /// ACC: gains from the PWM frequency ([`acc_gains`]) instead of
     /// PPWM/IPWM.
@@ -589,7 +571,8 @@ mod tests {
 
     #[test]
     fn pwm_table_round_trips_all_twenty_codes() {
-        for (hz, code) in PWM_TABLE {
+        assert_eq!(pwm_table().count(), 20, "all 20 frequencies of the manual");
+        for (hz, code) in pwm_table() {
             assert_eq!(pwm_code(hz), Some(code));
             assert_eq!(pwm_from_code(code), Some(hz));
         }
@@ -624,7 +607,7 @@ mod tests {
     fn acc_gains_settle_too_and_fall_with_the_pwm_frequency() {
         assert_eq!(acc_gains(2_500), PiGains::default());
         let mut last = acc_gains(10_000);
-        for (hz, _) in PWM_TABLE.iter().rev() {
+        for (hz, _) in pwm_table().collect::<Vec<_>>().iter().rev() {
             let g = acc_gains(*hz);
             assert!(g.ppwm <= last.ppwm && g.ipwm <= last.ipwm);
             last = g;
