@@ -62,6 +62,61 @@ enum Cmd {
         #[command(subcommand)]
         op: OdCmd,
     },
+    /// File access over EtherCAT: firmware download in BOOT, file read.
+    Foe {
+        #[command(subcommand)]
+        op: FoeCmd,
+    },
+    /// Firmware image tools.
+    Firmware {
+        #[command(subcommand)]
+        op: FirmwareCmd,
+    },
+}
+
+#[derive(Subcommand)]
+enum FoeCmd {
+    /// Download an `.efw` image to one slave in BOOT (manual 5.10), then
+    /// INIT and a simulated power cycle; prints the version that runs.
+    Write {
+        /// The `.efw` file (see `firmware pack`).
+        file: std::path::PathBuf,
+        /// FoE password in hex (the PAM-199 expects 00000000).
+        #[arg(long, default_value = "00000000")]
+        password: String,
+        /// File name sent in the write request.
+        #[arg(long, default_value = "pam-199-p-etc.efw")]
+        name: String,
+    },
+    /// Read a file the slave offers (e.g. `info.txt`) in PRE-OP.
+    Read {
+        /// File name.
+        name: String,
+        /// Write the file here instead of printing it.
+        #[arg(short, long)]
+        output: Option<std::path::PathBuf>,
+    },
+}
+
+#[derive(Subcommand)]
+enum FirmwareCmd {
+    /// Wrap a binary into an `.efw` image for the PAM-199-P-ETC.
+    Pack {
+        /// The firmware binary.
+        binary: std::path::PathBuf,
+        /// Firmware version text (up to 16 ASCII characters).
+        #[arg(long)]
+        version: String,
+        /// Output file.
+        #[arg(short, long)]
+        output: std::path::PathBuf,
+        /// Lowest device revision the image supports.
+        #[arg(long, default_value_t = 0)]
+        revision_min: u32,
+        /// Highest device revision the image supports.
+        #[arg(long, default_value_t = u32::MAX)]
+        revision_max: u32,
+    },
 }
 
 #[derive(Subcommand)]
@@ -131,6 +186,27 @@ fn main() -> ExitCode {
         Cmd::Od {
             op: OdCmd::Dump { json },
         } => smol::block_on(od_dump(json)),
+        Cmd::Foe {
+            op:
+                FoeCmd::Write {
+                    file,
+                    password,
+                    name,
+                },
+        } => smol::block_on(foe_write(&file, &password, &name)),
+        Cmd::Foe {
+            op: FoeCmd::Read { name, output },
+        } => smol::block_on(foe_read(&name, output.as_deref())),
+        Cmd::Firmware {
+            op:
+                FirmwareCmd::Pack {
+                    binary,
+                    version,
+                    output,
+                    revision_min,
+                    revision_max,
+                },
+        } => firmware_pack(&binary, &version, &output, revision_min, revision_max),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -524,4 +600,107 @@ fn describe_inputs(b: &[u8]) -> String {
         u16_at(10),
         u16_at(12)
     )
+}
+
+/// `foe write`: BOOT, download with a progress bar, INIT, power cycle.
+async fn foe_write(
+    file: &std::path::Path,
+    password: &str,
+    name: &str,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let image = std::fs::read(file).map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+    let password = u32::from_str_radix(password.trim_start_matches("0x"), 16)
+        .map_err(|_| format!("--password must be hex, got '{password}'"))?;
+    let bus = VirtualBus::new(1)?;
+    let md = &*bus.maindevice;
+    let group = bus.init().await?;
+    let station = group.subdevice(md, 0)?.configured_address();
+    let before: heapless::String<32> = group.subdevice(md, 0)?.sdo_read(0x100A, 0).await?;
+    println!("slave {station:#06x} runs firmware {before}; switching to BOOT");
+    master_test::foe::enter_boot(md, station).await?;
+    let mut client = MailboxClient::new(md, station, MailboxGeometry::bootstrap());
+    let bar = indicatif::ProgressBar::new(image.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:40} {bytes}/{total_bytes} {binary_bytes_per_sec}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let start = std::time::Instant::now();
+    master_test::foe::write(&mut client, name, password, &image, |done, _| {
+        bar.set_position(done as u64)
+    })
+    .await?;
+    bar.finish();
+    let secs = start.elapsed().as_secs_f64();
+    println!(
+        "downloaded {} bytes in {:.3} s ({:.1} MB/s)",
+        image.len(),
+        secs,
+        image.len() as f64 / secs / 1e6
+    );
+    master_test::foe::request_state(md, station, 0x01).await?;
+    println!("BOOT -> INIT: image pending for the bootloader; power cycle");
+    let version = lock(&bus.chain).power_cycle(0).ok_or("no slave")?;
+    println!("after the power cycle 0x100A SOFTWARE VERSION = {version}");
+    Ok(())
+}
+
+/// `foe read`: a file from one slave in PRE-OP.
+async fn foe_read(
+    name: &str,
+    output: Option<&std::path::Path>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let bus = VirtualBus::new(1)?;
+    let md = &*bus.maindevice;
+    let group = bus.init().await?;
+    let station = group.subdevice(md, 0)?.configured_address();
+    let mut client = MailboxClient::new(md, station, MailboxGeometry::standard());
+    let data = master_test::foe::read(&mut client, name, 0).await?;
+    match output {
+        Some(p) => {
+            std::fs::write(p, &data).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+            println!("{} bytes written to {}", data.len(), p.display());
+        }
+        None => print!("{}", String::from_utf8_lossy(&data)),
+    }
+    Ok(())
+}
+
+/// `firmware pack`: header with identity, revision range, version, CRC.
+fn firmware_pack(
+    binary: &std::path::Path,
+    version: &str,
+    output: &std::path::Path,
+    revision_min: u32,
+    revision_max: u32,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use pam_slave::firmware::{EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, pack};
+    let payload =
+        std::fs::read(binary).map_err(|e| format!("cannot read {}: {e}", binary.display()))?;
+    let version = FirmwareVersion::new(version)
+        .ok_or_else(|| format!("--version must be 1 to 16 ASCII characters, got '{version}'"))?;
+    let header = EfwHeaderRepr {
+        header_len: EFW_HEADER_LEN as u16,
+        flags: 0,
+        vendor_id: pam_slave::device::VENDOR_ID,
+        product_code: pam_slave::device::PRODUCT_CODE,
+        revision_min,
+        revision_max,
+        version,
+        payload_len: 0,
+        payload_crc: 0,
+    };
+    let mut out = vec![0u8; payload.len() + 1024];
+    let n = pack(&header, &payload, &mut out).map_err(|e| format!("cannot pack: {e}"))?;
+    std::fs::write(output, &out[..n])
+        .map_err(|e| format!("cannot write {}: {e}", output.display()))?;
+    println!(
+        "{}: {} bytes ({} payload, version {}, revisions {revision_min}..={revision_max})",
+        output.display(),
+        n,
+        payload.len(),
+        version.as_str()
+    );
+    Ok(())
 }
