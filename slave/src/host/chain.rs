@@ -11,7 +11,7 @@
 
 use crate::device::SoftSlave;
 use crate::esc::soft::FrameOutcome;
-use crate::firmware::{self, FirmwareVersion};
+use crate::firmware::{self, FirmwareVersion, ImageStore, StoreError};
 use crate::host::image_store::VecStore;
 use crate::wire::ecat::{Addressing, Command, Datagram, DatagramCursor, EcatFrame, FrameType};
 use crate::wire::ethernet::{ETHERTYPE_ETHERCAT, EthernetFrame};
@@ -23,20 +23,30 @@ pub const IMAGE_SLOT_CAPACITY: usize = 2 * 1024 * 1024;
 /// manual's 0x100A default).
 pub const FACTORY_VERSION: &str = "10";
 
-fn factory_image_store() -> VecStore {
-    let mut store = VecStore::new(IMAGE_SLOT_CAPACITY);
-    let payload = b"PAM-199-P-ETC simulated firmware 10";
-    if let Some(v) = FirmwareVersion::new(FACTORY_VERSION) {
-        let _ = firmware::provision(&mut store, v, payload);
+/// Gives a blank image store the factory firmware (slot A, version
+/// [`FACTORY_VERSION`]); a store that already holds a boot state is kept.
+pub fn provision_factory(store: &mut dyn ImageStore) -> Result<(), StoreError> {
+    match store.read_state() {
+        Ok(_) => Ok(()),
+        Err(_) => {
+            let payload = b"PAM-199-P-ETC simulated firmware 10";
+            let v = FirmwareVersion::new(FACTORY_VERSION).ok_or(StoreError::OutOfBounds)?;
+            firmware::provision(store, v, payload)
+        }
     }
-    store
+}
+
+fn factory_image_store() -> Box<dyn ImageStore + Send> {
+    let mut store = VecStore::new(IMAGE_SLOT_CAPACITY);
+    let _ = provision_factory(&mut store);
+    Box::new(store)
 }
 
 /// A line of software slaves, first to last.
 pub struct Chain {
     slaves: Vec<SoftSlave>,
     /// Each slave's firmware image store (A/B slots).
-    images: Vec<VecStore>,
+    images: Vec<Box<dyn ImageStore + Send>>,
     frames: u64,
     /// (station address or alias, slave position), sorted.
     addresses: Vec<(u16, usize)>,
@@ -60,12 +70,31 @@ impl Chain {
 
     /// A line of the given slaves (e.g. built with
     /// [`SoftSlave::with_layout`]), first to last.
-    pub fn with_slaves(mut slaves: Vec<SoftSlave>) -> Self {
+    pub fn with_slaves(slaves: Vec<SoftSlave>) -> Self {
+        let images = slaves.iter().map(|_| factory_image_store()).collect();
+        Self::with_stores(slaves, images)
+    }
+
+    /// A line of slaves with their firmware image stores (e.g. file-backed
+    /// ones that survive restarts). Each slave boots what its store holds.
+    pub fn with_stores(
+        mut slaves: Vec<SoftSlave>,
+        mut images: Vec<Box<dyn ImageStore + Send>>,
+    ) -> Self {
+        images.truncate(slaves.len());
+        while images.len() < slaves.len() {
+            images.push(factory_image_store());
+        }
+        for (s, img) in slaves.iter_mut().zip(images.iter_mut()) {
+            let decision = firmware::power_on(img.as_mut());
+            let _ = firmware::confirm_boot(img.as_mut());
+            s.slave_mut()
+                .set_firmware_version(decision.version.as_str());
+        }
         let last = slaves.len().saturating_sub(1);
         for (i, s) in slaves.iter_mut().enumerate() {
             s.set_port1_link(i != last);
         }
-        let images = slaves.iter().map(|_| factory_image_store()).collect();
         let mut chain = Chain {
             slaves,
             images,
@@ -194,7 +223,7 @@ impl Chain {
     /// Runs every slave's firmware once.
     pub fn poll(&mut self, now_ns: u64) {
         for (s, img) in self.slaves.iter_mut().zip(self.images.iter_mut()) {
-            s.poll_with(now_ns, Some(img));
+            s.poll_with(now_ns, Some(img.as_mut()));
         }
     }
 
@@ -207,10 +236,10 @@ impl Chain {
         let slave = self.slaves.get_mut(i)?;
         let store = self.images.get_mut(i)?;
         slave.power_cycle();
-        let decision = firmware::power_on(store);
+        let decision = firmware::power_on(store.as_mut());
         // The start check of the simulated firmware is its CRC, already
         // verified by the bootloader: confirm the trial image.
-        let _ = firmware::confirm_boot(store);
+        let _ = firmware::confirm_boot(store.as_mut());
         let version = decision.version.as_str().to_string();
         slave.slave_mut().set_firmware_version(&version);
         self.reindex();
@@ -218,8 +247,8 @@ impl Chain {
     }
 
     /// The firmware image store of slave `i`.
-    pub fn image_store(&self, i: usize) -> Option<&VecStore> {
-        self.images.get(i)
+    pub fn image_store(&self, i: usize) -> Option<&(dyn ImageStore + Send)> {
+        self.images.get(i).map(|b| b.as_ref())
     }
 
     /// The slaves.

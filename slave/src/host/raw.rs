@@ -6,12 +6,15 @@
 //! processed (source MAC with the locally administered bit set: our own
 //! replies seen again), is ignored.
 
-use super::chain::Chain;
+use super::chain::{Chain, IMAGE_SLOT_CAPACITY, provision_factory};
 use super::pcap::PcapWriter;
+use crate::device::SoftSlave;
+use crate::firmware::ImageStore;
+use crate::firmware::file_store::FileStore;
 use pnet_datalink::{Channel, Config, NetworkInterface};
 use std::fs::File;
 use std::io::{self, BufWriter};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -96,7 +99,15 @@ pub fn run(config: &RunnerConfig, stop: &AtomicBool) -> Result<RunStats, RunnerE
         None => None,
     };
     let (mut tx, mut rx) = open(&iface)?;
-    let mut chain = Chain::new(config.count);
+    let mut chain = match &config.state_dir {
+        Some(dir) => persistent_chain(dir, config.count)?,
+        None => Chain::new(config.count),
+    };
+    let mut saved: Vec<u32> = chain
+        .slaves()
+        .iter()
+        .map(|s| s.slave().nv().write_count())
+        .collect();
     let start = Instant::now();
     let mut stats = RunStats::default();
     let mut buf = Vec::with_capacity(1600);
@@ -114,6 +125,9 @@ pub fn run(config: &RunnerConfig, stop: &AtomicBool) -> Result<RunStats, RunnerE
                     let _ = p.write_frame(&buf);
                 }
                 chain.process(&mut buf, now);
+                if let Some(dir) = &config.state_dir {
+                    persist_parameters(dir, &chain, &mut saved)?;
+                }
                 if let Some(p) = pcap.as_mut() {
                     let _ = p.write_frame(&buf);
                 }
@@ -146,6 +160,68 @@ pub fn run(config: &RunnerConfig, stop: &AtomicBool) -> Result<RunStats, RunnerE
         let _ = p.flush();
     }
     Ok(stats)
+}
+
+fn io_err(context: String) -> impl FnOnce(io::Error) -> RunnerError {
+    move |source| RunnerError::Io { context, source }
+}
+
+fn slave_dir(dir: &Path, i: usize) -> PathBuf {
+    dir.join(format!("slave-{i}"))
+}
+
+/// Slaves whose parameters (`slave-N/params.bin`) and firmware store
+/// (`slave-N/firmware/`) live under `dir`; blank stores get the factory
+/// firmware.
+fn persistent_chain(dir: &Path, count: usize) -> Result<Chain, RunnerError> {
+    let mut slaves = Vec::with_capacity(count);
+    let mut stores: Vec<Box<dyn ImageStore + Send>> = Vec::with_capacity(count);
+    for i in 0..count {
+        let sd = slave_dir(dir, i);
+        let fw_dir = sd.join("firmware");
+        std::fs::create_dir_all(&fw_dir)
+            .map_err(io_err(format!("creating {}", fw_dir.display())))?;
+        let mut store = FileStore::open(&fw_dir, IMAGE_SLOT_CAPACITY).map_err(io_err(format!(
+            "opening firmware store {}",
+            fw_dir.display()
+        )))?;
+        let _ = provision_factory(&mut store);
+        stores.push(Box::new(store));
+        let mut slave = SoftSlave::new();
+        let params = sd.join("params.bin");
+        match std::fs::read(&params) {
+            Ok(bytes) => {
+                let nv = slave.slave_mut().nv_mut().bytes_mut();
+                let n = bytes.len().min(nv.len());
+                nv[..n].copy_from_slice(&bytes[..n]);
+                // Restart with the loaded EEPROM so the parameters apply.
+                slave.power_cycle();
+            }
+            Err(e) if e.kind() == io::ErrorKind::NotFound => {}
+            Err(e) => return Err(io_err(format!("reading {}", params.display()))(e)),
+        }
+        slaves.push(slave);
+    }
+    Ok(Chain::with_stores(slaves, stores))
+}
+
+/// Writes the parameter storage of every slave whose EEPROM changed since
+/// the last call (write to a temporary file, then rename: atomic).
+fn persist_parameters(dir: &Path, chain: &Chain, saved: &mut [u32]) -> Result<(), RunnerError> {
+    for (i, (s, seen)) in chain.slaves().iter().zip(saved.iter_mut()).enumerate() {
+        let count = s.slave().nv().write_count();
+        if count == *seen {
+            continue;
+        }
+        *seen = count;
+        let sd = slave_dir(dir, i);
+        let tmp = sd.join("params.bin.tmp");
+        let path = sd.join("params.bin");
+        std::fs::write(&tmp, s.slave().nv().bytes())
+            .map_err(io_err(format!("writing {}", tmp.display())))?;
+        std::fs::rename(&tmp, &path).map_err(io_err(format!("renaming to {}", path.display())))?;
+    }
+    Ok(())
 }
 
 type Tx = Box<dyn pnet_datalink::DataLinkSender>;
@@ -201,6 +277,37 @@ mod tests {
         f[13] = 0x00;
         assert!(!is_request(&f), "IPv4");
         assert!(!is_request(&f[..10]));
+    }
+
+    #[test]
+    fn state_dir_keeps_saved_parameters_and_the_firmware_store_across_restarts() {
+        let dir = std::env::temp_dir().join(format!("pam-state-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        {
+            let mut chain = persistent_chain(&dir, 2).unwrap();
+            let mut saved = vec![0u32; 2];
+            assert_eq!(chain.slaves()[1].slave().firmware_version().as_str(), "10");
+            let slave = chain.slaves_mut()[1].slave_mut();
+            slave.store.set(0x800D, 2, 2345);
+            let store = slave.store.clone();
+            crate::params::save(&store, slave.nv_mut()).unwrap();
+            persist_parameters(&dir, &chain, &mut saved).unwrap();
+        }
+        assert!(dir.join("slave-1/params.bin").exists());
+        assert!(dir.join("slave-1/firmware").is_dir());
+        let chain = persistent_chain(&dir, 2).unwrap();
+        assert_eq!(
+            chain.slaves()[1].slave().store.get(0x800D, 2),
+            Some(2345),
+            "restored"
+        );
+        assert_eq!(
+            chain.slaves()[0].slave().store.get(0x800D, 2),
+            Some(1000),
+            "untouched"
+        );
+        assert_eq!(chain.slaves()[0].slave().firmware_version().as_str(), "10");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
