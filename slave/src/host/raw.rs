@@ -192,8 +192,9 @@ fn persistent_chain(dir: &Path, count: usize) -> Result<Chain, RunnerError> {
         match std::fs::read(&params) {
             Ok(bytes) => {
                 let nv = slave.slave_mut().nv_mut().bytes_mut();
-                let n = bytes.len().min(nv.len());
-                nv[..n].copy_from_slice(&bytes[..n]);
+                for (d, b) in nv.iter_mut().zip(bytes.iter()) {
+                    *d = *b;
+                }
                 // Restart with the loaded EEPROM so the parameters apply.
                 slave.power_cycle();
             }
