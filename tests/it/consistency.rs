@@ -218,6 +218,37 @@ fn esi_dictionary_equals_what_sdo_information_reports_live() {
             }
         }
         assert!(checked > 280, "only {checked} entries compared");
+
+        // Ranges: every entry with a min/max in the model reports exactly
+        // those through SDO Information (value info: minimum | maximum).
+        let mut ranges = 0;
+        for obj in model::OBJECTS {
+            for e in obj.entries {
+                let (Some(min), Some(max)) = (e.min, e.max) else {
+                    continue;
+                };
+                let live = entry_description(&mut c, obj.index, e.sub, 0x60)
+                    .await
+                    .expect("entry");
+                let n = usize::from(e.bit_len).div_ceil(8);
+                assert_eq!(
+                    live.min.as_deref(),
+                    Some(&min.to_le_bytes()[..n]),
+                    "{:#06x}:{} min",
+                    obj.index,
+                    e.sub
+                );
+                assert_eq!(
+                    live.max.as_deref(),
+                    Some(&max.to_le_bytes()[..n]),
+                    "{:#06x}:{} max",
+                    obj.index,
+                    e.sub
+                );
+                ranges += 1;
+            }
+        }
+        assert!(ranges > 100, "{ranges} ranges compared");
     });
 }
 
