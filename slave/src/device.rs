@@ -1047,7 +1047,31 @@ impl<E: Esc, P: PowerStage, N: NvStorage> ObjectAccess for OdAccess<'_, E, P, N>
         {
             return Err(SdoAbortCode::LocalControl);
         }
-        // The assignment may only name PDOs of its own direction.
+        // The assignment may only name PDOs of its own direction, and the
+        // assigned PDOs (subindices 1..=count) must all belong to one mode.
+        if index == 0x1C12 || index == 0x1C13 {
+            let count = if sub == 0 {
+                value
+            } else {
+                self.slave.store.get(index, 0).unwrap_or(0)
+            };
+            let pdo_at = |s: u8| -> u16 {
+                if s == sub {
+                    value as u16
+                } else {
+                    self.slave.store.get(index, s).unwrap_or(0) as u16
+                }
+            };
+            let mut mode = None;
+            for s in 1..=count.clamp(0, 255) as u8 {
+                if let Some(m) = crate::pdo::pdo_mode(pdo_at(s)) {
+                    if mode.is_some_and(|x| x != m) {
+                        return Err(SdoAbortCode::ParameterIncompatible);
+                    }
+                    mode = Some(m);
+                }
+            }
+        }
         if (index == 0x1C12 || index == 0x1C13) && sub != 0 {
             let dir = if index == 0x1C12 {
                 Direction::Outputs
@@ -1094,10 +1118,17 @@ impl<E: Esc, P: PowerStage, N: NvStorage> OdAccess<'_, E, P, N> {
             };
             let (lo, hi) = dir.pdo_range();
             let count = new_value(0).or(self.slave.store.get(index, 0)).unwrap_or(0);
+            let mut mode = None;
             for s in 1..=count.clamp(0, 255) as u8 {
                 let pdo = new_value(s).or(self.slave.store.get(index, s)).unwrap_or(0) as u16;
                 if pdo < lo || pdo > hi || model::find(pdo).is_none() {
                     return Err(SdoAbortCode::ValueRange);
+                }
+                if let Some(m) = crate::pdo::pdo_mode(pdo) {
+                    if mode.is_some_and(|x| x != m) {
+                        return Err(SdoAbortCode::ParameterIncompatible);
+                    }
+                    mode = Some(m);
                 }
             }
         }

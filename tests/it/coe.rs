@@ -279,7 +279,9 @@ fn an_injected_fault_produces_an_emergency_the_master_decodes() {
     use pam_slave::app::power_stage::{Fault, Solenoid};
     use pam_slave::wire::coe::{CoeHeader, CoeService, Emergency, EmergencyRepr};
     smol::block_on(async {
-        let bus = VirtualBus::new(1).expect("bus");
+        // Simulated time: 1 ms per cycle, so no SM watchdog trip on a slow
+        // machine can put another emergency first.
+        let bus = VirtualBus::with_clock(1, master_test::link::Clock::simulated()).expect("bus");
         let md = &*bus.maindevice;
         let group = bus.init().await.expect("init");
         let station = group.subdevice(md, 0).expect("slave").configured_address();
@@ -290,8 +292,8 @@ fn an_injected_fault_produces_an_emergency_the_master_decodes() {
             out[0] = 1;
             out[1..5].copy_from_slice(&5000i32.to_le_bytes());
             drop(out);
+            bus.clock.advance(std::time::Duration::from_millis(1));
             group.tx_rx(md).await.unwrap();
-            smol::Timer::after(std::time::Duration::from_millis(1)).await;
         }
         lock(&bus.chain).slaves_mut()[0]
             .slave_mut()
@@ -300,6 +302,7 @@ fn an_injected_fault_produces_an_emergency_the_master_decodes() {
         let mut c = MailboxClient::new(md, station, MailboxGeometry::standard());
         let mut got = None;
         for _ in 0..20 {
+            bus.clock.advance(std::time::Duration::from_millis(1));
             group.tx_rx(md).await.unwrap();
             if let Ok(m) = c.receive().await {
                 got = Some(m);

@@ -534,3 +534,32 @@ fn led_patterns_follow_the_state() {
         drop(group);
     });
 }
+
+#[test]
+fn mixing_directional_and_independent_pdos_is_refused_at_the_write() {
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md: &Md = &bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let sd = group.subdevice(md, 0).expect("slave");
+        // 0x1C13 = { 0x1A00, 0x1A02 }: replacing one with 0x1A03 mixes modes.
+        let e = sd.sdo_write(0x1C13, 2, 0x1A03u16).await.expect_err("mixed");
+        assert_eq!(crate::common::abort_code(&e), Some(0x0604_0043));
+        let e = sd
+            .sdo_write(0x1C13, 1, 0x1234u16)
+            .await
+            .expect_err("unknown PDO");
+        assert_eq!(crate::common::abort_code(&e), Some(0x0609_0030));
+        // The usual sequence (count 0, entries, count) switches modes fine.
+        sd.sdo_write(0x1C13, 0, 0u8).await.unwrap();
+        sd.sdo_write(0x1C13, 1, 0x1A01u16).await.unwrap();
+        sd.sdo_write(0x1C13, 2, 0x1A03u16).await.unwrap();
+        sd.sdo_write(0x1C13, 0, 2u8).await.unwrap();
+        // Mapping objects are read-only (manual 6.1.1).
+        let e = sd
+            .sdo_write(0x1A00, 1, 0x6000_0101u32)
+            .await
+            .expect_err("RO");
+        assert_eq!(crate::common::abort_code(&e), Some(0x0601_0002));
+    });
+}

@@ -123,6 +123,13 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
             .expect("SDO write over raw Ethernet");
         let v: u16 = sd.sdo_read(0x800D, 2).await.expect("SDO read");
         assert_eq!(v, 2500);
+        // The runner runs on real time; a loaded machine may pause longer
+        // than the 100 ms SM watchdog between the cycle and the SDO read
+        // below, so this master switches the watchdog off (0x0420 = 0).
+        ethercrab::Command::bwr(0x0420)
+            .send(md, 0u16)
+            .await
+            .expect("SM watchdog off");
         let group = group.into_op(md).await.expect("OP over raw Ethernet");
         for sd in group.iter(md) {
             let mut out = sd.outputs_raw_mut();
