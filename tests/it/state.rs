@@ -183,6 +183,14 @@ fn tf1200_boot_handling() {
             (0x03 | ERR, 0x0011),
             "BOOT -> PRE-OP refused"
         );
+        for bad in [0x04u16, 0x08] {
+            request(&bus, s, 0x13).await;
+            assert_eq!(
+                request(&bus, s, bad).await,
+                (0x03 | ERR, 0x0011),
+                "BOOT -> {bad:#x}"
+            );
+        }
         assert_eq!(request(&bus, s, 0x11).await, (0x01, 0), "BOOT -> INIT");
     });
 }
@@ -237,6 +245,10 @@ fn tf1200_op_to_safeop_on_unknown_state() {
         let (_g, s) = safe_op(&bus).await;
         request(&bus, s, 0x08).await;
         assert_eq!(request(&bus, s, 0x0D).await, (0x04 | ERR, 0x0012));
+        // OP -> BOOT is not a transition: SAFE-OP with 0x0011.
+        request(&bus, s, 0x14).await;
+        assert_eq!(request(&bus, s, 0x08).await, (0x08, 0));
+        assert_eq!(request(&bus, s, 0x03).await, (0x04 | ERR, 0x0011));
     });
 }
 
