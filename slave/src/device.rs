@@ -24,7 +24,7 @@ use crate::od::model;
 use crate::od::store::{self, ObjectStore};
 use crate::od::types::{DataType, PdoMapping};
 use crate::params::{self, STORAGE_SIZE, Stored};
-use crate::pdo::{Direction, MAX_IMAGE, PdoError, PdoMode, ProcessImage};
+use crate::pdo::{Direction, MAX_IMAGE, PdoMode, ProcessImage};
 use crate::sii;
 use crate::wire::coe::SdoAbortCode;
 
@@ -1162,9 +1162,6 @@ impl<E: Esc, P: PowerStage, N: NvStorage> OdAccess<'_, E, P, N> {
         Ok(())
     }
 }
-
-/// Error building the process image (kept for callers of [`ProcessImage`]).
-pub type ImageError = PdoError;
 
 /// The PAM-199 on the software ESC: takes EtherCAT frames.
 pub struct SoftSlave {
