@@ -446,6 +446,21 @@ mod tests {
         out
     }
 
+    /// Starts a segmented download of 100 bytes to 0x2000:00 carrying the
+    /// first 20 bytes of `data`.
+    fn begin(srv: &mut SdoServer, od: &mut Od, data: &[u8; 100]) {
+        let init = SdoRequest::InitiateDownload {
+            index: 0x2000,
+            sub: 0,
+            complete_access: false,
+            kind: DownloadKind::Normal {
+                complete_size: 100,
+                data: &data[..20],
+            },
+        };
+        ask(srv, od, init, 64);
+    }
+
     #[test]
     fn upload_longer_than_the_mailbox_is_segmented_with_toggles() {
         let (mut srv, mut od) = (SdoServer::default(), od());
@@ -514,16 +529,7 @@ mod tests {
     fn segmented_download_is_stored_only_when_complete() {
         let (mut srv, mut od) = (SdoServer::default(), od());
         let data = [7u8; 100];
-        let init = SdoRequest::InitiateDownload {
-            index: 0x2000,
-            sub: 0,
-            complete_access: false,
-            kind: DownloadKind::Normal {
-                complete_size: 100,
-                data: &data[..20],
-            },
-        };
-        ask(&mut srv, &mut od, init, 64);
+        begin(&mut srv, &mut od, &data);
         ask(
             &mut srv,
             &mut od,
@@ -556,16 +562,7 @@ mod tests {
     fn toggle_error_aborts_0503_0000_and_leaves_the_object() {
         let (mut srv, mut od) = (SdoServer::default(), od());
         let data = [9u8; 100];
-        let init = SdoRequest::InitiateDownload {
-            index: 0x2000,
-            sub: 0,
-            complete_access: false,
-            kind: DownloadKind::Normal {
-                complete_size: 100,
-                data: &data[..20],
-            },
-        };
-        ask(&mut srv, &mut od, init, 64);
+        begin(&mut srv, &mut od, &data);
         let r = ask(
             &mut srv,
             &mut od,
@@ -591,16 +588,7 @@ mod tests {
     fn a_new_request_during_a_segmented_transfer_aborts_0504_0000() {
         let (mut srv, mut od) = (SdoServer::default(), od());
         let data = [9u8; 100];
-        let init = SdoRequest::InitiateDownload {
-            index: 0x2000,
-            sub: 0,
-            complete_access: false,
-            kind: DownloadKind::Normal {
-                complete_size: 100,
-                data: &data[..20],
-            },
-        };
-        ask(&mut srv, &mut od, init, 64);
+        begin(&mut srv, &mut od, &data);
         let r = ask(
             &mut srv,
             &mut od,
@@ -658,16 +646,7 @@ mod tests {
     fn early_last_segment_aborts_with_length_mismatch() {
         let (mut srv, mut od) = (SdoServer::default(), od());
         let data = [9u8; 100];
-        let init = SdoRequest::InitiateDownload {
-            index: 0x2000,
-            sub: 0,
-            complete_access: false,
-            kind: DownloadKind::Normal {
-                complete_size: 100,
-                data: &data[..20],
-            },
-        };
-        ask(&mut srv, &mut od, init, 64);
+        begin(&mut srv, &mut od, &data);
         let r = ask(
             &mut srv,
             &mut od,
