@@ -8,7 +8,9 @@
 
 use std::fmt;
 
-use pam_slave::sii::{FmmuUsage, PdoDirection, SiiError, SiiReader, SiiStrings, SmType, protocols};
+use pam_slave::sii::{
+    FmmuUsage, PdoDirection, SiiError, SiiReader, SiiStrings, SmType, pdo_flags, protocols,
+};
 
 use crate::esi::bootstrap_bytes;
 use crate::xml::{self, Element, hex_binary, hex_dec};
@@ -71,6 +73,11 @@ impl Diff {
 
 fn num(e: Option<&Element>) -> Option<i64> {
     e.and_then(|e| hex_dec(&e.text))
+}
+
+/// An xs:boolean attribute value that means true.
+fn xml_true(v: &str) -> bool {
+    matches!(v.trim(), "1" | "true")
 }
 
 fn num_attr(e: &Element, a: &str) -> Option<i64> {
@@ -145,6 +152,17 @@ pub fn check(esi: &str, sii: &[u8]) -> Result<Vec<Mismatch>, CheckError> {
                 dev.text_at("GroupType").unwrap_or("").to_string(),
                 string(&strings, g.group_idx),
             );
+            // SOEM names a slave after SII string 1 (ethercrab follows the
+            // name index): it must be the device type or its name.
+            let first = string(&strings, 1);
+            let name = dev.text_at("Name").unwrap_or("");
+            if first != ty.text && first != name {
+                d.0.push(Mismatch {
+                    what: "SII string 1 (the device name SOEM shows)".into(),
+                    esi: format!("{:?} (Type) or {name:?} (Name)", ty.text),
+                    sii: format!("{first:?}"),
+                });
+            }
             let coe = dev.path("Mailbox/CoE");
             let attr = |a: &str| {
                 coe.and_then(|c| c.attr(a))
@@ -267,6 +285,19 @@ pub fn check(esi: &str, sii: &[u8]) -> Result<Vec<Mismatch>, CheckError> {
                 e.text_at("Name").unwrap_or("").to_string(),
                 string(&strings, p.name_idx),
             );
+            // Flags the ESI states as attributes (ETG.2000 PdoType) and the
+            // SII as bits (ETG.2010 Table 14).
+            for (attr, bit) in [
+                ("Fixed", pdo_flags::FIXED_CONTENT),
+                ("Mandatory", pdo_flags::MANDATORY),
+                ("Virtual", pdo_flags::VIRTUAL_CONTENT),
+            ] {
+                d.cmp(
+                    format!("{what} {attr} (SII flag {bit:#06x})"),
+                    e.attr(attr).is_some_and(xml_true),
+                    p.flags & bit != 0,
+                );
+            }
             let esi_entries: Vec<(i64, i64, i64)> = e
                 .children_named("Entry")
                 .map(|x| {
@@ -390,6 +421,65 @@ mod tests {
             m.iter().any(|m| m.what == "RxPdo 0x1600 SyncManager"),
             "{m:#?}"
         );
+    }
+
+    #[test]
+    fn sii_string_1_that_is_not_the_device_is_reported() {
+        let (esi, sii) = ours();
+        let r = SiiReader::new(&sii).unwrap();
+        assert_eq!(r.strings().unwrap().get(1), Some("PAM-199-P-ETC"));
+        // Swap string 1 for another name of the same length.
+        let at = category_data(&sii, CategoryType::Strings) + 2;
+        let mut bad = sii.clone();
+        bad[at..at + 13].copy_from_slice(b"PAM-199-P-XXX");
+        let m = check(&esi, &bad).unwrap();
+        assert!(
+            m.iter()
+                .any(|m| m.what == "SII string 1 (the device name SOEM shows)"),
+            "{m:#?}"
+        );
+    }
+
+    #[test]
+    fn cleared_fixed_content_flag_is_reported() {
+        let (esi, mut sii) = ours();
+        // First RxPDO (0x1600): flags at header offset 6.
+        let at = category_data(&sii, CategoryType::RxPdo);
+        assert_eq!(sii[at + 6] & 0x10, 0x10, "0x1600 is fixed in the SII");
+        sii[at + 6] &= !0x10;
+        let m = check(&esi, &sii).unwrap();
+        assert!(
+            m.iter()
+                .any(|m| m.what == "RxPdo 0x1600 Fixed (SII flag 0x0010)"),
+            "{m:#?}"
+        );
+    }
+
+    #[test]
+    fn every_pdo_the_esi_marks_fixed_has_the_sii_flag() {
+        let (esi, sii) = ours();
+        let doc = crate::xml::parse(&esi).unwrap();
+        let dev = doc.path("Descriptions/Devices/Device").unwrap();
+        let fixed: Vec<i64> = dev
+            .children
+            .iter()
+            .filter(|e| e.name == "RxPdo" || e.name == "TxPdo")
+            .filter(|e| e.attr("Fixed") == Some("1"))
+            .filter_map(|e| num(e.child("Index")))
+            .collect();
+        assert_eq!(fixed.len(), 6, "every PAM PDO has fixed content");
+        let r = SiiReader::new(&sii).unwrap();
+        for dir in [PdoDirection::Rx, PdoDirection::Tx] {
+            for p in r.pdos(dir).unwrap() {
+                let p = p.unwrap();
+                assert_eq!(
+                    p.flags & pdo_flags::FIXED_CONTENT != 0,
+                    fixed.contains(&i64::from(p.index)),
+                    "{:#06x}",
+                    p.index
+                );
+            }
+        }
     }
 
     #[test]

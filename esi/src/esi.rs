@@ -531,8 +531,15 @@ fn write_pdo(w: &mut W, slot: &PdoSlot, all: &[PdoSlot]) -> Result<(), EsiError>
     };
     let sm = slot.sm.map(|s| s.to_string());
     let mut attrs: Vec<(&str, &str)> = Vec::new();
-    if let Some(sm) = &sm {
+    // The same flags the SII carries (pam_slave::pdo::sii_flags).
+    let flags = pam_slave::pdo::sii_flags(slot.index);
+    if flags & pam_slave::sii::pdo_flags::FIXED_CONTENT != 0 {
         attrs.push(("Fixed", "1"));
+    }
+    if flags & pam_slave::sii::pdo_flags::MANDATORY != 0 {
+        attrs.push(("Mandatory", "1"));
+    }
+    if let Some(sm) = &sm {
         attrs.push(("Sm", sm));
     }
     let name = pam_slave::od::model::find(slot.index)
@@ -1061,7 +1068,8 @@ mod tests {
         );
         assert_eq!(excludes(&p1600), [0x1601]);
         let p1601 = pdo("RxPdo", 0x1601);
-        assert_eq!((p1601.attr("Sm"), p1601.attr("Fixed")), (None, None));
+        // The alternative set has fixed content too (no PDO configuration).
+        assert_eq!((p1601.attr("Sm"), p1601.attr("Fixed")), (None, Some("1")));
         assert_eq!(excludes(&p1601), [0x1600]);
         for (i, sm) in [
             (0x1A00, Some("3")),

@@ -288,9 +288,32 @@ impl<'a> MailboxClient<'a> {
                 MailboxType::CoE => {
                     let coe = CoeHeader::new_checked(&msg.payload[..])
                         .map_err(|e| ClientError::Protocol(e.to_string()))?;
+                    let sdo = &msg.payload[2..];
                     match coe.service() {
-                        CoeService::SdoResponse | CoeService::SdoRequest => {
-                            return Ok(msg.payload[2..].to_vec());
+                        // ETG.1000.6 5.6.2.7: "Abort SDO Transfer" is an
+                        // SDO request (service 2), whichever side sends it.
+                        CoeService::SdoRequest => {
+                            return match SdoRequest::parse(sdo) {
+                                Ok(SdoRequest::Abort { index, sub, code }) => {
+                                    Err(ClientError::Abort { index, sub, code })
+                                }
+                                Ok(other) => Err(ClientError::Protocol(format!(
+                                    "the slave sent an SDO request that is not an abort: {other:?}"
+                                ))),
+                                Err(e) => Err(ClientError::Protocol(e.to_string())),
+                            };
+                        }
+                        CoeService::SdoResponse => {
+                            // A response with command specifier 4 is not an
+                            // abort: SOEM and Wireshark would read it as a
+                            // successful transfer. Refuse it.
+                            if let Ok(SdoResponse::Abort { code, .. }) = SdoResponse::parse(sdo) {
+                                return Err(ClientError::Protocol(format!(
+                                    "SDO abort {:#010x} sent as CoE service 3 (SDO response); ETG.1000.6 sends Abort SDO Transfer as service 2 (SDO request)",
+                                    u32::from(code)
+                                )));
+                            }
+                            return Ok(sdo.to_vec());
                         }
                         // Emergencies and other services are not the answer.
                         _ => continue,

@@ -69,6 +69,8 @@ pub enum AlStatusCode {
     NoError,
     /// 0x0001 unspecified error.
     Unspecified,
+    /// 0x0007 firmware update not successful, old firmware still running.
+    FirmwareUpdateFailed,
     /// 0x0011 invalid requested state change.
     InvalidStateChange,
     /// 0x0012 unknown requested state.
@@ -107,6 +109,7 @@ impl AlStatusCode {
         match self {
             AlStatusCode::NoError => 0x0000,
             AlStatusCode::Unspecified => 0x0001,
+            AlStatusCode::FirmwareUpdateFailed => 0x0007,
             AlStatusCode::InvalidStateChange => 0x0011,
             AlStatusCode::UnknownState => 0x0012,
             AlStatusCode::BootNotSupported => 0x0013,
@@ -130,6 +133,7 @@ impl AlStatusCode {
         match code {
             0x0000 => AlStatusCode::NoError,
             0x0001 => AlStatusCode::Unspecified,
+            0x0007 => AlStatusCode::FirmwareUpdateFailed,
             0x0011 => AlStatusCode::InvalidStateChange,
             0x0012 => AlStatusCode::UnknownState,
             0x0013 => AlStatusCode::BootNotSupported,

@@ -188,7 +188,7 @@ fn encode_sii(layout: &MemoryLayout, out: &mut [u8]) -> Result<usize, sii::SiiEr
             index: *index,
             sm: *sm,
             name,
-            flags: 0,
+            flags: crate::pdo::sii_flags(*index),
             entries,
         });
     }
@@ -199,7 +199,7 @@ fn encode_sii(layout: &MemoryLayout, out: &mut [u8]) -> Result<usize, sii::SiiEr
             index: *index,
             sm: *sm,
             name,
-            flags: 0,
+            flags: crate::pdo::sii_flags(*index),
             entries,
         });
     }
@@ -344,6 +344,7 @@ pub struct Slave<E: Esc, P: PowerStage = SimPowerStage, N: NvStorage = MemNv<STO
     last_sent: Option<(usize, [u8; MAX_MAILBOX])>,
     emergencies: Emergencies,
     emergencies_enabled: bool,
+    pdi_failures: u32,
     now_ns: u64,
 }
 
@@ -361,6 +362,19 @@ struct Checks<'a, E: Esc> {
     store: &'a ObjectStore,
     layout: MemoryLayout,
     images: Option<(ProcessImage, ProcessImage)>,
+    /// A PDI access that failed during a check: the check refuses with
+    /// 0x0001 and the firmware goes to its fail-safe state (never "assume
+    /// all is well").
+    pdi_error: Option<EscError>,
+}
+
+impl<E: Esc> Checks<'_, E> {
+    /// Records a failed PDI access; the refusal code of a check that could
+    /// not read the ESC.
+    fn pdi_failed(&mut self, e: EscError) -> AlStatusCode {
+        self.pdi_error.get_or_insert(e);
+        AlStatusCode::Unspecified
+    }
 }
 
 fn read_sm<E: Esc>(esc: &mut E, n: u8) -> Result<(u16, u16, u8, bool), EscError> {
@@ -376,31 +390,32 @@ fn read_sm<E: Esc>(esc: &mut E, n: u8) -> Result<(u16, u16, u8, bool), EscError>
 }
 
 impl<E: Esc> Checks<'_, E> {
-    fn mailbox_matches(&mut self, out: (u16, u16), inp: (u16, u16)) -> bool {
-        let (Ok(sm0), Ok(sm1)) = (read_sm(self.esc, 0), read_sm(self.esc, 1)) else {
-            return false;
-        };
-        sm0 == (out.0, out.1, sm0.2, true)
+    /// SM0/SM1 are enabled with the given start and length and mailbox
+    /// control bits; `Err` when the PDI cannot read them.
+    fn mailbox_matches(&mut self, out: (u16, u16), inp: (u16, u16)) -> Result<bool, EscError> {
+        let sm0 = read_sm(self.esc, 0)?;
+        let sm1 = read_sm(self.esc, 1)?;
+        Ok(sm0 == (out.0, out.1, sm0.2, true)
             && sm0.2 & 0x0F == SM_CONTROL[0] & 0x0F
             && sm1 == (inp.0, inp.1, sm1.2, true)
-            && sm1.2 & 0x0F == SM_CONTROL[1] & 0x0F
+            && sm1.2 & 0x0F == SM_CONTROL[1] & 0x0F)
     }
 }
 
 impl<E: Esc> TransitionChecks for Checks<'_, E> {
     fn check_mailbox(&mut self) -> Result<(), AlStatusCode> {
-        if self.mailbox_matches(self.layout.mbx_out, self.layout.mbx_in) {
-            Ok(())
-        } else {
-            Err(AlStatusCode::InvalidMailboxPreOp)
+        match self.mailbox_matches(self.layout.mbx_out, self.layout.mbx_in) {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(AlStatusCode::InvalidMailboxPreOp),
+            Err(e) => Err(self.pdi_failed(e)),
         }
     }
 
     fn check_boot_mailbox(&mut self) -> Result<(), AlStatusCode> {
-        if self.mailbox_matches(self.layout.boot_out, self.layout.boot_in) {
-            Ok(())
-        } else {
-            Err(AlStatusCode::InvalidMailboxBoot)
+        match self.mailbox_matches(self.layout.boot_out, self.layout.boot_in) {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(AlStatusCode::InvalidMailboxBoot),
+            Err(e) => Err(self.pdi_failed(e)),
         }
     }
 
@@ -424,8 +439,8 @@ impl<E: Esc> TransitionChecks for Checks<'_, E> {
         if inputs.mode().is_some_and(|m| m != function) {
             return Err(AlStatusCode::InvalidInputConfig);
         }
-        let sm2 = read_sm(self.esc, 2).map_err(|_| AlStatusCode::InvalidOutputConfig)?;
-        let sm3 = read_sm(self.esc, 3).map_err(|_| AlStatusCode::InvalidInputConfig)?;
+        let sm2 = read_sm(self.esc, 2).map_err(|e| self.pdi_failed(e))?;
+        let sm3 = read_sm(self.esc, 3).map_err(|e| self.pdi_failed(e))?;
         let out_ok = if outputs.byte_len() == 0 {
             !sm2.3
         } else {
@@ -455,8 +470,14 @@ impl<E: Esc> TransitionChecks for Checks<'_, E> {
     fn check_outputs(&mut self) -> Result<(), AlStatusCode> {
         // SAFE-OP -> OP needs valid outputs: an expired SyncManager watchdog
         // is re-armed only by fresh outputs from the master.
-        let time = self.esc.read_u16(reg::WATCHDOG_TIME_PD).unwrap_or(0);
-        let status = self.esc.read_u16(reg::WATCHDOG_STATUS_PD).unwrap_or(1);
+        let time = self
+            .esc
+            .read_u16(reg::WATCHDOG_TIME_PD)
+            .map_err(|e| self.pdi_failed(e))?;
+        let status = self
+            .esc
+            .read_u16(reg::WATCHDOG_STATUS_PD)
+            .map_err(|e| self.pdi_failed(e))?;
         if time != 0 && status & 1 == 0 {
             return Err(AlStatusCode::SmWatchdog);
         }
@@ -500,6 +521,7 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
             last_sent: None,
             emergencies: Emergencies::default(),
             emergencies_enabled: true,
+            pdi_failures: 0,
             now_ns: 0,
         }
     }
@@ -608,7 +630,60 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
     /// [`Slave::poll`] with the firmware image store: FoE writes go there
     /// (in BOOT) and BOOT→INIT marks a downloaded image pending for the
     /// bootloader. Without a store FoE answers "unsupported protocol".
+    ///
+    /// A failed PDI access is never taken as "all is well": the firmware
+    /// goes to its fail-safe state ([`Slave::pdi_failure`]: outputs off,
+    /// OP left for SAFE-OP, AL error 0x0001, Emergency 0x5000) and the error
+    /// is returned.
     pub fn poll_with<'s>(
+        &mut self,
+        now_ns: u64,
+        images: Option<&mut (dyn ImageStore + 's)>,
+    ) -> Result<(), EscError> {
+        match self.run_once(now_ns, images) {
+            Ok(()) => Ok(()),
+            Err(e) => {
+                self.pdi_failure(e);
+                Err(e)
+            }
+        }
+    }
+
+    /// The fail-safe reaction to a PDI failure `e`: outputs to their safe
+    /// state and the power stage off at once, OP left for SAFE-OP, the
+    /// error indication set with AL status code 0x0001 (unspecified error;
+    /// ETG.1000.6 has no code for "the firmware cannot reach its ESC") and
+    /// an Emergency 0x5000 (device hardware) queued. Writing the AL status
+    /// is attempted; when the PDI is still down the master sees the
+    /// silence of the SM watchdog and the PDI watchdog instead.
+    fn pdi_failure(&mut self, e: EscError) {
+        self.safe_outputs();
+        self.stage.disable();
+        self.pdi_failures = self.pdi_failures.saturating_add(1);
+        let state = if self.al.state == AlState::Op {
+            AlState::SafeOp
+        } else {
+            self.al.state
+        };
+        let first = !(self.al.error && self.al.code == AlStatusCode::Unspecified);
+        self.al = AlStatus {
+            state,
+            error: true,
+            code: AlStatusCode::Unspecified,
+        };
+        if first && self.emergencies_enabled && state != AlState::Init && state != AlState::Boot {
+            self.emergencies.pdi_failure(e);
+        }
+        let _ = self.esc.write_u16(reg::AL_STATUS_CODE, self.al.code.code());
+        let _ = self.esc.write_u16(reg::AL_STATUS, self.al.register());
+    }
+
+    /// How many polls ended in a PDI failure since power-on.
+    pub fn pdi_failures(&self) -> u32 {
+        self.pdi_failures
+    }
+
+    fn run_once<'s>(
         &mut self,
         now_ns: u64,
         mut images: Option<&mut (dyn ImageStore + 's)>,
@@ -628,9 +703,21 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
             self.al_control(control)?;
             if before == AlState::Boot && self.al.state == AlState::Init {
                 // Manual 5.10: "change to Init, the bootloader copies the new
-                // software": the downloaded image becomes pending.
+                // software": the downloaded image becomes pending. A store
+                // that cannot record it is reported, not ignored: INIT with
+                // the error indication and 0x0007 "firmware update not
+                // successful, old firmware still running".
                 if let Some(st) = images.as_deref_mut() {
-                    let _ = firmware::commit_pending(st);
+                    if firmware::commit_pending(st).is_err() {
+                        self.al = AlStatus {
+                            state: AlState::Init,
+                            error: true,
+                            code: AlStatusCode::FirmwareUpdateFailed,
+                        };
+                        self.esc
+                            .write_u16(reg::AL_STATUS_CODE, self.al.code.code())?;
+                        self.esc.write_u16(reg::AL_STATUS, self.al.register())?;
+                    }
                 }
             }
         }
@@ -694,8 +781,9 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
                 store: &self.store,
                 layout: self.layout,
                 images: None,
+                pdi_error: None,
             };
-            if !checks.mailbox_matches(out, inp) {
+            if !checks.mailbox_matches(out, inp)? {
                 let code = if boot {
                     AlStatusCode::InvalidMailboxBoot
                 } else {
@@ -753,8 +841,12 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
         };
         let reg = self.emergencies.update(state, self.al.code.code());
         self.store.set(0x1001, 0, i64::from(reg));
-        if !self.emergencies_enabled {
-            while self.emergencies.pop_into(&mut [0u8; 16]).is_some() {}
+        // No mailbox in INIT (and BOOT has only the bootstrap mailbox for
+        // FoE): what is queued there would reach the next master session
+        // as a stale message (SOEM's config_map then fails). Like the SSC
+        // and SOES, INIT empties the queue; 0x1001 stays consistent.
+        if !self.emergencies_enabled || matches!(self.al.state, AlState::Init | AlState::Boot) {
+            self.emergencies.clear();
         }
     }
 
@@ -774,8 +866,13 @@ impl<E: Esc, P: PowerStage, N: NvStorage> Slave<E, P, N> {
             store: &self.store,
             layout: self.layout,
             images: None,
+            pdi_error: None,
         };
         let after = al::transition(before, control, &mut checks);
+        if let Some(e) = checks.pdi_error {
+            // The check could not read the ESC: fail safe (see poll_with).
+            return Err(e);
+        }
         if after.error && !before.error && before.state == AlState::PreOp && (control & 0x0F) == 4 {
             self.emergencies.transition_refused(after.code.code());
         }
@@ -1226,28 +1323,34 @@ impl SoftSlave {
     }
 
     /// Runs the ESC's watchdogs and then the firmware once. A PDI failure
-    /// cannot happen on the software ESC; should it, the poll is retried at
-    /// the next call. While the firmware is stalled
-    /// ([`SoftSlave::set_stalled`]) only the ESC runs; once its PDI
+    /// (only possible here when injected with
+    /// [`SoftEsc::set_pdi_fault`]) puts the firmware in its fail-safe state
+    /// (see [`Slave::poll_with`]) and is returned. While the firmware is
+    /// stalled ([`SoftSlave::set_stalled`]) only the ESC runs; once its PDI
     /// watchdog expires the outputs go to the safe state.
-    pub fn poll(&mut self, now_ns: u64) {
-        self.poll_with(now_ns, None);
+    pub fn poll(&mut self, now_ns: u64) -> Result<(), EscError> {
+        self.poll_with(now_ns, None)
     }
 
     /// [`SoftSlave::poll`] with the firmware image store (see
     /// [`Slave::poll_with`]).
-    pub fn poll_with<'s>(&mut self, now_ns: u64, images: Option<&mut (dyn ImageStore + 's)>) {
+    pub fn poll_with<'s>(
+        &mut self,
+        now_ns: u64,
+        images: Option<&mut (dyn ImageStore + 's)>,
+    ) -> Result<(), EscError> {
         self.inner.esc.update_watchdogs(now_ns);
         if self.stalled {
             if self.inner.esc.pdi_watchdog_expired() {
                 self.inner.stage.disable();
             }
-            return;
+            return Ok(());
         }
-        let _ = self.inner.poll_with(now_ns, images);
+        let result = self.inner.poll_with(now_ns, images);
         // Stamp the firmware's PDI accesses with the time they happened.
         self.inner.esc.update_watchdogs(now_ns);
         self.now_ns = now_ns;
+        result
     }
 
     /// Switches CoE Emergency messages on or off (see

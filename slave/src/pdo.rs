@@ -89,6 +89,23 @@ pub enum PdoMode {
     Independent,
 }
 
+/// The SII PDO flags (ETG.2010 Table 14) of the PDO whose mapping object is
+/// `pdo`, as the ESI states them with its attributes: fixed content
+/// (`Fixed="1"`, [`crate::sii::pdo_flags::FIXED_CONTENT`]) when no entry of
+/// the mapping object can be written, i.e. the master cannot change what
+/// the PDO carries. The SII encoder and the ESI generator both call this,
+/// so the two files cannot disagree on a flag.
+pub fn sii_flags(pdo: u16) -> u16 {
+    let Some((_, o)) = crate::od::model::find(pdo) else {
+        return 0;
+    };
+    if o.entries.iter().any(|e| e.access.writable()) {
+        0
+    } else {
+        crate::sii::pdo_flags::FIXED_CONTENT
+    }
+}
+
 /// The mode of a PDO index, if it is one of the device's PDOs.
 pub const fn pdo_mode(pdo: u16) -> Option<PdoMode> {
     match pdo {

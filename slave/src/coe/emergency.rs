@@ -17,6 +17,7 @@
 //! | EEPROM data error | 0x5530 | manufacturer (7) | |
 //! | SyncManager watchdog (OP left) | 0x8100 | communication (4) | AL code low byte |
 //! | PRE-OP→SAFE-OP refused | 0xA000 | communication (4) | AL code low byte |
+//! | PDI failure (firmware cannot reach its ESC) | 0x5000 (device hardware) | generic (0) | 1 out of range, 2 SM busy, 3 interface |
 //! | all faults gone | 0x0000 | 0 | |
 //!
 //! Bit 0 (generic error) of 0x1001 is set whenever any other bit is.
@@ -148,6 +149,29 @@ impl Emergencies {
         }
         self.last = now;
         now.error_register()
+    }
+
+    /// Queues a PDI failure (0x5000 device hardware; data byte 0 says
+    /// which: 1 access out of range, 2 SyncManager busy, 3 interface).
+    pub fn pdi_failure(&mut self, e: crate::esc::EscError) {
+        let kind = match e {
+            crate::esc::EscError::OutOfRange { .. } => 1,
+            crate::esc::EscError::SmBusy { .. } => 2,
+            crate::esc::EscError::Interface => 3,
+        };
+        let state = self.last;
+        self.push(EmergencyRepr {
+            error_code: 0x5000,
+            error_register: state.error_register() | register::GENERIC,
+            data: [kind, 0, 0, 0, 0],
+        });
+    }
+
+    /// Drops every queued message (the mailbox stopped: INIT). The fault
+    /// state is kept, so a fault that persists is not reported again and
+    /// 0x1001 stays as it is.
+    pub fn clear(&mut self) {
+        self.queue.clear();
     }
 
     /// Queues the refusal of a state transition (0xA000, AL code in data).

@@ -64,11 +64,13 @@ impl CoeServer {
                 let (head, rest) = out
                     .split_at_mut_checked(CoeHeader::<&[u8]>::HEADER_LEN)
                     .ok_or(MailboxErrorCode::NoMoreMemory)?;
-                let Some(n) = self.sdo.handle(body, rest, od)? else {
+                let Some(out) = self.sdo.handle(body, rest, od)? else {
                     return Ok(None);
                 };
-                CoeHeader::emit_into(head, 0, CoeService::SdoResponse);
-                Ok(Some(n + CoeHeader::<&[u8]>::HEADER_LEN))
+                // An abort travels as an SDO request (service 2), every
+                // other answer as an SDO response (service 3).
+                CoeHeader::emit_into(head, 0, out.service);
+                Ok(Some(out.len + CoeHeader::<&[u8]>::HEADER_LEN))
             }
             CoeService::SdoInformation => {
                 let (head, rest) = out

@@ -7,7 +7,7 @@
 //! an interrupted transfer leaves the object unchanged.
 
 use super::ObjectAccess;
-use crate::wire::coe::{DownloadKind, SdoAbortCode, SdoRequest, SdoResponse};
+use crate::wire::coe::{CoeService, DownloadKind, SdoAbortCode, SdoRequest, SdoResponse};
 use crate::wire::mailbox::MailboxErrorCode;
 
 /// Largest object (or complete-access image) a transfer can carry.
@@ -48,6 +48,31 @@ pub enum SdoState {
     },
 }
 
+/// One SDO message the server produced: its length and the CoE service
+/// it travels in.
+///
+/// An "Abort SDO Transfer" is an SDO *request* (ETG.1000.6 5.6.2.7.1,
+/// CoE service 2) in either direction; every other answer is an SDO
+/// response (service 3). SOEM (`ecx_SDOread`/`ecx_SDOwrite`) and
+/// Wireshark's CoE dissector recognise an abort only in service 2, as SOES
+/// (`SDO_abort`) and the SSC send it. See docs/MANUAL-NOTES.md, note 44.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SdoOutput {
+    /// Bytes of the SDO part (after the CoE header).
+    pub len: usize,
+    /// The CoE service to put in the CoE header.
+    pub service: CoeService,
+}
+
+impl SdoOutput {
+    fn response(len: usize) -> Self {
+        SdoOutput {
+            len,
+            service: CoeService::SdoResponse,
+        }
+    }
+}
+
 /// The SDO server.
 #[derive(Debug)]
 pub struct SdoServer {
@@ -70,15 +95,15 @@ impl SdoServer {
         self.state
     }
 
-    /// Handles the SDO part of a CoE request; writes the SDO response into
-    /// `out` (which bounds segment sizes) and returns its length, or `None`
-    /// when no response is due (an abort from the master).
+    /// Handles the SDO part of a CoE request; writes the SDO answer into
+    /// `out` (which bounds segment sizes) and returns its length and CoE
+    /// service, or `None` when no answer is due (an abort from the master).
     pub fn handle(
         &mut self,
         request: &[u8],
         out: &mut [u8],
         od: &mut impl ObjectAccess,
-    ) -> Result<Option<usize>, MailboxErrorCode> {
+    ) -> Result<Option<SdoOutput>, MailboxErrorCode> {
         let Ok(req) = SdoRequest::parse(request) else {
             return Err(MailboxErrorCode::SizeTooShort);
         };
@@ -87,9 +112,15 @@ impl SdoServer {
             Reply::None => Ok(None),
             Reply::Abort { index, sub, code } => {
                 self.state = SdoState::Idle;
-                emit(&SdoResponse::Abort { index, sub, code }, out).map(Some)
+                let len = SdoRequest::Abort { index, sub, code }
+                    .emit(out)
+                    .map_err(|_| MailboxErrorCode::NoMoreMemory)?;
+                Ok(Some(SdoOutput {
+                    len,
+                    service: CoeService::SdoRequest,
+                }))
             }
-            Reply::Ack(r) => emit(&r, out).map(Some),
+            Reply::Ack(r) => emit(&r, out),
             Reply::UploadFirst {
                 index,
                 sub,
@@ -105,7 +136,7 @@ impl SdoServer {
                     complete_size: total as u32,
                     data,
                 };
-                emit(&r, out).map(Some)
+                emit(&r, out)
             }
             Reply::UploadSegment {
                 from,
@@ -115,7 +146,7 @@ impl SdoServer {
             } => {
                 let data = self.buf.get(from..to).unwrap_or(&[]);
                 let r = SdoResponse::UploadSegment { toggle, last, data };
-                emit(&r, out).map(Some)
+                emit(&r, out)
             }
         }
     }
@@ -377,8 +408,10 @@ enum Reply {
     },
 }
 
-fn emit(r: &SdoResponse<'_>, out: &mut [u8]) -> Result<usize, MailboxErrorCode> {
-    r.emit(out).map_err(|_| MailboxErrorCode::NoMoreMemory)
+fn emit(r: &SdoResponse<'_>, out: &mut [u8]) -> Result<Option<SdoOutput>, MailboxErrorCode> {
+    r.emit(out)
+        .map(|len| Some(SdoOutput::response(len)))
+        .map_err(|_| MailboxErrorCode::NoMoreMemory)
 }
 
 #[cfg(test)]
@@ -437,12 +470,22 @@ mod tests {
         }
     }
 
+    /// Sends `req`; returns the answer's bytes. Aborts come back as SDO
+    /// requests (service 2) and are returned re-encoded as
+    /// `SdoResponse::Abort` bytes (same layout) for the assertions; any
+    /// other answer must be an SDO response (service 3).
     fn ask(srv: &mut SdoServer, od: &mut Od, req: SdoRequest<'_>, room: usize) -> Vec<u8> {
         let mut raw = [0u8; 64];
         let n = req.emit(&mut raw).unwrap();
         let mut out = vec![0u8; room];
-        let len = srv.handle(&raw[..n], &mut out, od).unwrap().unwrap();
-        out.truncate(len);
+        let got = srv.handle(&raw[..n], &mut out, od).unwrap().unwrap();
+        out.truncate(got.len);
+        let is_abort = matches!(SdoRequest::parse(&out), Ok(SdoRequest::Abort { .. }));
+        if is_abort {
+            assert_eq!(got.service, CoeService::SdoRequest, "abort in service 2");
+        } else {
+            assert_eq!(got.service, CoeService::SdoResponse);
+        }
         out
     }
 
@@ -459,6 +502,34 @@ mod tests {
             },
         };
         ask(srv, od, init, 64);
+    }
+
+    #[test]
+    fn sdo_abort_travels_as_an_sdo_request_service_2() {
+        let (mut srv, mut od) = (SdoServer::default(), od());
+        let mut raw = [0u8; 16];
+        let n = SdoRequest::InitiateUpload {
+            index: 0x1234,
+            sub: 0,
+            complete_access: false,
+        }
+        .emit(&mut raw)
+        .unwrap();
+        let mut out = [0u8; 64];
+        let got = srv.handle(&raw[..n], &mut out, &mut od).unwrap().unwrap();
+        assert_eq!(got.service, CoeService::SdoRequest);
+        assert_eq!(
+            &out[..got.len],
+            &[0x80, 0x34, 0x12, 0x00, 0x00, 0x00, 0x02, 0x06, 0, 0][..got.len]
+        );
+        assert_eq!(
+            SdoRequest::parse(&out[..got.len]).unwrap(),
+            SdoRequest::Abort {
+                index: 0x1234,
+                sub: 0,
+                code: SdoAbortCode::ObjectNotFound
+            }
+        );
     }
 
     #[test]

@@ -133,6 +133,48 @@ pub struct SoftEsc {
     /// The master wrote a watchdog divider or time: both watchdogs restart
     /// their count at the next update.
     wd_restart: bool,
+    /// Injected PDI failure (tests of the firmware's fail-safe paths).
+    pdi_fault: Option<PdiFault>,
+}
+
+/// A PDI failure injected into the software ESC: PDI accesses that touch
+/// `start..end` fail with [`EscError::Interface`], as an SPI error on a
+/// hardware ESC would. The frame side is not affected.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PdiFault {
+    /// First address that fails.
+    pub start: u16,
+    /// One past the last address that fails.
+    pub end: u16,
+    /// PDI reads fail.
+    pub reads: bool,
+    /// PDI writes fail.
+    pub writes: bool,
+}
+
+impl PdiFault {
+    /// Every PDI access (read and write) fails.
+    pub const ALL: PdiFault = PdiFault {
+        start: 0,
+        end: u16::MAX,
+        reads: true,
+        writes: true,
+    };
+
+    /// Reads of `start..end` fail.
+    pub const fn reads(start: u16, end: u16) -> Self {
+        PdiFault {
+            start,
+            end,
+            reads: true,
+            writes: false,
+        }
+    }
+
+    fn hits(&self, a: u32, b: u32, write: bool) -> bool {
+        let dir = if write { self.writes } else { self.reads };
+        dir && a < u32::from(self.end) && u32::from(self.start) < b
+    }
 }
 
 impl core::fmt::Debug for SoftEsc {
@@ -164,6 +206,7 @@ impl SoftEsc {
             pdi_touched: false,
             wd_pdi_at: None,
             wd_restart: false,
+            pdi_fault: None,
         };
         let n = sii.len().min(SII_SIZE);
         if let (Some(dst), Some(src)) = (esc.sii.get_mut(..n), sii.get(..n)) {
@@ -171,6 +214,11 @@ impl SoftEsc {
         }
         esc.power_on();
         esc
+    }
+
+    /// Makes PDI accesses fail as `fault` says (`None`: the PDI works).
+    pub fn set_pdi_fault(&mut self, fault: Option<PdiFault>) {
+        self.pdi_fault = fault;
     }
 
     /// Resets every register to its power-on value (as a power cycle does);
@@ -998,6 +1046,9 @@ impl Esc for SoftEsc {
         self.pdi_touched = true;
         let a = u32::from(addr);
         let b = a + buf.len() as u32;
+        if self.pdi_fault.is_some_and(|f| f.hits(a, b, false)) {
+            return Err(EscError::Interface);
+        }
         if b as usize > MEM_SIZE {
             return Err(EscError::OutOfRange {
                 addr,
@@ -1036,6 +1087,9 @@ impl Esc for SoftEsc {
         self.pdi_touched = true;
         let a = u32::from(addr);
         let b = a + data.len() as u32;
+        if self.pdi_fault.is_some_and(|f| f.hits(a, b, true)) {
+            return Err(EscError::Interface);
+        }
         if b as usize > MEM_SIZE {
             return Err(EscError::OutOfRange {
                 addr,

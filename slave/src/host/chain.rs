@@ -10,6 +10,7 @@
 //! the test `dispatch_equals_serial_processing` checks it on random traffic.
 
 use crate::device::SoftSlave;
+use crate::esc::EscError;
 use crate::esc::soft::FrameOutcome;
 use crate::firmware::{self, FirmwareVersion, ImageStore, StoreError};
 use crate::host::image_store::VecStore;
@@ -48,6 +49,7 @@ pub struct Chain {
     /// Each slave's firmware image store (A/B slots).
     images: Vec<Box<dyn ImageStore + Send>>,
     frames: u64,
+    pdi_failures: u64,
     /// (station address or alias, slave position), sorted.
     addresses: Vec<(u16, usize)>,
 }
@@ -99,6 +101,7 @@ impl Chain {
             slaves,
             images,
             frames: 0,
+            pdi_failures: 0,
             addresses: Vec::new(),
         };
         chain.reindex();
@@ -124,7 +127,9 @@ impl Chain {
     pub fn process(&mut self, frame: &mut [u8], now_ns: u64) -> FrameOutcome {
         let outcome = self.process_frame(frame);
         self.frames += 1;
-        self.poll(now_ns);
+        // A PDI failure is counted and handled by the slave (fail-safe);
+        // the frame has already been answered by the ESCs.
+        let _ = self.poll(now_ns);
         outcome
     }
 
@@ -220,11 +225,28 @@ impl Chain {
         }
     }
 
-    /// Runs every slave's firmware once.
-    pub fn poll(&mut self, now_ns: u64) {
-        for (s, img) in self.slaves.iter_mut().zip(self.images.iter_mut()) {
-            s.poll_with(now_ns, Some(img.as_mut()));
+    /// Runs every slave's firmware once. Every slave runs even when one
+    /// fails; the first PDI failure (slave position, error) is returned
+    /// and every failure is counted ([`Chain::pdi_failures`]).
+    pub fn poll(&mut self, now_ns: u64) -> Result<(), (usize, EscError)> {
+        let mut first = None;
+        for (i, (s, img)) in self
+            .slaves
+            .iter_mut()
+            .zip(self.images.iter_mut())
+            .enumerate()
+        {
+            if let Err(e) = s.poll_with(now_ns, Some(img.as_mut())) {
+                self.pdi_failures += 1;
+                first.get_or_insert((i, e));
+            }
         }
+        first.map_or(Ok(()), Err)
+    }
+
+    /// PDI failures seen by [`Chain::poll`] since the chain was built.
+    pub fn pdi_failures(&self) -> u64 {
+        self.pdi_failures
     }
 
     /// A simulated power cycle of slave `i`: ESC and firmware restart, the

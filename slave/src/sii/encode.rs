@@ -58,7 +58,13 @@ pub fn encode(cfg: &SiiConfig<'_>, out: &mut [u8]) -> Result<usize, SiiError> {
     w.put_u8(0)?;
     table.end = w.pos;
     let g = &cfg.general;
-    for name in [g.group, g.image, g.order, g.name] {
+    // String 1 is what SOEM (ecx_config_init) shows as the slave's name,
+    // while ethercrab follows the General category's name index. Vendors'
+    // EEPROMs put the device type (order code) first, then group and name
+    // (see the Beckhoff dumps in shared/reference/sii-dumps): order code
+    // first, then the name, so string 1 is the device type, or the name
+    // when there is no order code.
+    for name in [g.order, g.name, g.group, g.image] {
         if name.len() > MAX_NAME_LEN {
             return Err(SiiError::StringTooLong {
                 len: name.len(),
@@ -474,12 +480,13 @@ mod tests {
             &[1, 0, 0, 0, 2, 0, 0, 0, 3, 0, 0, 0, 4, 0, 0, 0]
         );
         assert_eq!(&out[0x7C..0x80], &[1, 0, 1, 0]);
-        // Strings: type 10, 3 words: count 2, "G", "O", pad.
-        assert_eq!(&out[0x80..0x8A], &[10, 0, 3, 0, 2, 1, b'G', 1, b'O', 0]);
-        // General: type 30, 16 words.
+        // Strings: type 10, 3 words: count 2, "O" (order code first: string
+        // 1 is what SOEM shows as the name), "G", pad.
+        assert_eq!(&out[0x80..0x8A], &[10, 0, 3, 0, 2, 1, b'O', 1, b'G', 0]);
+        // General: type 30, 16 words: group 2, image 0, order 1, name 1.
         assert_eq!(&out[0x8A..0x8E], &[30, 0, 16, 0]);
-        assert_eq!(&out[0x8E..0x92], &[1, 0, 2, 2]);
-        assert_eq!(out[0x8E + 14], 1);
+        assert_eq!(&out[0x8E..0x92], &[2, 0, 1, 1]);
+        assert_eq!(out[0x8E + 14], 2);
         assert_eq!(&out[0x8E + 16..0x8E + 18], &[0x11, 0x00]);
         // FMMU: one usage plus 0xFF padding.
         let fmmu = 0x8E + 32;

@@ -92,6 +92,42 @@ pub mod protocols {
     pub const VOE: u16 = 0x0020;
 }
 
+/// PDO flag bits of a TxPDO/RxPDO category header (ETG.2010 Table 14,
+/// offset 6), with the ESI (ETG.2000 `PdoType`) attribute each mirrors.
+/// The values agree with SOES's `siitool` and IgH's SII reader.
+pub mod pdo_flags {
+    /// `Mandatory="1"`: the PDO must be assigned.
+    pub const MANDATORY: u16 = 0x0001;
+    /// PDO assigned by default (`Sm` present in the ESI).
+    pub const DEFAULT: u16 = 0x0002;
+    /// Oversampling PDO (`OSFac`).
+    pub const OVERSAMPLE: u16 = 0x0004;
+    /// `Fixed="1"`: the PDO's entries cannot be changed.
+    pub const FIXED_CONTENT: u16 = 0x0010;
+    /// `Virtual="1"`: the PDO's content is virtual.
+    pub const VIRTUAL_CONTENT: u16 = 0x0020;
+    /// The master downloads the PDO even when it is the default.
+    pub const DOWNLOAD_ANYWAY: u16 = 0x0040;
+    /// The PDO belongs to a module.
+    pub const FROM_MODULE: u16 = 0x0080;
+    /// Module aligned.
+    pub const MODULE_ALIGN: u16 = 0x0100;
+    /// Depends on the slot.
+    pub const DEPEND_ON_SLOT: u16 = 0x0200;
+    /// Depends on the slot group.
+    pub const DEPEND_ON_SLOT_GROUP: u16 = 0x0400;
+    /// `OverwrittenByModule="1"`.
+    pub const OVERWRITTEN_BY_MODULE: u16 = 0x0800;
+    /// The PDO is configurable.
+    pub const CONFIGURABLE: u16 = 0x1000;
+    /// Automatic PDO name.
+    pub const AUTO_PDO_NAME: u16 = 0x2000;
+    /// Automatic exclusion disabled.
+    pub const DIS_AUTO_EXCLUDE: u16 = 0x4000;
+    /// The PDO is writable.
+    pub const WRITABLE: u16 = 0x8000;
+}
+
 /// Everything that can go wrong while encoding or reading an SII image.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum SiiError {

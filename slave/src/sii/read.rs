@@ -229,15 +229,34 @@ impl<'a> SiiReader<'a> {
         })
     }
 
-    /// PDOs of the first TxPDO or RxPDO category (ETG.2010 Tables 14, 15);
-    /// empty when absent.
+    /// PDOs of every TxPDO or RxPDO category, in chain order (ETG.2010
+    /// Tables 14, 15); empty when absent.
+    ///
+    /// Our encoder writes all PDOs of a direction into one category, as
+    /// ETG.2010 recommends; other generators (and real vendors' EEPROMs)
+    /// write one category per PDO, so every category of the type is read.
+    /// A broken category chain is an error here when it comes before the
+    /// first PDO category, else it ends the iteration with that error.
     pub fn pdos(&self, direction: PdoDirection) -> Result<PdoIter<'a>, SiiError> {
         let kind = match direction {
             PdoDirection::Tx => CategoryType::TxPdo,
             PdoDirection::Rx => CategoryType::RxPdo,
         };
+        let mut categories = self.categories();
+        // Position on the first category of the type (an error before it
+        // is reported now, as for every other accessor).
+        let mut rest: &'a [u8] = &[];
+        for cat in categories.by_ref() {
+            let cat = cat?;
+            if cat.kind == kind {
+                rest = cat.data;
+                break;
+            }
+        }
         Ok(PdoIter {
-            rest: self.find_data(kind)?,
+            categories,
+            kind,
+            rest,
             failed: false,
         })
     }
@@ -670,22 +689,56 @@ impl Iterator for PdoEntryIter<'_> {
     }
 }
 
-/// Iterator over the PDOs of one category (ETG.2010 Table 14). Yields
-/// [`SiiError::PdoOverrun`] once and stops when a header or its entries run
-/// past the category end. Trailing bytes shorter than a header (word
-/// padding) end the iteration quietly.
+/// Iterator over the PDOs of every category of one type (ETG.2010 Table
+/// 14), from [`SiiReader::pdos`]. Yields [`SiiError::PdoOverrun`] once for
+/// a category whose PDO header or entries run past its end and goes on
+/// with the next category. Trailing bytes shorter than a header (word
+/// padding) end a category quietly. A broken chain after the first PDO
+/// category yields its error and ends the iteration.
 #[derive(Debug, Clone)]
 pub struct PdoIter<'a> {
+    categories: Categories<'a>,
+    kind: CategoryType,
     rest: &'a [u8],
     failed: bool,
+}
+
+impl<'a> PdoIter<'a> {
+    /// Moves to the next category of the type; `Some(Err)` for a broken
+    /// chain, `None` at its end.
+    fn next_category(&mut self) -> Option<Result<(), SiiError>> {
+        loop {
+            match self.categories.next()? {
+                Err(e) => return Some(Err(e)),
+                Ok(cat) if cat.kind == CategoryType::End => return None,
+                Ok(cat) if cat.kind == self.kind => {
+                    self.rest = cat.data;
+                    self.failed = false;
+                    return Some(Ok(()));
+                }
+                Ok(_) => {}
+            }
+        }
+    }
 }
 
 impl<'a> Iterator for PdoIter<'a> {
     type Item = Result<PdoView<'a>, SiiError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        if self.failed || self.rest.len() < PDO_RECORD_LEN {
-            return None;
+        while self.failed || self.rest.len() < PDO_RECORD_LEN {
+            match self.next_category()? {
+                Ok(()) => {}
+                Err(e) => {
+                    // Nothing after a broken chain can be trusted.
+                    self.categories = Categories {
+                        image: &[],
+                        next_word: None,
+                    };
+                    self.rest = &[];
+                    return Some(Err(e));
+                }
+            }
         }
         let (head, tail) = self.rest.split_at_checked(PDO_RECORD_LEN)?;
         let index = u16_at(head, 0);
@@ -1012,8 +1065,8 @@ pub(crate) mod tests {
         assert_eq!(
             all,
             [
-                "PAM",
                 "PAM-199-P-ETC",
+                "PAM",
                 "Inputs",
                 "Status word",
                 "Fault",
@@ -1031,10 +1084,10 @@ pub(crate) mod tests {
         let general_cat = r.find(CategoryType::General).unwrap().unwrap();
         assert_eq!(general_cat.data.len(), 32);
         let general = r.general().unwrap().unwrap();
-        assert_eq!(general.order_idx, 2);
-        assert_eq!(general.name_idx, 2);
-        assert_eq!(general.group_idx, 1);
-        assert_eq!(general.group_idx_dup, 1);
+        assert_eq!(general.order_idx, 1);
+        assert_eq!(general.name_idx, 1);
+        assert_eq!(general.group_idx, 2);
+        assert_eq!(general.group_idx_dup, 2);
         assert_eq!(general.image_idx, 0);
         assert_eq!(general.resolve(&strings), cfg.general);
 
@@ -1427,6 +1480,62 @@ pub(crate) mod tests {
         let r = SiiReader::new(&image).unwrap();
         let items: Vec<_> = r.pdos(PdoDirection::Tx).unwrap().collect();
         assert_eq!(items, [Err(SiiError::PdoOverrun { index: 0x1A00 })]);
+    }
+
+    #[test]
+    fn pdos_of_every_category_of_a_direction_are_read() {
+        // Three TxPDO categories of one PDO each (as other generators
+        // write them), an RxPDO category in between, then End.
+        let mut tail = std::vec![];
+        for (index, obj) in [(0x1A00u16, 0x6000u16), (0x1A01, 0x6010)] {
+            tail.extend_from_slice(&[50, 0, 8, 0]);
+            tail.extend_from_slice(&index.to_le_bytes());
+            tail.extend_from_slice(&[1, 3, 0, 0, 0, 0]);
+            tail.extend_from_slice(&obj.to_le_bytes());
+            tail.extend_from_slice(&[1, 0, 6, 16, 0, 0]);
+        }
+        tail.extend_from_slice(&[51, 0, 8, 0]);
+        tail.extend_from_slice(&[0x00, 0x16, 1, 2, 0, 0, 0x10, 0]);
+        tail.extend_from_slice(&[0x00, 0x70, 1, 0, 6, 16, 0, 0]);
+        tail.extend_from_slice(&[50, 0, 8, 0]);
+        tail.extend_from_slice(&[0x02, 0x1A, 1, 0xFF, 0, 0, 0, 0]);
+        tail.extend_from_slice(&[0x20, 0x60, 1, 0, 6, 16, 0, 0]);
+        tail.extend_from_slice(&[0xFF, 0xFF]);
+        let image = image_with(&tail);
+        let r = SiiReader::new(&image).unwrap();
+        let tx: Vec<u16> = r
+            .pdos(PdoDirection::Tx)
+            .unwrap()
+            .map(|p| p.unwrap().index)
+            .collect();
+        assert_eq!(tx, [0x1A00, 0x1A01, 0x1A02]);
+        let rx: Vec<(u16, u16)> = r
+            .pdos(PdoDirection::Rx)
+            .unwrap()
+            .map(|p| p.map(|p| (p.index, p.flags)).unwrap())
+            .collect();
+        assert_eq!(rx, [(0x1600, 0x0010)]);
+    }
+
+    #[test]
+    fn an_overrun_pdo_category_does_not_hide_the_next_one() {
+        let mut tail = std::vec![50, 0, 4, 0];
+        tail.extend_from_slice(&[0x00, 0x1A, 2, 3, 0, 0, 0, 0]); // claims 2 entries, has 0
+        tail.extend_from_slice(&[50, 0, 8, 0]);
+        tail.extend_from_slice(&[0x01, 0x1A, 1, 3, 0, 0, 0, 0]);
+        tail.extend_from_slice(&[0x00, 0x60, 1, 0, 6, 16, 0, 0]);
+        tail.extend_from_slice(&[0xFF, 0xFF]);
+        let image = image_with(&tail);
+        let r = SiiReader::new(&image).unwrap();
+        let items: Vec<_> = r
+            .pdos(PdoDirection::Tx)
+            .unwrap()
+            .map(|p| p.map(|p| p.index))
+            .collect();
+        assert_eq!(
+            items,
+            [Err(SiiError::PdoOverrun { index: 0x1A00 }), Ok(0x1A01)]
+        );
     }
 
     #[test]
