@@ -321,7 +321,12 @@ fn write_sub_item(
     }
     text(w, "BitSize", &bits.to_string())?;
     text(w, "BitOffs", &offset.to_string())?;
-    write_entry_flags(w, e, None)?;
+    // A padding gap keeps its place in the layout but states no access
+    // rights: the slave describes it as NULL with access 0 (MANUAL-NOTES
+    // note 20), which the ESI's ro/rw/wo cannot express.
+    if !e.gap {
+        write_entry_flags(w, e, None)?;
+    }
     end(w, "SubItem")
 }
 
@@ -418,7 +423,8 @@ fn write_objects(w: &mut W) -> io::Result<()> {
         match (o.code, o.entries.first()) {
             (ObjectCode::Var, Some(e)) => write_value_info(w, e)?,
             _ => {
-                for e in o.entries {
+                // Gaps have no value, hence no default to state.
+                for e in o.entries.iter().filter(|e| !e.gap) {
                     start(w, "SubItem", &[])?;
                     text(w, "Name", e.name)?;
                     start(w, "Info", &[])?;
@@ -988,8 +994,9 @@ mod tests {
                 continue;
             }
             let subs: Vec<&Element> = info.children_named("SubItem").collect();
-            assert_eq!(subs.len(), o.entries.len(), "{what}");
-            for (e, s) in o.entries.iter().zip(subs) {
+            let valued: Vec<&Entry> = o.entries.iter().filter(|e| !e.gap).collect();
+            assert_eq!(subs.len(), valued.len(), "{what}");
+            for (e, s) in valued.into_iter().zip(subs) {
                 assert_eq!(s.text_at("Name"), Some(e.name), "{what}");
                 check_info(s.child("Info").unwrap(), e, &format!("{what}:{}", e.sub));
             }

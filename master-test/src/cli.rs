@@ -3,8 +3,8 @@
 //! (as SDO Information reports them), type, access and unit names, and a
 //! tiny JSON string escaper.
 //!
-//! Everything here is pure (no bus); the subcommands in `main.rs` do the
-//! talking.
+//! Everything here is pure (no bus); the subcommands of the `master-test`
+//! binary and [`crate::od`] do the talking.
 
 use pam_slave::od::model::ENUMS;
 use pam_slave::od::types::EnumDesc;
@@ -119,6 +119,7 @@ pub fn type_name(code: u16) -> String {
         0x0021 => "PDO_MAPPING",
         0x0023 => "IDENTITY",
         0x002A => "RECORD",
+        0x0000 => "NULL",
         0x0030..=0x0037 => return format!("BIT{}", code - 0x2F),
         c => match kind(c) {
             Kind::Enum(e) => e.name,

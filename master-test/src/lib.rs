@@ -4,9 +4,11 @@
 //! ([`link`]) to a chain of software slaves: real EtherCAT frames, no
 //! sockets, no root. Integration tests and the demo CLI use it.
 
+pub mod cli;
 pub mod foe;
 pub mod link;
 pub mod mailbox;
+pub mod od;
 pub mod sdo_info;
 
 use ethercrab::{MainDevice, MainDeviceConfig, PduStorage, RetryBehaviour, Timeouts};
@@ -95,6 +97,22 @@ impl VirtualBus {
         let pcap = pcap
             .map(pam_slave::host::pcap::PcapWriter::create)
             .transpose()?;
+        Self::on_shared(Arc::new(Mutex::new(chain)), clock, pcap)
+    }
+
+    /// Another master session on the same line: a new ethercrab
+    /// [`MainDevice`] with its own link to the slaves of this bus (as when
+    /// one master program stops and the next one starts). The slaves keep
+    /// their state; both links may run.
+    pub fn next_session(&self) -> Result<Self, BusError> {
+        Self::on_shared(self.chain.clone(), self.clock.clone(), None)
+    }
+
+    fn on_shared(
+        chain: SharedChain,
+        clock: Clock,
+        pcap: Option<pam_slave::host::pcap::PcapWriter<std::io::BufWriter<std::fs::File>>>,
+    ) -> Result<Self, BusError> {
         // Each bus owns its storage for the life of the process; tests
         // create a handful, so leaking is the simple, safe choice.
         let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
@@ -108,7 +126,6 @@ impl VirtualBus {
                 retry_behaviour: RetryBehaviour::None,
             },
         ));
-        let chain = Arc::new(Mutex::new(chain));
         let link = Link::spawn(tx, rx, chain.clone(), clock.clone(), pcap)?;
         Ok(VirtualBus {
             maindevice,

@@ -7,12 +7,12 @@
 //! * `od dump [--json]`: the live object dictionary, like TwinCAT's
 //!   CoE-Online tab.
 
-mod cli;
-
 use clap::{Parser, Subcommand};
 use master_test::VirtualBus;
+use master_test::cli;
 use master_test::link::lock;
-use master_test::mailbox::{ClientError, MailboxClient, MailboxGeometry};
+use master_test::mailbox::{MailboxClient, MailboxGeometry};
+use master_test::od::{DumpEntry, EntryValue};
 use master_test::sdo_info::{self, EntryInfo, value_info};
 use std::io::Write as _;
 use std::process::ExitCode;
@@ -420,13 +420,6 @@ async fn sdo_write(address: &str, value: &str) -> Result<(), BoxError> {
     .await
 }
 
-/// One described entry of `od dump` with its value (or why there is none).
-struct DumpEntry {
-    info: EntryInfo,
-    /// The value, or why there is none (`write-only`, an abort).
-    value: Result<cli::Value, String>,
-}
-
 async fn od_dump(json: bool) -> Result<(), BoxError> {
     let result = with_client(async |c| {
         let stdout = std::io::stdout();
@@ -442,28 +435,11 @@ async fn od_dump(json: bool) -> Result<(), BoxError> {
             )?;
         }
         for (n, &index) in objects.iter().enumerate() {
-            let obj = sdo_info::object_description(c, index).await?;
-            let mut entries = Vec::new();
-            for sub in 0..=obj.max_sub {
-                // Absent subindices have no description: skip them.
-                let Ok(info) = sdo_info::entry_description(c, index, sub, value_info::ALL).await
-                else {
-                    continue;
-                };
-                let value = if info.access & 0x07 == 0 {
-                    Err("write-only".to_string())
-                } else {
-                    match c.sdo_upload(index, sub, false).await {
-                        Ok(b) => Ok(cli::decode(info.data_type, info.bit_len, &b)),
-                        Err(ClientError::Abort { code, .. }) => Err(format!("abort {code}")),
-                        Err(e) => Err(e.to_string()),
-                    }
-                };
-                entries.push(DumpEntry { info, value });
-            }
+            let o = master_test::od::read_object(c, index).await?;
+            let (obj, entries) = (&o.info, &o.entries);
             if json {
                 let last = n + 1 == objects.len();
-                write_json_object(&mut out, &obj, &entries, last)?;
+                write_json_object(&mut out, obj, entries, last)?;
             } else {
                 writeln!(
                     out,
@@ -472,21 +448,18 @@ async fn od_dump(json: bool) -> Result<(), BoxError> {
                     obj.name,
                     cli::object_code_text(obj.object_code)
                 )?;
-                for d in &entries {
+                for d in entries {
                     let e = &d.info;
-                    let value = match &d.value {
-                        Ok(v) => cli::show(v, e.bit_len),
-                        Err(s) => format!("({s})"),
-                    };
                     writeln!(
                         out,
-                        "  {:04X}:{:02X}  {:<28} {:<11} {:<3} {:<4} {value}",
+                        "  {:04X}:{:02X}  {:<28} {:<11} {:<3} {:<4} {}",
                         e.index,
                         e.sub,
                         e.name,
                         cli::type_name(e.data_type),
                         cli::access_text(e.access),
-                        cli::unit_text(e.unit)
+                        cli::unit_text(e.unit),
+                        d.value.text(e.bit_len)
                     )?;
                 }
             }
@@ -546,17 +519,16 @@ fn write_json_object(
             opt(&e.max, e),
         );
         match &d.value {
-            Ok(v) => {
+            EntryValue::Value(v) => {
                 line.push_str(&v.to_json());
                 if let cli::Value::Enum { text: Some(t), .. } = v {
                     line.push_str(&format!(", \"value_text\": {}", cli::json_str(t)));
                 }
             }
-            Err(s) => {
-                line.push_str("null");
-                if e.access & 0x07 != 0 {
-                    line.push_str(&format!(", \"error\": {}", cli::json_str(s)));
-                }
+            EntryValue::WriteOnly => line.push_str("null"),
+            EntryValue::Padding => line.push_str("null, \"padding\": true"),
+            EntryValue::Error(s) => {
+                line.push_str(&format!("null, \"error\": {}", cli::json_str(s)));
             }
         }
         line.push_str(" }");

@@ -367,3 +367,76 @@ fn a_48_byte_mailbox_is_advertised_in_the_sii_and_long_uploads_are_segmented() {
         assert_eq!(group.tx_rx(md).await.expect("cycle").working_counter, 3);
     });
 }
+
+#[test]
+fn od_dump_of_a_fresh_slave_has_no_error_rows_and_padding_agrees_everywhere() {
+    use master_test::od::{EntryValue, read_dictionary};
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let sd = group.subdevice(md, 0).expect("slave");
+        let mut c = MailboxClient::new(md, sd.configured_address(), MailboxGeometry::standard());
+        let dict = read_dictionary(&mut c).await.expect("dictionary");
+        let mut values = 0;
+        let mut padding = Vec::new();
+        for o in &dict {
+            for e in &o.entries {
+                match &e.value {
+                    EntryValue::Error(msg) => panic!(
+                        "{:#06x}:{} {}: {msg}",
+                        e.info.index, e.info.sub, e.info.name
+                    ),
+                    EntryValue::Padding => padding.push((e.info.index, e.info.sub)),
+                    EntryValue::Value(_) => values += 1,
+                    EntryValue::WriteOnly => {}
+                }
+            }
+        }
+        assert!(values > 270, "{values} values read");
+        assert_eq!(padding.len(), 18, "{padding:x?}");
+        // What SDO Information calls padding, an upload refuses with
+        // 0x06010000 (unsupported access), as the SSC does.
+        for (index, sub) in padding {
+            let e = c
+                .sdo_upload(index, sub, false)
+                .await
+                .expect_err("padding is not readable");
+            assert_eq!(e.abort_code(), Some(0x0601_0000), "{index:#06x}:{sub}");
+        }
+    });
+}
+
+#[test]
+fn an_abort_travels_in_coe_service_2_as_etg_1000_6_and_soem_expect() {
+    use pam_slave::wire::coe::{CoeHeader, CoeService, SdoRequest};
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let sd = group.subdevice(md, 0).expect("slave");
+        let mut c = MailboxClient::new(md, sd.configured_address(), MailboxGeometry::standard());
+        // Upload request for 0x1234:00, sent by hand.
+        let mut req = [0u8; 10];
+        CoeHeader::emit_into(&mut req[..2], 0, CoeService::SdoRequest);
+        SdoRequest::InitiateUpload {
+            index: 0x1234,
+            sub: 0,
+            complete_access: false,
+        }
+        .emit(&mut req[2..])
+        .unwrap();
+        c.send(MailboxType::CoE, &req).await.expect("send");
+        let m = c.receive().await.expect("answer");
+        let coe = CoeHeader::new_checked(&m.payload[..]).unwrap();
+        assert_eq!(coe.service(), CoeService::SdoRequest, "abort = SDO request");
+        assert_eq!(
+            SdoRequest::parse(&m.payload[2..]).unwrap(),
+            SdoRequest::Abort {
+                index: 0x1234,
+                sub: 0,
+                code: SdoAbortCode::ObjectNotFound
+            }
+        );
+    });
+}

@@ -8,6 +8,7 @@ mod capture;
 mod coe;
 mod common;
 mod consistency;
+mod failsafe;
 mod foe;
 mod sdo;
 mod sii;

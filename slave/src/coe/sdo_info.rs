@@ -54,9 +54,12 @@
 //!     bits 3..=6 (and without min/max for strings): it says exactly which
 //!     values follow.
 //!
-//!   Gap entries (`gap: true`) are real subindices of the packed layout and
-//!   are described like any entry (`BITn`, RO, named `SubIndex 0NN`), which
-//!   keeps SDO Information and the ESI consistent.
+//!   Gap entries (`gap: true`) are real subindices of the packed layout.
+//!   They are described as the SSC describes record padding: data type
+//!   0x0000 (NULL), their bit length, object access 0 (no read or write
+//!   right in any state), no value info, named `SubIndex 0NN`. An upload or
+//!   download of a gap aborts 0x06010000; a complete access carries them
+//!   as zero bits (MANUAL-NOTES note 20).
 //! * **Errors** answer with an SDO Info error request (opcode 7, `u32`
 //!   abort code): unknown object 0x06020000, unknown subindex 0x06090011,
 //!   short or malformed requests, unknown opcodes and unknown list types
@@ -196,6 +199,10 @@ pub fn object_data_type(o: &Object) -> u16 {
 /// The object access word of an entry description: [`Access::bits`](crate::od::types::Access::bits) plus
 /// the PDO, backup and setting flags of [`access_flag`].
 pub fn entry_access(e: &Entry) -> u16 {
+    if e.gap {
+        // Padding: no read or write right in any state (SSC: access 0).
+        return 0;
+    }
     let pdo = match e.pdo {
         PdoMapping::None => 0,
         PdoMapping::Rx => access_flag::RX_PDO,
@@ -205,6 +212,16 @@ pub fn entry_access(e: &Entry) -> u16 {
     let setting = if e.setting { access_flag::SETTING } else { 0 };
     e.access.bits() | pdo | backup | setting
 }
+
+/// The data type an entry description reports: the entry's type, or
+/// [`NULL_TYPE`] for a padding gap.
+pub fn entry_data_type(e: &Entry) -> u16 {
+    if e.gap { NULL_TYPE } else { e.data_type.code() }
+}
+
+/// Data type index 0x0000 (`DEFTYPE_NULL`): what the SSC reports for a
+/// padding gap in a record (no value, bit length = the gap).
+pub const NULL_TYPE: u16 = 0x0000;
 
 /// The ETG.1004 unit code of a unit text (0 when there is none), the same
 /// codes the ESI writes.
@@ -508,10 +525,14 @@ fn write_entry_description(w: &mut Writer<'_>, index: u16, e: &Entry, asked: u8)
     if range.is_none() {
         info &= !(value_info::MIN | value_info::MAX);
     }
+    if e.gap {
+        // A padding gap has no value to describe.
+        info = 0;
+    }
     w.u16(index);
     w.u8(e.sub);
     w.u8(info);
-    w.u16(e.data_type.code());
+    w.u16(entry_data_type(e));
     w.u16(e.bit_len);
     w.u16(entry_access(e));
     let n = value_len(e);
@@ -860,12 +881,12 @@ mod tests {
     }
 
     #[test]
-    fn entry_description_of_a_gap_is_a_read_only_bit_field() {
+    fn entry_description_of_a_gap_is_null_with_no_access_and_no_values() {
         let f = entry_desc(0x6000, 0x02, 0x78);
-        // BIT7, 7 bits, RO; natural range 0..=127 in one byte.
-        assert_eq!(&f[8..14], &[0x36, 0x00, 7, 0, 0x07, 0x00]);
-        assert_eq!(&f[14..21], &[0, 0, 0, 0, 0, 0, 127]);
-        assert_eq!(&f[21..], b"SubIndex 002");
+        // Value info cleared, type 0x0000 (NULL), 7 bits, access 0.
+        assert_eq!(f[7], 0x00);
+        assert_eq!(&f[8..14], &[0x00, 0x00, 7, 0, 0x00, 0x00]);
+        assert_eq!(&f[14..], b"SubIndex 002");
     }
 
     #[test]

@@ -238,14 +238,18 @@ impl ObjectStore {
 }
 
 /// Finds an SDO-accessible entry: unknown index aborts 0x06020000, unknown
-/// subindex or a padding gap 0x06090011.
+/// subindex 0x06090011, a padding gap 0x06010000 (unsupported access: SDO
+/// Information describes a gap as NULL with no access rights, as the SSC
+/// does, so reading it is refused the way the SSC refuses it; MANUAL-NOTES
+/// note 20).
 pub fn lookup(index: u16, sub: u8) -> Result<(usize, &'static Entry), SdoAbortCode> {
     let Some((_, obj)) = model::find(index) else {
         return Err(SdoAbortCode::ObjectNotFound);
     };
     match model::find_entry(obj.index, sub) {
-        Some((flat, e)) if !e.gap => Ok((flat, e)),
-        _ => Err(SdoAbortCode::SubindexNotFound),
+        Some((_, e)) if e.gap => Err(SdoAbortCode::UnsupportedAccess),
+        Some((flat, e)) => Ok((flat, e)),
+        None => Err(SdoAbortCode::SubindexNotFound),
     }
 }
 
