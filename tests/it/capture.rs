@@ -44,10 +44,9 @@ fn virtual_link_capture_holds_requests_and_replies_of_the_bring_up() {
 #[test]
 fn capture_decodes_with_tshark_where_installed() {
     if Command::new("tshark").arg("--version").output().is_err() {
-        eprintln!(
-            "SKIPPED: tshark is not installed; the pcap structure is checked by the other capture test"
+        return crate::common::skip(
+            "tshark is not installed; the pcap structure is checked by the other capture test",
         );
-        return;
     }
     let path = std::env::temp_dir().join(format!("pam-tshark-{}.pcap", std::process::id()));
     smol::block_on(async {
@@ -83,4 +82,68 @@ fn capture_decodes_with_tshark_where_installed() {
         text.lines().count() >= 2,
         "tshark decodes CoE mailbox frames: {text}"
     );
+}
+
+#[test]
+fn tshark_decodes_every_sdo_abort_in_a_capture_with_its_code() {
+    use master_test::mailbox::{MailboxClient, MailboxGeometry};
+    if Command::new("tshark").arg("--version").output().is_err() {
+        return crate::common::skip("tshark is not installed");
+    }
+    let path = std::env::temp_dir().join(format!("pam-aborts-{}.pcap", std::process::id()));
+    let provoked = [
+        0x0602_0000u32,
+        0x0601_0002,
+        0x0609_0031,
+        0x0601_0000,
+        0x0609_0011,
+    ];
+    smol::block_on(async {
+        let bus = VirtualBus::with_options(1, Clock::real(), Some(&path)).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let sd = group.subdevice(md, 0).expect("slave");
+        let mut c = MailboxClient::new(md, sd.configured_address(), MailboxGeometry::standard());
+        let got = [
+            c.sdo_upload(0x1234, 0, false).await.err(),
+            c.sdo_download(0x1018, 1, false, &[1, 0, 0, 0]).await.err(),
+            c.sdo_download(0x800D, 2, false, &5000u16.to_le_bytes())
+                .await
+                .err(),
+            c.sdo_upload(0x6000, 2, false).await.err(),
+            c.sdo_upload(0x1008, 7, false).await.err(),
+        ];
+        let codes: Vec<Option<u32>> = got.iter().map(|e| e.as_ref()?.abort_code()).collect();
+        assert_eq!(codes, provoked.map(Some), "our client saw the aborts");
+        drop(group);
+        drop(bus);
+    });
+    let out = Command::new("tshark")
+        .arg("-r")
+        .arg(&path)
+        .args([
+            "-Y",
+            "ecat_mailbox.coe.abortcode",
+            "-T",
+            "fields",
+            "-e",
+            "ecat_mailbox.coe.abortcode",
+        ])
+        .output()
+        .expect("tshark runs");
+    let _ = std::fs::remove_file(&path);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let decoded: Vec<u32> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| u32::from_str_radix(l.trim().trim_start_matches("0x"), 16).ok())
+        .collect();
+    // Each abort appears once in the reply frame the master read (the
+    // frames that polled the mailbox before it was full carry none).
+    let mut unique = decoded.clone();
+    unique.dedup();
+    assert_eq!(unique, provoked, "tshark decoded {decoded:#010x?}");
 }

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 
 use ethercrab::error::{Error, MailboxError};
+use std::path::PathBuf;
+use std::process::{Child, Command};
 
 /// The CoE abort code inside an ethercrab SDO error, if it is one.
 pub fn abort_code(e: &Error) -> Option<u32> {
@@ -8,4 +10,88 @@ pub fn abort_code(e: &Error) -> Option<u32> {
         Error::Mailbox(MailboxError::Aborted { code, .. }) => Some(u32::from(*code)),
         _ => None,
     }
+}
+
+/// Says why a test cannot run here and returns; under `CI=true` (as
+/// `.ci/run` sets it) a skip is a failure, so CI never passes by skipping.
+pub fn skip(reason: &str) {
+    if std::env::var("CI").is_ok_and(|v| v == "true") {
+        panic!("cannot run under CI=true: {reason}");
+    }
+    eprintln!("SKIPPED: {reason}");
+}
+
+/// A network namespace (and the veth end inside it) with the runner
+/// process started in it; both are removed on drop, even when a test fails.
+pub struct Netns {
+    /// Namespace name.
+    pub name: String,
+    /// The runner started in it.
+    pub runner: Option<Child>,
+}
+
+impl Drop for Netns {
+    fn drop(&mut self) {
+        if let Some(mut c) = self.runner.take() {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+        let _ = Command::new("ip")
+            .args(["netns", "del", &self.name])
+            .status();
+    }
+}
+
+pub fn ip(args: &[&str]) -> Result<(), String> {
+    let out = Command::new("ip")
+        .args(args)
+        .output()
+        .map_err(|e| format!("ip: {e}"))?;
+    if out.status.success() {
+        Ok(())
+    } else {
+        Err(format!(
+            "ip {}: {}",
+            args.join(" "),
+            String::from_utf8_lossy(&out.stderr).trim()
+        ))
+    }
+}
+
+/// The `pam-slave` binary next to this test binary, built on demand
+/// (`cargo test` builds other packages' binaries only as test harnesses).
+pub fn runner_binary() -> Option<PathBuf> {
+    let exe = std::env::current_exe().ok()?;
+    let dir = exe.parent()?.parent()?;
+    let bin = dir.join("pam-slave");
+    if !bin.exists() {
+        let profile_release = dir.file_name().is_some_and(|n| n == "release");
+        let mut cmd = Command::new(env!("CARGO"));
+        cmd.args(["build", "-p", "pam-slave", "--bin", "pam-slave"]);
+        if profile_release {
+            cmd.arg("--release");
+        }
+        let _ = cmd.status();
+    }
+    bin.exists().then_some(bin)
+}
+
+/// Creates namespace + veth, or explains why the test cannot run here.
+pub fn setup(tag: &str) -> Result<(Netns, String, String), String> {
+    let pid = std::process::id();
+    let ns = format!("pam{tag}{pid}");
+    let host_if = format!("pm{pid}m");
+    let slave_if = format!("pm{pid}s");
+    ip(&["netns", "add", &ns])?;
+    let guard = Netns {
+        name: ns.clone(),
+        runner: None,
+    };
+    ip(&[
+        "link", "add", &host_if, "type", "veth", "peer", "name", &slave_if, "netns", &ns,
+    ])?;
+    ip(&["link", "set", &host_if, "up"])?;
+    ip(&["-n", &ns, "link", "set", &slave_if, "up"])?;
+    ip(&["-n", &ns, "link", "set", "lo", "up"])?;
+    Ok((guard, host_if, slave_if))
 }

@@ -12,5 +12,6 @@ mod failsafe;
 mod foe;
 mod sdo;
 mod sii;
+mod soem;
 mod state;
 mod veth;

@@ -5,96 +5,23 @@
 //! namespace (and with it the veth pair) is removed even when the test
 //! fails.
 
+use crate::common::{runner_binary, setup, skip};
 use ethercrab::{MainDevice, MainDeviceConfig, PduStorage, RetryBehaviour};
 use master_test::{MAX_FRAMES, MAX_PDU_DATA, MAX_SUBDEVICES, PDI_LEN};
-use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use std::time::Duration;
-
-struct Netns {
-    name: String,
-    runner: Option<Child>,
-}
-
-impl Drop for Netns {
-    fn drop(&mut self) {
-        if let Some(mut c) = self.runner.take() {
-            let _ = c.kill();
-            let _ = c.wait();
-        }
-        let _ = Command::new("ip")
-            .args(["netns", "del", &self.name])
-            .status();
-    }
-}
-
-fn ip(args: &[&str]) -> Result<(), String> {
-    let out = Command::new("ip")
-        .args(args)
-        .output()
-        .map_err(|e| format!("ip: {e}"))?;
-    if out.status.success() {
-        Ok(())
-    } else {
-        Err(format!(
-            "ip {}: {}",
-            args.join(" "),
-            String::from_utf8_lossy(&out.stderr).trim()
-        ))
-    }
-}
-
-/// The `pam-slave` binary next to this test binary, built on demand
-/// (`cargo test` builds other packages' binaries only as test harnesses).
-fn runner_binary() -> Option<PathBuf> {
-    let exe = std::env::current_exe().ok()?;
-    let dir = exe.parent()?.parent()?;
-    let bin = dir.join("pam-slave");
-    if !bin.exists() {
-        let profile_release = dir.file_name().is_some_and(|n| n == "release");
-        let mut cmd = Command::new(env!("CARGO"));
-        cmd.args(["build", "-p", "pam-slave", "--bin", "pam-slave"]);
-        if profile_release {
-            cmd.arg("--release");
-        }
-        let _ = cmd.status();
-    }
-    bin.exists().then_some(bin)
-}
-
-/// Creates namespace + veth, or explains why the test cannot run here.
-fn setup(tag: &str) -> Result<(Netns, String, String), String> {
-    let pid = std::process::id();
-    let ns = format!("pam{tag}{pid}");
-    let host_if = format!("pm{pid}m");
-    let slave_if = format!("pm{pid}s");
-    ip(&["netns", "add", &ns])?;
-    let guard = Netns {
-        name: ns.clone(),
-        runner: None,
-    };
-    ip(&[
-        "link", "add", &host_if, "type", "veth", "peer", "name", &slave_if, "netns", &ns,
-    ])?;
-    ip(&["link", "set", &host_if, "up"])?;
-    ip(&["-n", &ns, "link", "set", &slave_if, "up"])?;
-    ip(&["-n", &ns, "link", "set", "lo", "up"])?;
-    Ok((guard, host_if, slave_if))
-}
 
 #[test]
 fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
     let Some(bin) = runner_binary() else {
-        eprintln!("SKIPPED: pam-slave binary not built next to the test binary");
-        return;
+        return skip("pam-slave binary not built next to the test binary");
     };
     let (mut guard, host_if, slave_if) = match setup("v") {
         Ok(x) => x,
         Err(e) => {
-            eprintln!(
-                "SKIPPED: cannot create a network namespace and veth pair here ({e}); needs root and iproute2"
-            );
-            return;
+            return skip(&format!(
+                "cannot create a network namespace and veth pair here ({e}); needs root and iproute2"
+            ));
         }
     };
     let child = Command::new("ip")

@@ -1,0 +1,287 @@
+#!/usr/bin/env python3
+"""SOEM (through pysoem) against the raw-socket runner `pam-slave`.
+
+A master we did not write drives a line of software PAM-199-P-ETC slaves
+over a real network interface (a veth pair in the integration test). The
+Rust test `veth::soem_*` builds the files, starts the runner in a network
+namespace, runs the phases of this script and checks its exit status; this
+script prints what SOEM saw (names, abort codes, working counters) and
+exits 1 on the first disagreement.
+
+    soem_interop.py phase1 IFACE ESI.xml EEPROM.bin GOOD.efw BAD_CRC.efw VERSION
+    soem_interop.py phase2 IFACE VERSION
+
+phase1: discovery, SDO, SDO Information, complete access, SII, state
+machine, SM watchdog, 1000 cycles, an ended session followed by a second
+one, FoE refusals and a good FoE download in BOOT, then BOOT -> INIT.
+phase2 (after the runner restarted, i.e. a power cycle): the new firmware
+version in 0x100A on the updated slave, and OP again.
+"""
+
+import struct
+import sys
+import time
+import xml.etree.ElementTree as ET
+
+import pysoem
+
+PRODUCT = 0x00C7_03F3
+VENDOR = 0x0000_05AE
+NAME = "PAM-199-P-ETC"
+FAILURES = []
+
+
+def log(msg):
+    print(msg, flush=True)
+
+
+def check(ok, what):
+    log(("ok    " if ok else "FAIL  ") + what)
+    if not ok:
+        FAILURES.append(what)
+    return ok
+
+
+def open_master(iface):
+    m = pysoem.Master()
+    m.open(iface)
+    n = m.config_init()
+    return m, n
+
+
+def al_status_code(slave):
+    return struct.unpack("<H", slave._fprd(0x0134, 2, 20000))[0]
+
+
+def al_status(slave):
+    return struct.unpack("<H", slave._fprd(0x0130, 2, 20000))[0]
+
+
+def request_state(m, slave, state, wait_s=2.0):
+    slave.state = state
+    slave.write_state()
+    deadline = time.monotonic() + wait_s
+    st = al_status(slave)
+    while time.monotonic() < deadline:
+        st = al_status(slave)
+        if st & 0x0F == state & 0x0F or st & 0x10:
+            break
+        time.sleep(0.002)
+    return st, al_status_code(slave)
+
+
+def abort_of(fn):
+    try:
+        fn()
+    except pysoem.SdoError as e:
+        return e.abort_code
+    return None
+
+
+def cycles(m, n, period_s=0.002):
+    """n process-data cycles; returns the list of working counters."""
+    wkcs = []
+    for _ in range(n):
+        m.send_processdata()
+        wkcs.append(m.receive_processdata(10000))
+        time.sleep(period_s)
+    return wkcs
+
+
+def to_op(m):
+    """SAFE-OP, then OP with outputs flowing (the SM watchdog is armed)."""
+    m.state = pysoem.SAFEOP_STATE
+    m.write_state()
+    m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
+    m.state = pysoem.OP_STATE
+    m.write_state()
+    for _ in range(500):
+        cycles(m, 1)
+        if m.state_check(pysoem.OP_STATE, 2000) == pysoem.OP_STATE:
+            return True
+    return False
+
+
+def esi_object_indices(path):
+    root = ET.parse(path).getroot()
+    return [
+        int(o.find("Index").text.replace("#x", "0x"), 16)
+        for o in root.iter("Object")
+    ]
+
+
+def phase1(iface, esi, sii_path, good_efw, bad_efw, version):
+    m, n = open_master(iface)
+    check(n == 8, f"SOEM config_init found {n} slaves (8 expected)")
+    for i, s in enumerate(m.slaves):
+        log(f"      slave {i}: vendor {s.man:#010x} product {s.id:#010x} revision {s.rev} name {s.name!r}")
+    check(all(s.man == VENDOR and s.id == PRODUCT and s.rev == 7 for s in m.slaves),
+          "identity of every slave (vendor 0x05AE, product 0x00C703F3, revision 7)")
+    check(all(s.name == NAME for s in m.slaves), f"every slave is named {NAME!r}")
+    s = m.slaves[0]
+
+    # --- SDO upload/download and the abort codes SOEM reports
+    s.sdo_write(0x800D, 2, struct.pack("<H", 2000))
+    check(struct.unpack("<H", s.sdo_read(0x800D, 2))[0] == 2000, "SDO download/upload 0x800D:02 CURRENT = 2000")
+    aborts = {
+        "out of range 0x800D:02 = 5000": (lambda: s.sdo_write(0x800D, 2, struct.pack("<H", 5000)), 0x06090031),
+        "read-only 0x1018:01": (lambda: s.sdo_write(0x1018, 1, struct.pack("<I", 1)), 0x06010002),
+        "unknown object 0x1234": (lambda: s.sdo_read(0x1234, 0), 0x06020000),
+        "unknown subindex 0x1008:07": (lambda: s.sdo_read(0x1008, 7), 0x06090011),
+        "padding 0x6000:02": (lambda: s.sdo_read(0x6000, 2), 0x06010000),
+    }
+    for what, (fn, want) in aborts.items():
+        got = abort_of(fn)
+        check(got == want, f"abort for {what}: SOEM got {got if got is None else hex(got)}, want {want:#010x}")
+    check(struct.unpack("<H", s.sdo_read(0x800D, 2))[0] == 2000, "a refused write leaves 0x800D:02 at 2000")
+    name = s.sdo_read(0x1008, 0).decode()
+    check(name == NAME, f"0x1008 DEVICE NAME (segmented by size) = {name!r}")
+
+    # --- SDO Information: object list equal to the ESI
+    od = s.od
+    live = [o.index for o in od]
+    want = esi_object_indices(esi)
+    check(live == want, f"SDO Information lists {len(live)} objects, the ESI {len(want)}: equal")
+    by_index = {o.index: o for o in od}
+    o8006 = by_index.get(0x8006)
+    check(o8006 is not None and len(o8006.entries) == 43, "SDO Information: 0x8006 has subindex 0..42")
+    o6000 = by_index.get(0x6000)
+    if o6000 is not None:
+        pad = o6000.entries[2]
+        check(pad.data_type == 0 and pad.obj_access == 0 and pad.bit_length == 7,
+              f"0x6000:02 padding: type {pad.data_type}, access {pad.obj_access:#x}, {pad.bit_length} bits")
+
+    # --- complete access of 0x8006
+    img = s.sdo_read(0x8006, 0, 256, ca=True)
+    check(len(img) == 86 and img[0] == 42, f"complete access upload of 0x8006: {len(img)} bytes")
+    new = bytearray(img)
+    for i in range(42):
+        new[2 + 2 * i: 4 + 2 * i] = struct.pack("<h", (i - 21) * 300)
+    s.sdo_write(0x8006, 0, bytes(new), ca=True)
+    back = s.sdo_read(0x8006, 0, 256, ca=True)
+    check(back == bytes(new), "complete access download of 0x8006 reads back")
+    check(struct.unpack("<h", s.sdo_read(0x8006, 0x2A))[0] == 20 * 300, "0x8006:2A after the complete download")
+
+    # --- the SII through SOEM equals `esi sii`
+    want_sii = open(sii_path, "rb").read()
+    got = bytearray()
+    for word in range(0, len(want_sii) // 2, 2):
+        got += s.eeprom_read(word)
+    check(bytes(got) == want_sii, f"SII read by SOEM ({len(got)} bytes) equals `esi sii`")
+
+    # --- state machine: INIT -> OP refused with 0x0011
+    st, code = request_state(m, s, pysoem.INIT_STATE)
+    st, code = request_state(m, s, pysoem.OP_STATE)
+    check(st == 0x11 and code == 0x0011, f"INIT->OP refused: AL status {st:#06x}, code {code:#06x}")
+    st, code = request_state(m, s, pysoem.INIT_STATE | pysoem.STATE_ACK)
+    check(st == 0x01, f"acknowledged back to INIT: {st:#06x}")
+    st, code = request_state(m, s, pysoem.PREOP_STATE)
+    check(st == 0x02, f"INIT->PRE-OP: {st:#06x}")
+
+    # --- process data: config_map, OP, 1000 cycles with the expected WKC
+    m.read_state()
+    size = m.config_map()
+    log(f"      config_map: I/O map {size} bytes, expected WKC {m.expected_wkc}")
+    check(m.expected_wkc == 3 * 8, f"expected working counter {m.expected_wkc} (3 per slave)")
+    check(to_op(m), "all 8 slaves in OP")
+    wkcs = cycles(m, 1000, 0.0005)
+    bad = [w for w in wkcs if w != m.expected_wkc]
+    log(f"      1000 cycles: working counters min {min(wkcs)} max {max(wkcs)}, {len(bad)} unexpected")
+    check(not bad, "1000 cycles, every working counter as expected")
+
+    # --- SM watchdog: stop the outputs, SAFE-OP + 0x001B, back to OP
+    time.sleep(0.3)
+    st, code = al_status(s), al_status_code(s)
+    check(st == 0x14 and code == 0x001B, f"outputs stopped 300 ms: AL status {st:#06x}, code {code:#06x}")
+    s.state = pysoem.SAFEOP_STATE | pysoem.STATE_ACK
+    s.write_state()
+    cycles(m, 20)
+    st, code = request_state(m, s, pysoem.OP_STATE)
+    for _ in range(200):
+        cycles(m, 1)
+        st = al_status(s)
+        if st == 0x08:
+            break
+    check(st == 0x08, f"acknowledged, outputs flowing, OP again: {st:#06x}")
+
+    # --- the session ends in OP without a goodbye; the next one starts
+    m.close()
+    m, n = open_master(iface)
+    check(n == 8, "second session finds the 8 slaves")
+    try:
+        m.config_map()
+        ok = True
+    except pysoem.ConfigMapError as e:
+        ok = False
+        log(f"      config_map error list: {e.error_list}")
+    check(ok, "second session: config_map without errors (no stale emergencies)")
+    check(to_op(m), "second session: OP")
+    cycles(m, 50)
+
+    # --- FoE in BOOT (slave 8, the last): refusals, then a good image.
+    # As SOEM's firmware-update example does it: a session of its own
+    # (config_init, no config_map), INIT, SM0/SM1 set to the bootstrap
+    # mailbox of the SII, BOOT, foe_write.
+    m.close()
+    m, n = open_master(iface)
+    s = m.slaves[7]
+    m.state = pysoem.INIT_STATE
+    m.write_state()
+    m.state_check(pysoem.INIT_STATE, 2_000_000)
+    s.amend_mbx("out", 0x1000, 1024)
+    s.amend_mbx("in", 0x1400, 1024)
+    st, code = request_state(m, s, pysoem.BOOT_STATE)
+    check(st == 0x03, f"INIT->BOOT with the bootstrap mailbox: {st:#06x} code {code:#06x}")
+    good = open(good_efw, "rb").read()
+    bad = open(bad_efw, "rb").read()
+    r = s.foe_write("pam-199-p-etc.efw", 0x1234, good, 5_000_000)
+    log(f"      foe_write with a wrong password returned {r}")
+    check(r <= 0, "wrong password refused")
+    r = s.foe_write("pam-199-p-etc.efw", 0, bad, 5_000_000)
+    log(f"      foe_write of a corrupt image returned {r}")
+    check(r <= 0, "corrupt image refused")
+    t = time.monotonic()
+    r = s.foe_write("pam-199-p-etc.efw", 0, good, 10_000_000)
+    dt = time.monotonic() - t
+    log(f"      foe_write of {len(good)} bytes returned {r} in {dt:.3f} s")
+    check(r > 0, "good image written")
+    st, code = request_state(m, s, pysoem.INIT_STATE)
+    check(st == 0x01, f"BOOT->INIT (image handed to the bootloader): {st:#06x} code {code:#06x}")
+    m.close()
+
+
+def phase2(iface, version):
+    m, n = open_master(iface)
+    check(n == 8, f"after the power cycle SOEM finds {n} slaves")
+    v = [s.sdo_read(0x100A, 0).decode() for s in m.slaves]
+    log(f"      0x100A per slave: {v}")
+    check(v[7] == version, f"slave 8 runs the new firmware {version!r}")
+    check(all(x == "10" for x in v[:7]), "the other slaves still run 10")
+    m.config_map()
+    check(to_op(m), "OP after the update")
+    wkcs = cycles(m, 100, 0.0005)
+    check(all(w == m.expected_wkc for w in wkcs), "100 cycles after the update")
+    m.close()
+
+
+def main():
+    if len(sys.argv) < 3:
+        print(__doc__)
+        return 2
+    log(f"pysoem {getattr(pysoem, '__version__', '?')}")
+    if sys.argv[1] == "phase1":
+        phase1(*sys.argv[2:8])
+    elif sys.argv[1] == "phase2":
+        phase2(*sys.argv[2:4])
+    else:
+        print(__doc__)
+        return 2
+    if FAILURES:
+        log(f"{len(FAILURES)} check(s) failed")
+        return 1
+    log("all checks passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
