@@ -78,14 +78,45 @@ def abort_of(fn):
     return None
 
 
+# SOEM's frame timeouts are compiled in (2-6 ms per frame). On a loaded CI
+# machine the runner process may not be scheduled that fast; what is
+# checked is the protocol, not the machine's speed, so the receive timeout
+# of the cycle is generous and the SM watchdog is lengthened wherever the
+# test does not examine it.
+RECEIVE_TIMEOUT_US = 200_000
+LONG_WATCHDOG_MS = 5000
+
+
 def cycles(m, n, period_s=0.002):
     """n process-data cycles; returns the list of working counters."""
     wkcs = []
     for _ in range(n):
         m.send_processdata()
-        wkcs.append(m.receive_processdata(10000))
+        wkcs.append(m.receive_processdata(RECEIVE_TIMEOUT_US))
         time.sleep(period_s)
     return wkcs
+
+
+def set_sm_watchdog(m, ms):
+    for s in m.slaves:
+        s.set_watchdog("processdata", ms)
+
+
+def foe_write(s, name, password, data):
+    """SOEM's foe_write. A frame lost to a scheduling delay (EC_NOFRAME,
+    -1: no answer within SOEM's compiled-in 2 ms) is retried once with a
+    fresh write request after the slave's pending answer has been drained,
+    as a user would; the log says so."""
+    r = s.foe_write(name, password, data, 10_000_000)
+    if r == -1:
+        log("      foe_write: a frame missed SOEM's timeout; retrying once")
+        time.sleep(0.1)
+        try:
+            s.mbx_receive()
+        except Exception:
+            pass
+        r = s.foe_write(name, password, data, 10_000_000)
+    return r
 
 
 def to_op(m):
@@ -180,6 +211,7 @@ def phase1(iface, esi, sii_path, good_efw, bad_efw, version):
 
     # --- process data: config_map, OP, 1000 cycles with the expected WKC
     m.read_state()
+    set_sm_watchdog(m, LONG_WATCHDOG_MS)
     size = m.config_map()
     log(f"      config_map: I/O map {size} bytes, expected WKC {m.expected_wkc}")
     check(m.expected_wkc == 3 * 8, f"expected working counter {m.expected_wkc} (3 per slave)")
@@ -189,7 +221,10 @@ def phase1(iface, esi, sii_path, good_efw, bad_efw, version):
     log(f"      1000 cycles: working counters min {min(wkcs)} max {max(wkcs)}, {len(bad)} unexpected")
     check(not bad, "1000 cycles, every working counter as expected")
 
-    # --- SM watchdog: stop the outputs, SAFE-OP + 0x001B, back to OP
+    # --- SM watchdog (back to its 100 ms default): stop the outputs,
+    # SAFE-OP + 0x001B, back to OP
+    set_sm_watchdog(m, 100)
+    cycles(m, 5)
     time.sleep(0.3)
     st, code = al_status(s), al_status_code(s)
     check(st == 0x14 and code == 0x001B, f"outputs stopped 300 ms: AL status {st:#06x}, code {code:#06x}")
@@ -203,11 +238,13 @@ def phase1(iface, esi, sii_path, good_efw, bad_efw, version):
         if st == 0x08:
             break
     check(st == 0x08, f"acknowledged, outputs flowing, OP again: {st:#06x}")
+    set_sm_watchdog(m, LONG_WATCHDOG_MS)
 
     # --- the session ends in OP without a goodbye; the next one starts
     m.close()
     m, n = open_master(iface)
     check(n == 8, "second session finds the 8 slaves")
+    set_sm_watchdog(m, LONG_WATCHDOG_MS)
     try:
         m.config_map()
         ok = True
@@ -234,14 +271,14 @@ def phase1(iface, esi, sii_path, good_efw, bad_efw, version):
     check(st == 0x03, f"INIT->BOOT with the bootstrap mailbox: {st:#06x} code {code:#06x}")
     good = open(good_efw, "rb").read()
     bad = open(bad_efw, "rb").read()
-    r = s.foe_write("pam-199-p-etc.efw", 0x1234, good, 5_000_000)
+    r = foe_write(s, "pam-199-p-etc.efw", 0x1234, good)
     log(f"      foe_write with a wrong password returned {r}")
-    check(r <= 0, "wrong password refused")
-    r = s.foe_write("pam-199-p-etc.efw", 0, bad, 5_000_000)
+    check(r == -5, "wrong password refused with an FoE error (SOEM -5)")
+    r = foe_write(s, "pam-199-p-etc.efw", 0, bad)
     log(f"      foe_write of a corrupt image returned {r}")
-    check(r <= 0, "corrupt image refused")
+    check(r == -5, "corrupt image refused with an FoE error (SOEM -5)")
     t = time.monotonic()
-    r = s.foe_write("pam-199-p-etc.efw", 0, good, 10_000_000)
+    r = foe_write(s, "pam-199-p-etc.efw", 0, good)
     dt = time.monotonic() - t
     log(f"      foe_write of {len(good)} bytes returned {r} in {dt:.3f} s")
     check(r > 0, "good image written")
@@ -253,6 +290,7 @@ def phase1(iface, esi, sii_path, good_efw, bad_efw, version):
 def phase2(iface, version):
     m, n = open_master(iface)
     check(n == 8, f"after the power cycle SOEM finds {n} slaves")
+    set_sm_watchdog(m, LONG_WATCHDOG_MS)
     v = [s.sdo_read(0x100A, 0).decode() for s in m.slaves]
     log(f"      0x100A per slave: {v}")
     check(v[7] == version, f"slave 8 runs the new firmware {version!r}")

@@ -12,6 +12,10 @@ pub fn abort_code(e: &Error) -> Option<u32> {
     }
 }
 
+/// Held by the tests that run `pam-slave` on a veth pair, so two runners
+/// and their masters do not compete for the two cores at the same time.
+pub static NET_TESTS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 /// Says why a test cannot run here and returns; under `CI=true` (as
 /// `.ci/run` sets it) a skip is a failure, so CI never passes by skipping.
 pub fn skip(reason: &str) {
@@ -80,8 +84,9 @@ pub fn runner_binary() -> Option<PathBuf> {
 pub fn setup(tag: &str) -> Result<(Netns, String, String), String> {
     let pid = std::process::id();
     let ns = format!("pam{tag}{pid}");
-    let host_if = format!("pm{pid}m");
-    let slave_if = format!("pm{pid}s");
+    // Interface names are global (at most 15 bytes): tag them per test.
+    let host_if = format!("pm{pid}{tag}m");
+    let slave_if = format!("pm{pid}{tag}s");
     ip(&["netns", "add", &ns])?;
     let guard = Netns {
         name: ns.clone(),

@@ -139,6 +139,9 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
     let Some(bin) = runner_binary() else {
         return skip("pam-slave binary not built next to the test binary");
     };
+    let _serial = crate::common::NET_TESTS
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
     let (mut guard, host_if, slave_if) = match setup("s") {
         Ok(x) => x,
         Err(e) => {

@@ -16,6 +16,9 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
     let Some(bin) = runner_binary() else {
         return skip("pam-slave binary not built next to the test binary");
     };
+    let _serial = crate::common::NET_TESTS
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
     let (mut guard, host_if, slave_if) = match setup("v") {
         Ok(x) => x,
         Err(e) => {

@@ -124,10 +124,12 @@ pub fn run(config: &RunnerConfig, stop: &AtomicBool) -> Result<RunStats, RunnerE
                 if let Some(p) = pcap.as_mut() {
                     let _ = p.write_frame(&buf);
                 }
-                chain.process(&mut buf, now);
-                if let Some(dir) = &config.state_dir {
-                    persist_parameters(dir, &chain, &mut saved)?;
-                }
+                // As on silicon, the ESCs answer the frame at once; the
+                // firmware runs afterwards. A slow firmware step (a flash
+                // write with fsync in FoE) delays the mailbox answer, never
+                // the frame: masters with short frame timeouts (SOEM: 2 ms)
+                // keep working.
+                chain.process_frame(&mut buf);
                 if let Some(p) = pcap.as_mut() {
                     let _ = p.write_frame(&buf);
                 }
@@ -138,6 +140,10 @@ pub fn run(config: &RunnerConfig, stop: &AtomicBool) -> Result<RunStats, RunnerE
                     });
                 }
                 stats.answered += 1;
+                let _ = chain.poll(now);
+                if let Some(dir) = &config.state_dir {
+                    persist_parameters(dir, &chain, &mut saved)?;
+                }
             }
             Err(e)
                 if matches!(
