@@ -99,6 +99,25 @@ fn efw(version: &str, len: usize) -> Vec<u8> {
     out
 }
 
+/// Appends to `target/interop-logs/soem.log` (which `.ci/run` prints after
+/// the tests: cargo shows a passing test's output only with --nocapture).
+fn keep_log(text: &str) {
+    use std::io::Write as _;
+    let dir = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../target/interop-logs"
+    ));
+    if std::fs::create_dir_all(&dir).is_ok() {
+        if let Ok(mut f) = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(dir.join("soem.log"))
+        {
+            let _ = f.write_all(text.as_bytes());
+        }
+    }
+}
+
 /// `tshark -T fields -e FIELD` over the capture: the numbers it shows
 /// (tshark prints some fields in hex, others in decimal).
 fn tshark_fields(pcap: &Path, filter: &str, field: &str) -> Option<Vec<u32>> {
@@ -180,6 +199,11 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
             "11",
         ],
     );
+    let _ = std::fs::remove_file(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../target/interop-logs/soem.log"
+    ));
+    keep_log(&format!("--- SOEM phase 1 ---\n{log}"));
     eprintln!("--- SOEM phase 1 ---\n{log}");
     stop_runner(guard.runner.take().expect("runner"));
     assert!(ok, "SOEM phase 1 failed (log above)");
@@ -188,6 +212,7 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
     let runner = start_runner(&guard.name, &bin, &slave_if, &state, &file("phase2.pcap"));
     guard.runner = Some(runner);
     let (ok, log) = run_python(&py, &["phase2", &host_if, "11"]);
+    keep_log(&format!("--- SOEM phase 2 ---\n{log}"));
     eprintln!("--- SOEM phase 2 ---\n{log}");
     stop_runner(guard.runner.take().expect("runner"));
     assert!(ok, "SOEM phase 2 failed (log above)");
@@ -204,6 +229,7 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
         "ecat_mailbox.coe.abortcode",
     )
     .expect("tshark reads the runner's capture");
+    keep_log(&format!("tshark: SDO abort codes {aborts:#010x?}\n"));
     eprintln!("tshark: SDO abort codes {aborts:#010x?}");
     for code in [
         0x0609_0031,
@@ -223,6 +249,7 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
         "ecat_mailbox.foe_errcode",
     )
     .expect("tshark FoE");
+    keep_log(&format!("tshark: FoE error codes {foe_errors:#06x?}\n"));
     eprintln!("tshark: FoE error codes {foe_errors:#06x?}");
     assert!(
         foe_errors.contains(&0x800A),
