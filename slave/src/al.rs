@@ -192,6 +192,13 @@ pub trait TransitionChecks {
     fn check_process_data(&mut self) -> Result<(), AlStatusCode>;
     /// SAFE-OP→OP: outputs can be taken over.
     fn check_outputs(&mut self) -> Result<(), AlStatusCode>;
+    /// An upward transition (INIT→PRE-OP, INIT→BOOT, PRE-OP→SAFE-OP,
+    /// SAFE-OP→OP) passed its check: the application may still refuse it.
+    /// Downward transitions cannot be refused (ETG.1000.6).
+    fn accept(&mut self, from: AlState, to: AlState) -> Result<(), AlStatusCode> {
+        let _ = (from, to);
+        Ok(())
+    }
 }
 
 /// Computes the AL status after the master wrote `control` into 0x0120.
@@ -230,10 +237,18 @@ pub fn transition(current: AlStatus, control: u16, checks: &mut impl TransitionC
     let result = match (current.state, requested) {
         (a, b) if a == b => Ok(()),
         (_, Init) => Ok(()),
-        (Init, PreOp) => checks.check_mailbox(),
-        (Init, Boot) => checks.check_boot_mailbox(),
-        (PreOp, SafeOp) => checks.check_process_data(),
-        (SafeOp, Op) => checks.check_outputs(),
+        (Init, PreOp) => checks
+            .check_mailbox()
+            .and_then(|()| checks.accept(Init, PreOp)),
+        (Init, Boot) => checks
+            .check_boot_mailbox()
+            .and_then(|()| checks.accept(Init, Boot)),
+        (PreOp, SafeOp) => checks
+            .check_process_data()
+            .and_then(|()| checks.accept(PreOp, SafeOp)),
+        (SafeOp, Op) => checks
+            .check_outputs()
+            .and_then(|()| checks.accept(SafeOp, Op)),
         (SafeOp, PreOp) | (Op, PreOp) | (Op, SafeOp) => Ok(()),
         _ => Err(AlStatusCode::InvalidStateChange),
     };

@@ -1,7 +1,7 @@
-//! Board interfaces (layer 6) the device needs beside the ESC: non-volatile
-//! parameter storage here; the power stage trait lives with the amplifier
-//! ([`crate::app::power_stage::PowerStage`]) and the firmware image store
-//! with the bootloader ([`crate::firmware`]).
+//! Board interfaces (layer 6) the core offers beside the ESC: non-volatile
+//! parameter storage here, the firmware image store with the bootloader
+//! ([`crate::firmware::ImageStore`]). Device hardware (a power stage, I/O
+//! drivers) belongs to the device's own crate.
 
 /// Errors of non-volatile storage.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -32,6 +32,11 @@ pub trait NvStorage {
     fn read(&self, offset: usize, buf: &mut [u8]) -> Result<(), NvError>;
     /// Writes `data` at `offset`.
     fn write(&mut self, offset: usize, data: &[u8]) -> Result<(), NvError>;
+    /// Completed writes so far (lets a host notice a change cheaply; 0 when
+    /// the storage does not count).
+    fn write_count(&self) -> u32 {
+        0
+    }
 }
 
 /// RAM-backed storage that survives simulated power cycles of the device
@@ -90,6 +95,10 @@ impl<const N: usize> MemNv<N> {
 impl<const N: usize> NvStorage for MemNv<N> {
     fn capacity(&self) -> usize {
         N
+    }
+
+    fn write_count(&self) -> u32 {
+        self.writes
     }
 
     fn read(&self, offset: usize, buf: &mut [u8]) -> Result<(), NvError> {

@@ -1,10 +1,16 @@
-//! # pam-slave: an EtherCAT SubDevice stack realising the PAM-199-P-ETC
+//! # ecat-slave: an EtherCAT SubDevice (slave) stack core
 //!
-//! A `#![no_std]`, heap-free EtherCAT slave core: the PAM-199-P-ETC object
-//! dictionary ([`od`]), the CoE mailbox servers ([`coe`], [`mailbox`]), the AL
-//! state machine ([`al`]), PDO mapping ([`pdo`]), the SII image ([`sii`]) and a
+//! A `#![no_std]`, heap-free EtherCAT slave core that names no device: a
 //! software EtherCAT Slave Controller ([`esc::soft`]) that processes real
-//! EtherCAT frames. [`device::Slave`] ties them together into one device.
+//! EtherCAT frames, the PDI trait for hardware ESCs ([`esc::Esc`]), the AL
+//! state machine ([`al`]), SyncManager and PDI watchdogs, the mailbox
+//! ([`mailbox`]) with CoE ([`coe`]: SDO, complete access, SDO Information,
+//! Emergency) and FoE firmware update ([`foe`], [`firmware`]), the PDO
+//! engine ([`pdo`]), the object dictionary engine ([`od`]), the SII encoder
+//! and reader ([`sii`]), parameter storage ([`params`]), LEDs ([`led`]).
+//!
+//! A device is one static description plus one application trait
+//! ([`device`]); see `docs/WRITE-YOUR-OWN-DEVICE.md`.
 //!
 //! Layers (top depends on bottom only): `device` → `od` → `coe`/`mailbox` →
 //! `al`/`pdo` → `esc` → `hal`; byte formats live in [`wire`] and carry no
@@ -22,7 +28,6 @@
 )]
 
 pub mod al;
-pub mod app;
 pub mod coe;
 pub mod device;
 pub mod esc;
@@ -37,4 +42,6 @@ pub mod od;
 pub mod params;
 pub mod pdo;
 pub mod sii;
+#[cfg(test)]
+pub(crate) mod testing;
 pub mod wire;

@@ -5,8 +5,9 @@
 //! object dictionary holds them. It packs entry values into the SyncManager
 //! buffer bit by bit (inputs) and unpacks the buffer into entries (outputs).
 
-use crate::od::model;
-use crate::od::store::ObjectStore;
+use crate::device::ProcessData;
+use crate::od::Dictionary;
+use crate::od::store::Od;
 use crate::od::types::PdoMapping;
 
 /// Most mapped entries (padding included) of one direction.
@@ -61,9 +62,9 @@ pub enum PdoError {
         /// The mapping value.
         mapping: u32,
     },
-    /// The assignment mixes PDOs of the directional and independent modes.
-    #[error("PDOs {0:#06x} and {1:#06x} belong to different modes")]
-    MixedModes(u16, u16),
+    /// The assignment mixes PDOs that belong to no common PDO set.
+    #[error("PDOs {0:#06x} and {1:#06x} belong to no common PDO set")]
+    MixedSets(u16, u16),
     /// More entries or bytes than the image can hold.
     #[error("process image too large")]
     TooLarge,
@@ -80,23 +81,14 @@ pub struct MappedEntry {
     pub bit_len: u8,
 }
 
-/// The PDO mode a PDO belongs to (manual 7.1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PdoMode {
-    /// Directional: 0x1600, 0x1A00, 0x1A02 (FUNCTION = DIR).
-    Directional,
-    /// Independent: 0x1601, 0x1A01, 0x1A03 (FUNCTION = IND).
-    Independent,
-}
-
 /// The SII PDO flags (ETG.2010 Table 14) of the PDO whose mapping object is
 /// `pdo`, as the ESI states them with its attributes: fixed content
 /// (`Fixed="1"`, [`crate::sii::pdo_flags::FIXED_CONTENT`]) when no entry of
 /// the mapping object can be written, i.e. the master cannot change what
 /// the PDO carries. The SII encoder and the ESI generator both call this,
 /// so the two files cannot disagree on a flag.
-pub fn sii_flags(pdo: u16) -> u16 {
-    let Some((_, o)) = crate::od::model::find(pdo) else {
+pub fn sii_flags(dict: &Dictionary, pdo: u16) -> u16 {
+    let Some((_, o)) = dict.find(pdo) else {
         return 0;
     };
     if o.entries.iter().any(|e| e.access.writable()) {
@@ -106,54 +98,91 @@ pub fn sii_flags(pdo: u16) -> u16 {
     }
 }
 
-/// The mode of a PDO index, if it is one of the device's PDOs.
-pub const fn pdo_mode(pdo: u16) -> Option<PdoMode> {
-    match pdo {
-        0x1600 | 0x1A00 | 0x1A02 => Some(PdoMode::Directional),
-        0x1601 | 0x1A01 | 0x1A03 => Some(PdoMode::Independent),
-        _ => None,
+/// Bit mask of the PDO sets (of `pd`) that contain `pdo`.
+pub fn sets_of(pd: &ProcessData, pdo: u16) -> u32 {
+    let mut mask = 0u32;
+    for (n, set) in pd.sets.iter().enumerate().take(32) {
+        if set.rx.contains(&pdo) || set.tx.contains(&pdo) {
+            mask |= 1 << n;
+        }
     }
+    mask
+}
+
+/// Writes PDO set `set` of `pd` into the assignment objects 0x1C12 and
+/// 0x1C13 (count and PDOs), as a device does when its configuration selects
+/// another set. Returns `false` for a set that does not exist.
+pub fn assign_set(od: &mut Od, pd: &ProcessData, set: usize) -> bool {
+    let Some(s) = pd.sets.get(set) else {
+        return false;
+    };
+    for (index, list) in [(0x1C12u16, s.rx), (0x1C13, s.tx)] {
+        od.set(index, 0, list.len() as i64);
+        for (i, pdo) in list.iter().enumerate() {
+            od.set(index, (i + 1) as u8, i64::from(*pdo));
+        }
+    }
+    true
 }
 
 /// The process image of one direction.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ProcessImage {
     entries: heapless::Vec<MappedEntry, MAX_MAPPED>,
     bits: u16,
-    mode: Option<PdoMode>,
+    /// The PDO sets every assigned PDO belongs to (bit n: set n).
+    sets: u32,
+}
+
+impl Default for ProcessImage {
+    fn default() -> Self {
+        ProcessImage {
+            entries: heapless::Vec::new(),
+            bits: 0,
+            sets: u32::MAX,
+        }
+    }
 }
 
 impl ProcessImage {
-    /// Builds the image from the assignment and mapping objects in `store`.
-    pub fn build(store: &ObjectStore, dir: Direction) -> Result<Self, PdoError> {
+    /// Builds the image from the assignment and mapping objects in `store`;
+    /// the assigned PDOs must share a PDO set of `pd` (when the device
+    /// declares sets).
+    pub fn build(store: &Od, dir: Direction, pd: &ProcessData) -> Result<Self, PdoError> {
         let assign = dir.assign_index();
         let count = store.get(assign, 0).unwrap_or(0);
         let mut image = ProcessImage::default();
         let (lo, hi) = dir.pdo_range();
+        let dict = store.dictionary();
         for i in 1..=count.clamp(0, 254) as u8 {
             let pdo = store.get(assign, i).unwrap_or(0) as u16;
-            if pdo < lo || pdo > hi || model::find(pdo).is_none() {
+            if pdo < lo || pdo > hi || dict.find(pdo).is_none() {
                 return Err(PdoError::UnknownPdo(pdo));
             }
-            if let Some(m) = pdo_mode(pdo) {
-                match image.mode {
-                    Some(prev) if prev != m => {
-                        let first = store.get(assign, 1).unwrap_or(0) as u16;
-                        return Err(PdoError::MixedModes(first, pdo));
-                    }
-                    _ => image.mode = Some(m),
+            if !pd.sets.is_empty() {
+                let mask = sets_of(pd, pdo);
+                if image.sets & mask == 0 {
+                    let first = store.get(assign, 1).unwrap_or(0) as u16;
+                    return Err(PdoError::MixedSets(first, pdo));
                 }
+                image.sets &= mask;
             }
             let n = store.get(pdo, 0).unwrap_or(0);
             for s in 1..=n.clamp(0, 254) as u8 {
                 let mapping = store.get(pdo, s).unwrap_or(0) as u32;
-                image.push_mapping(pdo, mapping, dir)?;
+                image.push_mapping(dict, pdo, mapping, dir)?;
             }
         }
         Ok(image)
     }
 
-    fn push_mapping(&mut self, pdo: u16, mapping: u32, dir: Direction) -> Result<(), PdoError> {
+    fn push_mapping(
+        &mut self,
+        dict: &Dictionary,
+        pdo: u16,
+        mapping: u32,
+        dir: Direction,
+    ) -> Result<(), PdoError> {
         let index = (mapping >> 16) as u16;
         let sub = ((mapping >> 8) & 0xFF) as u8;
         let bits = (mapping & 0xFF) as u8;
@@ -161,7 +190,7 @@ impl ProcessImage {
         let flat = if index == 0 {
             None
         } else {
-            let (flat, e) = model::find_entry(index, sub).ok_or(invalid)?;
+            let (flat, e) = dict.find_entry(index, sub).ok_or(invalid)?;
             if e.pdo != dir.mapping() || e.bit_len != u16::from(bits) || e.gap {
                 return Err(invalid);
             }
@@ -194,9 +223,10 @@ impl ProcessImage {
         usize::from(self.bits).div_ceil(8)
     }
 
-    /// The mode the assigned PDOs belong to (`None` when nothing is assigned).
-    pub fn mode(&self) -> Option<PdoMode> {
-        self.mode
+    /// The PDO sets every assigned PDO belongs to (bit n: set n; all bits
+    /// when nothing is assigned or the device declares no sets).
+    pub fn sets(&self) -> u32 {
+        self.sets
     }
 
     /// The mapped entries in image order.
@@ -205,7 +235,7 @@ impl ProcessImage {
     }
 
     /// Packs the mapped entries' values into `out` (inputs).
-    pub fn pack(&self, store: &ObjectStore, out: &mut [u8]) {
+    pub fn pack(&self, store: &Od, out: &mut [u8]) {
         for e in &self.entries {
             let v = e.flat.map_or(0, |f| store.value(usize::from(f))) as u64;
             write_bits(out, e.bit_offset, e.bit_len, v);
@@ -214,11 +244,14 @@ impl ProcessImage {
 
     /// Unpacks `data` into the mapped entries (outputs), sign-extending
     /// signed types.
-    pub fn unpack(&self, store: &mut ObjectStore, data: &[u8]) {
+    pub fn unpack(&self, store: &mut Od, data: &[u8]) {
+        let dict = store.dictionary();
         for e in &self.entries {
             let Some(f) = e.flat else { continue };
             let raw = read_bits(data, e.bit_offset, e.bit_len);
-            let signed = model::entry_at(usize::from(f)).is_some_and(|en| en.data_type.is_signed());
+            let signed = dict
+                .entry_at(usize::from(f))
+                .is_some_and(|en| en.data_type.is_signed());
             let v = if signed && e.bit_len < 64 && e.bit_len > 0 {
                 let shift = 64 - u32::from(e.bit_len);
                 ((raw << shift) as i64) >> shift
@@ -271,76 +304,72 @@ pub fn read_bits(buf: &[u8], offset: u16, len: u8) -> u64 {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
     use crate::al::AlState;
+    use crate::testing::{DEVICE, store};
 
     #[test]
-    fn default_directional_images_are_5_and_14_bytes() {
-        let s = ObjectStore::new();
-        let out = ProcessImage::build(&s, Direction::Outputs).unwrap();
-        let inp = ProcessImage::build(&s, Direction::Inputs).unwrap();
-        assert_eq!(out.byte_len(), 5);
-        assert_eq!(inp.byte_len(), 14);
-        assert_eq!(out.mode(), Some(PdoMode::Directional));
-    }
-
-    #[test]
-    fn outputs_unpack_into_enable_and_command_value() {
-        let mut s = ObjectStore::new();
-        let out = ProcessImage::build(&s, Direction::Outputs).unwrap();
-        let cmd: i32 = -5000;
-        let mut data = [0u8; 5];
-        data[0] = 1;
-        data[1..5].copy_from_slice(&cmd.to_le_bytes());
-        out.unpack(&mut s, &data);
-        assert_eq!(s.get(0x7000, 1), Some(1));
-        assert_eq!(s.get(0x7000, 3), Some(-5000));
-    }
-
-    #[test]
-    fn inputs_pack_ia_at_byte_10() {
-        let mut s = ObjectStore::new();
-        s.set(0x6000, 6, 750);
-        s.set(0x6000, 1, 1);
-        let inp = ProcessImage::build(&s, Direction::Inputs).unwrap();
-        let mut buf = [0u8; 14];
+    fn the_default_set_gives_3_byte_images_and_unpacks_signed_values() {
+        let mut s = store();
+        let pd = &DEVICE.process_data;
+        let out = ProcessImage::build(&s, Direction::Outputs, pd).unwrap();
+        let inp = ProcessImage::build(&s, Direction::Inputs, pd).unwrap();
+        assert_eq!((out.byte_len(), inp.byte_len()), (3, 3));
+        assert_eq!(out.sets(), 0b01);
+        out.unpack(&mut s, &[1, 0xFE, 0xFF]);
+        assert_eq!((s.get(0x7000, 1), s.get(0x7000, 3)), (Some(1), Some(-2)));
+        s.set(0x6000, 3, 0x1234);
+        let mut buf = [0u8; 3];
         inp.pack(&s, &mut buf);
-        assert_eq!(buf[0], 1);
-        // 0x1A00 is 4 bytes; 0x1A02 W, C, U, IA -> IA at 4 + 6.
-        assert_eq!(u16::from_le_bytes([buf[10], buf[11]]), 750);
+        assert_eq!(buf, [0, 0x34, 0x12]);
     }
 
     #[test]
-    fn mixed_mode_assignment_is_refused() {
-        let mut s = ObjectStore::new();
-        s.download(0x1C13, 2, &0x1A03u16.to_le_bytes(), AlState::PreOp)
+    fn pdos_of_no_common_set_are_refused() {
+        let mut s = store();
+        s.download(0x1C13, 0, &[2], AlState::PreOp).unwrap();
+        s.download(0x1C13, 2, &0x1A01u16.to_le_bytes(), AlState::PreOp)
             .unwrap();
         assert_eq!(
-            ProcessImage::build(&s, Direction::Inputs),
-            Err(PdoError::MixedModes(0x1A00, 0x1A03))
+            ProcessImage::build(&s, Direction::Inputs, &DEVICE.process_data),
+            Err(PdoError::MixedSets(0x1A00, 0x1A01))
+        );
+        s.set(0x1C12, 1, 0x1234);
+        assert_eq!(
+            ProcessImage::build(&s, Direction::Outputs, &DEVICE.process_data),
+            Err(PdoError::UnknownPdo(0x1234))
         );
     }
 
     #[test]
-    fn unknown_pdo_in_assignment_is_refused() {
-        let mut s = ObjectStore::new();
-        s.set(0x1C12, 1, 0x1234);
+    fn assign_set_writes_the_assignment_objects() {
+        let mut s = store();
+        assert!(assign_set(&mut s, &DEVICE.process_data, 1));
         assert_eq!(
-            ProcessImage::build(&s, Direction::Outputs),
-            Err(PdoError::UnknownPdo(0x1234))
+            (s.get(0x1C12, 1), s.get(0x1C13, 1)),
+            (Some(0x1601), Some(0x1A01))
+        );
+        let out = ProcessImage::build(&s, Direction::Outputs, &DEVICE.process_data).unwrap();
+        assert_eq!((out.byte_len(), out.sets()), (4, 0b10));
+        assert!(!assign_set(&mut s, &DEVICE.process_data, 2));
+        assert_eq!(sets_of(&DEVICE.process_data, 0x1A00), 0b01);
+        assert_eq!(
+            sii_flags(&crate::testing::DICT, 0x1600),
+            crate::sii::pdo_flags::FIXED_CONTENT
         );
     }
 
     #[test]
     fn bit_helpers_round_trip_unaligned_values() {
         let mut buf = [0u8; 4];
-        write_bits(&mut buf, 3, 5, 0b10110);
-        assert_eq!(read_bits(&buf, 3, 5), 0b10110);
+        write_bits(&mut buf, 3, 11, 0x5A5);
+        assert_eq!(read_bits(&buf, 3, 11), 0x5A5);
         write_bits(&mut buf, 8, 16, 0xBEEF);
         assert_eq!(read_bits(&buf, 8, 16), 0xBEEF);
-        // Out of range is ignored, not a panic.
+        // Past the end: no panic, nothing written.
         write_bits(&mut buf, 30, 8, 0xFF);
-        assert_eq!(read_bits(&buf, 40, 8), 0);
+        let _ = read_bits(&buf, 30, 8);
     }
 }

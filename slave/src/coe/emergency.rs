@@ -1,33 +1,29 @@
-//! CoE Emergency (ETG.1000.6 5.6.4): what the device reports on its own,
-//! and the error register 0x1001 kept consistent with it.
+//! CoE Emergency (ETG.1000.6 5.6.4) and the error register 0x1001.
 //!
-//! The device compares its fault state each poll with the previous one and
-//! queues an emergency for every fault that appears (and the "error reset"
-//! code 0x0000 when the last one clears). The queue holds
-//! [`QUEUE_LEN`] messages; when it is full the **oldest** message is
-//! dropped, so the master always sees the most recent condition.
+//! The application raises its own emergencies (a fault appearing) and
+//! states its error-register bits; the core adds what it sees itself and
+//! keeps 0x1001 consistent:
 //!
 //! | condition | error code | register bit | data byte 0 |
 //! |---|---|---|---|
-//! | short circuit at solenoid A/B | 0x2320 | current (1) | 1 = A, 2 = B |
-//! | open circuit at solenoid A/B | 0xFF01 (manufacturer) | current (1) | 1 = A, 2 = B |
-//! | supply overvoltage | 0x3210 | voltage (2) | |
-//! | supply undervoltage | 0x3220 | voltage (2) | |
-//! | over temperature | 0x4210 | temperature (3) | |
-//! | EEPROM data error | 0x5530 | manufacturer (7) | |
+//! | the application's faults | its codes | its bits | its data |
 //! | SyncManager watchdog (OP left) | 0x8100 | communication (4) | AL code low byte |
-//! | PRE-OP→SAFE-OP refused | 0xA000 | communication (4) | AL code low byte |
+//! | PRE-OP→SAFE-OP refused | 0xA000 | communication (4) | AL code (2 bytes) |
 //! | PDI failure (firmware cannot reach its ESC) | 0x5000 (device hardware) | generic (0) | 1 out of range, 2 SM busy, 3 interface |
-//! | all faults gone | 0x0000 | 0 | |
+//! | every fault gone (register back to 0) | 0x0000 | 0 | |
 //!
-//! Bit 0 (generic error) of 0x1001 is set whenever any other bit is.
+//! Bit 0 (generic error) of 0x1001 is set whenever any other bit is. The
+//! queue holds [`QUEUE_LEN`] messages; when it is full the **oldest** is
+//! dropped, so the master always sees the most recent condition. INIT
+//! empties it ([`Emergencies::clear`]).
 
+use crate::esc::EscError;
 use crate::wire::coe::{CoeHeader, CoeService, Emergency, EmergencyRepr};
 
 /// Messages held while the master has not read the mailbox.
 pub const QUEUE_LEN: usize = 8;
 
-/// Error register bits (0x1001).
+/// Error register bits (0x1001, CiA 301).
 pub mod register {
     /// Generic error.
     pub const GENERIC: u8 = 0x01;
@@ -39,61 +35,23 @@ pub mod register {
     pub const TEMPERATURE: u8 = 0x08;
     /// Communication.
     pub const COMMUNICATION: u8 = 0x10;
+    /// Device profile specific.
+    pub const PROFILE: u8 = 0x20;
     /// Manufacturer specific.
     pub const MANUFACTURER: u8 = 0x80;
 }
 
-/// The fault conditions that produce emergencies.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct FaultState {
-    /// Short circuit at solenoid A / B.
-    pub short: [bool; 2],
-    /// Open circuit at solenoid A / B.
-    pub open: [bool; 2],
-    /// Supply overvoltage.
-    pub overvoltage: bool,
-    /// Supply undervoltage.
-    pub undervoltage: bool,
-    /// Over temperature.
-    pub overtemperature: bool,
-    /// EEPROM data error.
-    pub eeprom: bool,
-    /// SyncManager watchdog expired (communication).
-    pub watchdog: bool,
-}
-
-impl FaultState {
-    /// The error register 0x1001 for this state.
-    pub fn error_register(&self) -> u8 {
-        let mut r = 0;
-        if self.short.iter().chain(self.open.iter()).any(|b| *b) {
-            r |= register::CURRENT;
-        }
-        if self.overvoltage || self.undervoltage {
-            r |= register::VOLTAGE;
-        }
-        if self.overtemperature {
-            r |= register::TEMPERATURE;
-        }
-        if self.watchdog {
-            r |= register::COMMUNICATION;
-        }
-        if self.eeprom {
-            r |= register::MANUFACTURER;
-        }
-        if r != 0 {
-            r |= register::GENERIC;
-        }
-        r
-    }
-}
-
-/// The emergency queue.
+/// The emergency queue and the error register.
 #[derive(Debug, Default)]
 pub struct Emergencies {
     queue: heapless::Deque<EmergencyRepr, QUEUE_LEN>,
-    last: FaultState,
     dropped: u32,
+    /// The application's register bits.
+    app_bits: u8,
+    /// The communication error the core saw at the last update.
+    comm: bool,
+    /// The register at the last update.
+    last_register: u8,
 }
 
 impl Emergencies {
@@ -106,84 +64,87 @@ impl Emergencies {
         let _ = self.queue.push_back(e);
     }
 
-    /// Queues one message with `code`, the register of `state` and `data0`.
-    fn push_code(&mut self, code: u16, state: &FaultState, data0: u8) {
+    /// The error register as it stands (application bits, communication,
+    /// generic).
+    pub fn register(&self) -> u8 {
+        let r = self.app_bits
+            | if self.comm {
+                register::COMMUNICATION
+            } else {
+                0
+            };
+        if r != 0 { r | register::GENERIC } else { 0 }
+    }
+
+    /// Sets the application's error-register bits (current, voltage,
+    /// temperature, manufacturer, ...). Call before [`Self::raise`] so the
+    /// message carries the new register.
+    pub fn set_app_bits(&mut self, bits: u8) {
+        self.app_bits = bits & !register::GENERIC;
+    }
+
+    /// Queues an application emergency with `code` and `data`, carrying
+    /// the current register.
+    pub fn raise(&mut self, code: u16, data: [u8; 5]) {
+        let error_register = self.register();
         self.push(EmergencyRepr {
             error_code: code,
-            error_register: state.error_register(),
-            data: [data0, 0, 0, 0, 0],
+            error_register,
+            data,
         });
     }
 
-    /// Compares `now` with the previous state and queues a message for
-    /// every new fault (and 0x0000 when the last fault clears). Returns the
-    /// error register for 0x1001.
-    pub fn update(&mut self, now: FaultState, al_code: u16) -> u8 {
-        let old = self.last;
-        for (i, (n, o)) in now.short.iter().zip(old.short.iter()).enumerate() {
-            if *n && !*o {
-                self.push_code(0x2320, &now, i as u8 + 1);
-            }
+    /// The core's part of a poll: `comm` is the communication error (the SM
+    /// watchdog took the device out of OP; `al_code` its AL status code).
+    /// Queues 0x8100 when it appears and 0x0000 when the register falls
+    /// back to 0. Returns the register for 0x1001.
+    pub fn update(&mut self, comm: bool, al_code: u16) -> u8 {
+        let rising = comm && !self.comm;
+        self.comm = comm;
+        if rising {
+            self.raise(0x8100, [al_code as u8, 0, 0, 0, 0]);
         }
-        for (i, (n, o)) in now.open.iter().zip(old.open.iter()).enumerate() {
-            if *n && !*o {
-                self.push_code(0xFF01, &now, i as u8 + 1);
-            }
+        let r = self.register();
+        if r == 0 && self.last_register != 0 {
+            self.raise(0x0000, [0; 5]);
         }
-        let rising = [
-            (now.overvoltage && !old.overvoltage, 0x3210),
-            (now.undervoltage && !old.undervoltage, 0x3220),
-            (now.overtemperature && !old.overtemperature, 0x4210),
-            (now.eeprom && !old.eeprom, 0x5530),
-        ];
-        for (rose, code) in rising {
-            if rose {
-                self.push_code(code, &now, 0);
-            }
-        }
-        if now.watchdog && !old.watchdog {
-            self.push_code(0x8100, &now, al_code as u8);
-        }
-        if now.error_register() == 0 && old.error_register() != 0 {
-            self.push_code(0x0000, &now, 0);
-        }
-        self.last = now;
-        now.error_register()
-    }
-
-    /// Queues a PDI failure (0x5000 device hardware; data byte 0 says
-    /// which: 1 access out of range, 2 SyncManager busy, 3 interface).
-    pub fn pdi_failure(&mut self, e: crate::esc::EscError) {
-        let kind = match e {
-            crate::esc::EscError::OutOfRange { .. } => 1,
-            crate::esc::EscError::SmBusy { .. } => 2,
-            crate::esc::EscError::Interface => 3,
-        };
-        let state = self.last;
-        self.push(EmergencyRepr {
-            error_code: 0x5000,
-            error_register: state.error_register() | register::GENERIC,
-            data: [kind, 0, 0, 0, 0],
-        });
-    }
-
-    /// Drops every queued message (the mailbox stopped: INIT). The fault
-    /// state is kept, so a fault that persists is not reported again and
-    /// 0x1001 stays as it is.
-    pub fn clear(&mut self) {
-        self.queue.clear();
+        self.last_register = r;
+        r
     }
 
     /// Queues the refusal of a state transition (0xA000, AL code in data).
     pub fn transition_refused(&mut self, al_code: u16) {
-        let state = self.last;
         let mut e = EmergencyRepr {
             error_code: 0xA000,
-            error_register: state.error_register() | register::GENERIC | register::COMMUNICATION,
+            error_register: self.register() | register::GENERIC | register::COMMUNICATION,
             data: [0; 5],
         };
-        e.data[..2].copy_from_slice(&al_code.to_le_bytes());
+        let [lo, hi] = al_code.to_le_bytes();
+        e.data[0] = lo;
+        e.data[1] = hi;
         self.push(e);
+    }
+
+    /// Queues a PDI failure (0x5000 device hardware; data byte 0 says
+    /// which: 1 access out of range, 2 SyncManager busy, 3 interface).
+    pub fn pdi_failure(&mut self, e: EscError) {
+        let kind = match e {
+            EscError::OutOfRange { .. } => 1,
+            EscError::SmBusy { .. } => 2,
+            EscError::Interface => 3,
+        };
+        self.push(EmergencyRepr {
+            error_code: 0x5000,
+            error_register: self.register() | register::GENERIC,
+            data: [kind, 0, 0, 0, 0],
+        });
+    }
+
+    /// Drops every queued message (the mailbox stopped: INIT). The register
+    /// state is kept, so a fault that persists is not reported again and
+    /// 0x1001 stays as it is.
+    pub fn clear(&mut self) {
+        self.queue.clear();
     }
 
     /// Writes the oldest queued message as CoE payload (CoE header with
@@ -214,29 +175,48 @@ impl Emergencies {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::indexing_slicing)]
 mod tests {
     use super::*;
 
+    fn code_of(out: &[u8]) -> u16 {
+        u16::from_le_bytes([out[2], out[3]])
+    }
+
     #[test]
-    fn a_new_fault_queues_one_message_and_its_clearing_a_reset() {
+    fn an_application_fault_and_its_clearing_give_one_message_and_a_reset() {
         let mut q = Emergencies::default();
-        let mut s = FaultState::default();
-        assert_eq!(q.update(s, 0), 0);
-        s.open[0] = true;
-        assert_eq!(q.update(s, 0), register::GENERIC | register::CURRENT);
-        assert_eq!(q.update(s, 0), 0x03, "no repeat while it persists");
+        assert_eq!(q.update(false, 0), 0);
+        q.set_app_bits(register::CURRENT);
+        q.raise(0xFF01, [1, 0, 0, 0, 0]);
+        assert_eq!(q.update(false, 0), register::GENERIC | register::CURRENT);
+        assert_eq!(q.update(false, 0), 0x03, "no repeat while it persists");
         assert_eq!(q.len(), 1);
-        s.open[0] = false;
-        assert_eq!(q.update(s, 0), 0);
+        q.set_app_bits(0);
+        assert_eq!(q.update(false, 0), 0);
         assert_eq!(q.len(), 2);
         let mut out = [0u8; 16];
         assert_eq!(q.pop_into(&mut out), Some(10));
         assert_eq!(out[..2], [0x00, 0x10], "CoE service 1");
-        assert_eq!(u16::from_le_bytes([out[2], out[3]]), 0xFF01);
+        assert_eq!(code_of(&out), 0xFF01);
         assert_eq!((out[4], out[5]), (0x03, 1));
         q.pop_into(&mut out).unwrap();
-        assert_eq!(u16::from_le_bytes([out[2], out[3]]), 0x0000);
+        assert_eq!(code_of(&out), 0x0000);
         assert!(q.is_empty());
+    }
+
+    #[test]
+    fn the_sm_watchdog_raises_0x8100_with_the_communication_bit() {
+        let mut q = Emergencies::default();
+        assert_eq!(q.update(true, 0x1B), 0x11);
+        assert_eq!(q.update(true, 0x1B), 0x11);
+        let mut out = [0u8; 16];
+        q.pop_into(&mut out).unwrap();
+        assert_eq!((code_of(&out), out[4], out[5]), (0x8100, 0x11, 0x1B));
+        assert!(q.is_empty(), "raised once");
+        assert_eq!(q.update(false, 0), 0);
+        q.pop_into(&mut out).unwrap();
+        assert_eq!(code_of(&out), 0x0000, "reset when it clears");
     }
 
     #[test]
@@ -253,34 +233,35 @@ mod tests {
         assert_eq!(q.dropped(), 3);
         let mut out = [0u8; 16];
         q.pop_into(&mut out).unwrap();
-        assert_eq!(u16::from_le_bytes([out[2], out[3]]), 3, "oldest kept is #3");
+        assert_eq!(code_of(&out), 3, "oldest kept is #3");
     }
 
     #[test]
-    fn error_register_bits_follow_the_faults() {
-        let s = FaultState {
-            undervoltage: true,
-            overtemperature: true,
-            ..Default::default()
-        };
-        assert_eq!(s.error_register(), 0x01 | 0x04 | 0x08);
-        let s = FaultState {
-            eeprom: true,
-            watchdog: true,
-            ..Default::default()
-        };
-        assert_eq!(s.error_register(), 0x01 | 0x10 | 0x80);
-    }
-
-    #[test]
-    fn too_small_output_keeps_the_message() {
+    fn clear_empties_the_queue_but_keeps_the_register() {
         let mut q = Emergencies::default();
-        q.push(EmergencyRepr {
-            error_code: 1,
-            error_register: 0,
-            data: [0; 5],
-        });
-        assert_eq!(q.pop_into(&mut [0u8; 4]), None);
-        assert_eq!(q.len(), 1);
+        q.set_app_bits(register::VOLTAGE);
+        q.raise(0x3210, [0; 5]);
+        q.update(false, 0);
+        q.clear();
+        assert!(q.is_empty());
+        assert_eq!(
+            q.update(false, 0),
+            0x05,
+            "register unchanged, no re-announce"
+        );
+        assert!(q.is_empty());
+    }
+
+    #[test]
+    fn refusals_and_pdi_failures_carry_their_codes() {
+        let mut q = Emergencies::default();
+        q.transition_refused(0x001D);
+        q.pdi_failure(EscError::Interface);
+        let mut out = [0u8; 16];
+        q.pop_into(&mut out).unwrap();
+        assert_eq!((code_of(&out), out[5], out[6]), (0xA000, 0x1D, 0x00));
+        assert_eq!(out[4] & 0x11, 0x11);
+        q.pop_into(&mut out).unwrap();
+        assert_eq!((code_of(&out), out[5]), (0x5000, 3));
     }
 }

@@ -9,11 +9,15 @@ pub mod emergency;
 pub mod sdo;
 pub mod sdo_info;
 
+use crate::od::Dictionary;
 use crate::wire::coe::{CoeHeader, CoeService, SdoAbortCode};
 use crate::wire::mailbox::MailboxErrorCode;
 
 /// What the CoE servers need from the object dictionary.
 pub trait ObjectAccess {
+    /// The dictionary SDO Information describes.
+    fn dictionary(&self) -> &'static Dictionary;
+
     /// Reads `index:sub` (or the whole object with `complete_access`) into
     /// `out`; returns the number of bytes.
     fn sdo_upload(
@@ -76,7 +80,7 @@ impl CoeServer {
                 let (head, rest) = out
                     .split_at_mut_checked(CoeHeader::<&[u8]>::HEADER_LEN)
                     .ok_or(MailboxErrorCode::NoMoreMemory)?;
-                let Some(n) = self.info.handle(body, rest) else {
+                let Some(n) = self.info.handle(body, rest, od.dictionary()) else {
                     return Ok(None);
                 };
                 CoeHeader::emit_into(head, 0, CoeService::SdoInformation);
@@ -88,12 +92,12 @@ impl CoeServer {
 
     /// The next fragment of an SDO Information response in progress (CoE
     /// header onwards), if any.
-    pub fn next_fragment(&mut self, out: &mut [u8]) -> Option<usize> {
+    pub fn next_fragment(&mut self, out: &mut [u8], dict: &Dictionary) -> Option<usize> {
         if !self.info.busy() {
             return None;
         }
         let (head, rest) = out.split_at_mut_checked(CoeHeader::<&[u8]>::HEADER_LEN)?;
-        let n = self.info.next_fragment(rest)?;
+        let n = self.info.next_fragment(rest, dict)?;
         CoeHeader::emit_into(head, 0, CoeService::SdoInformation);
         Some(n + CoeHeader::<&[u8]>::HEADER_LEN)
     }

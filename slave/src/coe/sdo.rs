@@ -426,6 +426,10 @@ mod tests {
     }
 
     impl ObjectAccess for Od {
+        fn dictionary(&self) -> &'static crate::od::Dictionary {
+            &crate::testing::DICT
+        }
+
         fn sdo_upload(
             &mut self,
             index: u16,

@@ -1,4 +1,5 @@
-//! A line of software slaves that frames pass through in order.
+//! A line of software slaves that frames pass through in order, whatever
+//! devices they are.
 //!
 //! [`Chain::process`] gives the same result as passing the frame through
 //! every slave's ESC one after the other ([`Chain::process_serial`]), but
@@ -8,20 +9,29 @@
 //! position, broadcast and logical datagrams to every slave in line order.
 //! Only addressed slaves change a datagram, so the outcome is identical;
 //! the test `dispatch_equals_serial_processing` checks it on random traffic.
+//!
+//! Slaves of different devices share a line through [`LineSlave`], the
+//! object-safe face of a [`SoftSlave`]; [`Chain::slave`] gives a test the
+//! typed slave back.
 
-use crate::device::SoftSlave;
+use std::any::Any;
+
+use crate::al::AlStatus;
+use crate::device::{Application, DeviceDescription, SoftSlave};
 use crate::esc::EscError;
-use crate::esc::soft::FrameOutcome;
+use crate::esc::soft::{FrameOutcome, SoftEsc};
 use crate::firmware::{self, FirmwareVersion, ImageStore, StoreError};
+use crate::hal::NvStorage;
 use crate::host::image_store::VecStore;
+use crate::led::LedPattern;
+use crate::od::Od;
 use crate::wire::ecat::{Addressing, Command, Datagram, DatagramCursor, EcatFrame, FrameType};
 use crate::wire::ethernet::{ETHERTYPE_ETHERCAT, EthernetFrame};
 
 /// Slot capacity of a software slave's firmware store (2 MiB).
 pub const IMAGE_SLOT_CAPACITY: usize = 2 * 1024 * 1024;
 
-/// Version of the factory firmware a software slave starts with (the
-/// manual's 0x100A default).
+/// Version of the factory firmware a software slave starts with.
 pub const FACTORY_VERSION: &str = "10";
 
 /// Gives a blank image store the factory firmware (slot A, version
@@ -30,7 +40,7 @@ pub fn provision_factory(store: &mut dyn ImageStore) -> Result<(), StoreError> {
     match store.read_state() {
         Ok(_) => Ok(()),
         Err(_) => {
-            let payload = b"PAM-199-P-ETC simulated firmware 10";
+            let payload = b"simulated factory firmware 10";
             let v = FirmwareVersion::new(FACTORY_VERSION).ok_or(StoreError::OutOfBounds)?;
             firmware::provision(store, v, payload)
         }
@@ -43,9 +53,129 @@ fn factory_image_store() -> Box<dyn ImageStore + Send> {
     Box::new(store)
 }
 
+/// A software slave of any device, as a line holds it.
+pub trait LineSlave: Send {
+    /// The device's description.
+    fn description(&self) -> &'static DeviceDescription;
+    /// Passes an Ethernet frame through the ESC (in place).
+    fn process_frame(&mut self, frame: &mut [u8]) -> FrameOutcome;
+    /// The software ESC.
+    fn esc(&self) -> &SoftEsc;
+    /// The software ESC, mutably.
+    fn esc_mut(&mut self) -> &mut SoftEsc;
+    /// Runs the firmware once ([`SoftSlave::poll_with`]).
+    fn poll_with(
+        &mut self,
+        now_ns: u64,
+        images: Option<&mut dyn ImageStore>,
+    ) -> Result<(), EscError>;
+    /// A power cycle ([`SoftSlave::power_cycle`]).
+    fn power_cycle(&mut self);
+    /// Sets whether port 1 has a link.
+    fn set_port1_link(&mut self, link: bool);
+    /// Sets 0x100A to the version that runs.
+    fn set_firmware_version(&mut self, version: &str);
+    /// The version in 0x100A.
+    fn firmware_version(&self) -> String;
+    /// RUN and ERR LED patterns.
+    fn led_patterns(&self) -> (LedPattern, LedPattern);
+    /// Whether RUN and ERR are lit now.
+    fn leds(&self) -> (bool, bool);
+    /// Simulates the firmware stalling.
+    fn set_stalled(&mut self, stalled: bool);
+    /// Switches emergencies on or off.
+    fn set_emergencies(&mut self, enabled: bool);
+    /// Emergencies waiting for the master.
+    fn emergencies_waiting(&self) -> usize;
+    /// The AL status the firmware holds.
+    fn al_status(&self) -> AlStatus;
+    /// The live object dictionary.
+    fn od(&self) -> &Od;
+    /// The live object dictionary, mutably.
+    fn od_mut(&mut self) -> &mut Od;
+    /// The application's non-volatile storage, if it has one.
+    fn nv(&self) -> Option<&dyn NvStorage>;
+    /// The application's non-volatile storage, mutably.
+    fn nv_mut(&mut self) -> Option<&mut dyn NvStorage>;
+    /// For [`Chain::slave`].
+    fn as_any(&self) -> &dyn Any;
+    /// For [`Chain::slave_mut`].
+    fn as_any_mut(&mut self) -> &mut dyn Any;
+}
+
+impl<A: Application + Send + 'static> LineSlave for SoftSlave<A> {
+    fn description(&self) -> &'static DeviceDescription {
+        A::DESCRIPTION
+    }
+    fn process_frame(&mut self, frame: &mut [u8]) -> FrameOutcome {
+        SoftSlave::process_frame(self, frame)
+    }
+    fn esc(&self) -> &SoftEsc {
+        self.slave().esc()
+    }
+    fn esc_mut(&mut self) -> &mut SoftEsc {
+        self.slave_mut().esc_mut()
+    }
+    fn poll_with(
+        &mut self,
+        now_ns: u64,
+        images: Option<&mut dyn ImageStore>,
+    ) -> Result<(), EscError> {
+        SoftSlave::poll_with(self, now_ns, images)
+    }
+    fn power_cycle(&mut self) {
+        SoftSlave::power_cycle(self);
+    }
+    fn set_port1_link(&mut self, link: bool) {
+        SoftSlave::set_port1_link(self, link);
+    }
+    fn set_firmware_version(&mut self, version: &str) {
+        self.slave_mut().set_firmware_version(version);
+    }
+    fn firmware_version(&self) -> String {
+        self.slave().firmware_version().as_str().to_string()
+    }
+    fn led_patterns(&self) -> (LedPattern, LedPattern) {
+        SoftSlave::led_patterns(self)
+    }
+    fn leds(&self) -> (bool, bool) {
+        SoftSlave::leds(self)
+    }
+    fn set_stalled(&mut self, stalled: bool) {
+        SoftSlave::set_stalled(self, stalled);
+    }
+    fn set_emergencies(&mut self, enabled: bool) {
+        SoftSlave::set_emergencies(self, enabled);
+    }
+    fn emergencies_waiting(&self) -> usize {
+        self.slave().emergencies_waiting()
+    }
+    fn al_status(&self) -> AlStatus {
+        self.slave().al_status()
+    }
+    fn od(&self) -> &Od {
+        self.slave().od()
+    }
+    fn od_mut(&mut self) -> &mut Od {
+        self.slave_mut().od_mut()
+    }
+    fn nv(&self) -> Option<&dyn NvStorage> {
+        self.slave().app().nv()
+    }
+    fn nv_mut(&mut self) -> Option<&mut dyn NvStorage> {
+        self.slave_mut().app_mut().nv_mut()
+    }
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self
+    }
+}
+
 /// A line of software slaves, first to last.
 pub struct Chain {
-    slaves: Vec<SoftSlave>,
+    slaves: Vec<Box<dyn LineSlave>>,
     /// Each slave's firmware image store (A/B slots).
     images: Vec<Box<dyn ImageStore + Send>>,
     frames: u64,
@@ -64,15 +194,20 @@ impl core::fmt::Debug for Chain {
 }
 
 impl Chain {
-    /// `n` PAM-199 slaves in their power-on state; every slave but the last
-    /// reports a link on port 1.
-    pub fn new(n: usize) -> Self {
-        Self::with_slaves((0..n).map(|_| SoftSlave::new()).collect())
+    /// `n` slaves of one device, each made by `make`, in their power-on
+    /// state; every slave but the last reports a link on port 1.
+    pub fn of<A: Application + Send + 'static>(n: usize, make: impl Fn() -> A) -> Self {
+        Self::with_slaves(
+            (0..n)
+                .map(|_| Box::new(SoftSlave::new(make())) as Box<dyn LineSlave>)
+                .collect(),
+        )
     }
 
-    /// A line of the given slaves (e.g. built with
-    /// [`SoftSlave::with_layout`]), first to last.
-    pub fn with_slaves(slaves: Vec<SoftSlave>) -> Self {
+    /// A line of the given slaves (any devices, e.g. built with
+    /// [`SoftSlave::with_layout`]), first to last, each with a factory
+    /// firmware store.
+    pub fn with_slaves(slaves: Vec<Box<dyn LineSlave>>) -> Self {
         let images = slaves.iter().map(|_| factory_image_store()).collect();
         Self::with_stores(slaves, images)
     }
@@ -80,7 +215,7 @@ impl Chain {
     /// A line of slaves with their firmware image stores (e.g. file-backed
     /// ones that survive restarts). Each slave boots what its store holds.
     pub fn with_stores(
-        mut slaves: Vec<SoftSlave>,
+        mut slaves: Vec<Box<dyn LineSlave>>,
         mut images: Vec<Box<dyn ImageStore + Send>>,
     ) -> Self {
         images.truncate(slaves.len());
@@ -90,8 +225,7 @@ impl Chain {
         for (s, img) in slaves.iter_mut().zip(images.iter_mut()) {
             let decision = firmware::power_on(img.as_mut());
             let _ = firmware::confirm_boot(img.as_mut());
-            s.slave_mut()
-                .set_firmware_version(decision.version.as_str());
+            s.set_firmware_version(decision.version.as_str());
         }
         let last = slaves.len().saturating_sub(1);
         for (i, s) in slaves.iter_mut().enumerate() {
@@ -111,7 +245,7 @@ impl Chain {
     fn reindex(&mut self) {
         self.addresses.clear();
         for (i, s) in self.slaves.iter().enumerate() {
-            let esc = s.slave().esc();
+            let esc = s.esc();
             self.addresses.push((esc.station_address(), i));
             let alias = esc.station_alias();
             if alias != 0 && alias != esc.station_address() {
@@ -191,7 +325,7 @@ impl Chain {
                         break;
                     }
                     if let Some(s) = self.slaves.get_mut(i) {
-                        s.slave_mut().esc_mut().process_datagram(dg);
+                        s.esc_mut().process_datagram(dg);
                     }
                     k += 1;
                 }
@@ -205,7 +339,7 @@ impl Chain {
                 let pos = usize::from(0u16.wrapping_sub(adp0));
                 if let Some(s) = self.slaves.get_mut(pos) {
                     dg.set_adp(0);
-                    s.slave_mut().esc_mut().process_datagram(dg);
+                    s.esc_mut().process_datagram(dg);
                 }
                 dg.set_adp(adp0.wrapping_add(n as u16));
                 if cmd.is_write() && dg.ado() < 0x0014 {
@@ -216,7 +350,7 @@ impl Chain {
             // Broadcast, logical, ARMW, FRMW: every slave in line order.
             _ => {
                 for s in &mut self.slaves {
-                    s.slave_mut().esc_mut().process_datagram(dg);
+                    s.esc_mut().process_datagram(dg);
                 }
                 if cmd.is_write() {
                     self.reindex();
@@ -263,7 +397,7 @@ impl Chain {
         // verified by the bootloader: confirm the trial image.
         let _ = firmware::confirm_boot(store.as_mut());
         let version = decision.version.as_str().to_string();
-        slave.slave_mut().set_firmware_version(&version);
+        slave.set_firmware_version(&version);
         self.reindex();
         Some(version)
     }
@@ -274,13 +408,27 @@ impl Chain {
     }
 
     /// The slaves.
-    pub fn slaves(&self) -> &[SoftSlave] {
+    pub fn slaves(&self) -> &[Box<dyn LineSlave>] {
         &self.slaves
     }
 
     /// The slaves, mutably (to set inputs, inject faults).
-    pub fn slaves_mut(&mut self) -> &mut [SoftSlave] {
+    pub fn slaves_mut(&mut self) -> &mut [Box<dyn LineSlave>] {
         &mut self.slaves
+    }
+
+    /// Slave `i` as the device `A` it is (`None` for another device or a
+    /// bad index).
+    pub fn slave<A: Application + Send + 'static>(&self, i: usize) -> Option<&SoftSlave<A>> {
+        self.slaves.get(i)?.as_any().downcast_ref()
+    }
+
+    /// Slave `i` as the device `A` it is, mutably.
+    pub fn slave_mut<A: Application + Send + 'static>(
+        &mut self,
+        i: usize,
+    ) -> Option<&mut SoftSlave<A>> {
+        self.slaves.get_mut(i)?.as_any_mut().downcast_mut()
     }
 
     /// Number of frames processed so far.
@@ -340,8 +488,8 @@ mod tests {
     /// Sets station addresses 0x1000.. and a process-data configuration so
     /// that logical and configured traffic finds targets.
     fn configured_pair() -> (Chain, Chain) {
-        let mut a = Chain::new(6);
-        let mut b = Chain::new(6);
+        let mut a = crate::testing::line(6);
+        let mut b = crate::testing::line(6);
         for i in 0..6u16 {
             let mut buf = vec![0u8; 200];
             let mut fb = FrameBuilder::new(&mut buf, [0x10; 6]).unwrap();
@@ -418,11 +566,9 @@ mod tests {
 
 #[cfg(test)]
 mod garbage_tests {
-    use super::*;
-
     #[test]
     fn random_ethercat_frames_never_panic_the_line_or_its_firmware() {
-        let mut chain = Chain::new(2);
+        let mut chain = crate::testing::line(2);
         let mut x: u64 = 0x2545_F491_4F6C_DD1D;
         let mut next = move || {
             x ^= x << 13;

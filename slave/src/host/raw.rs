@@ -1,4 +1,4 @@
-//! The raw-socket runner: a chain of software PAM-199 slaves answering
+//! The raw-socket runner: a line of software slaves (any devices) answering
 //! EtherCAT frames (EtherType 0x88A4) on a real network interface, so any
 //! master (TwinCAT, SOEM/pysoem, IgH, ethercrab's raw-socket task) can drive
 //! them. Frames come back out of the same interface, as from the last slave
@@ -6,9 +6,8 @@
 //! processed (source MAC with the locally administered bit set: our own
 //! replies seen again), is ignored.
 
-use super::chain::{Chain, IMAGE_SLOT_CAPACITY, provision_factory};
+use super::chain::{Chain, IMAGE_SLOT_CAPACITY, LineSlave, provision_factory};
 use super::pcap::PcapWriter;
-use crate::device::SoftSlave;
 use crate::firmware::ImageStore;
 use crate::firmware::file_store::FileStore;
 use pnet_datalink::{Channel, Config, NetworkInterface};
@@ -18,13 +17,11 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-/// What to run.
+/// What to run (the slaves themselves are handed to [`run`]).
 #[derive(Debug, Clone)]
 pub struct RunnerConfig {
     /// Network interface name.
     pub iface: String,
-    /// Number of slaves on the line.
-    pub count: usize,
     /// Capture every frame (both directions) to this pcap file.
     pub pcap: Option<PathBuf>,
     /// Directory for the slaves' persistent state.
@@ -48,7 +45,7 @@ pub enum RunnerError {
     )]
     Permission(String),
     /// The slave count is out of range.
-    #[error("--count must be between 1 and 512, got {0}")]
+    #[error("a line needs 1 to {MAX_LINE} slaves, got {0}")]
     Count(usize),
     /// Any other I/O failure.
     #[error("{context}: {source}")]
@@ -69,10 +66,18 @@ pub struct RunStats {
     pub ignored: u64,
 }
 
-/// Opens the interface and serves frames until `stop` is set.
-pub fn run(config: &RunnerConfig, stop: &AtomicBool) -> Result<RunStats, RunnerError> {
-    if config.count == 0 || config.count > 512 {
-        return Err(RunnerError::Count(config.count));
+/// Most slaves one runner serves.
+pub const MAX_LINE: usize = 512;
+
+/// Opens the interface and serves frames for the line `slaves` (first to
+/// last) until `stop` is set.
+pub fn run(
+    config: &RunnerConfig,
+    slaves: Vec<Box<dyn LineSlave>>,
+    stop: &AtomicBool,
+) -> Result<RunStats, RunnerError> {
+    if slaves.is_empty() || slaves.len() > MAX_LINE {
+        return Err(RunnerError::Count(slaves.len()));
     }
     let all = pnet_datalink::interfaces();
     let Some(iface) = all.iter().find(|i| i.name == config.iface).cloned() else {
@@ -100,13 +105,13 @@ pub fn run(config: &RunnerConfig, stop: &AtomicBool) -> Result<RunStats, RunnerE
     };
     let (mut tx, mut rx) = open(&iface)?;
     let mut chain = match &config.state_dir {
-        Some(dir) => persistent_chain(dir, config.count)?,
-        None => Chain::new(config.count),
+        Some(dir) => persistent_chain(dir, slaves)?,
+        None => Chain::with_slaves(slaves),
     };
     let mut saved: Vec<u32> = chain
         .slaves()
         .iter()
-        .map(|s| s.slave().nv().write_count())
+        .map(|s| s.nv().map_or(0, |n| n.write_count()))
         .collect();
     let start = Instant::now();
     let mut stats = RunStats::default();
@@ -182,10 +187,9 @@ fn slave_dir(dir: &Path, i: usize) -> PathBuf {
 /// Slaves whose parameters (`slave-N/params.bin`) and firmware store
 /// (`slave-N/firmware/`) live under `dir`; blank stores get the factory
 /// firmware.
-fn persistent_chain(dir: &Path, count: usize) -> Result<Chain, RunnerError> {
-    let mut slaves = Vec::with_capacity(count);
-    let mut stores: Vec<Box<dyn ImageStore + Send>> = Vec::with_capacity(count);
-    for i in 0..count {
+fn persistent_chain(dir: &Path, mut slaves: Vec<Box<dyn LineSlave>>) -> Result<Chain, RunnerError> {
+    let mut stores: Vec<Box<dyn ImageStore + Send>> = Vec::with_capacity(slaves.len());
+    for (i, slave) in slaves.iter_mut().enumerate() {
         let sd = slave_dir(dir, i);
         let fw_dir = sd.join("firmware");
         std::fs::create_dir_all(&fw_dir)
@@ -196,21 +200,19 @@ fn persistent_chain(dir: &Path, count: usize) -> Result<Chain, RunnerError> {
         )))?;
         let _ = provision_factory(&mut store);
         stores.push(Box::new(store));
-        let mut slave = SoftSlave::new();
         let params = sd.join("params.bin");
         match std::fs::read(&params) {
             Ok(bytes) => {
-                let nv = slave.slave_mut().nv_mut().bytes_mut();
-                for (d, b) in nv.iter_mut().zip(bytes.iter()) {
-                    *d = *b;
+                if let Some(nv) = slave.nv_mut() {
+                    let n = bytes.len().min(nv.capacity());
+                    let _ = nv.write(0, bytes.get(..n).unwrap_or(&[]));
+                    // Restart with the loaded EEPROM so the parameters apply.
+                    slave.power_cycle();
                 }
-                // Restart with the loaded EEPROM so the parameters apply.
-                slave.power_cycle();
             }
             Err(e) if e.kind() == io::ErrorKind::NotFound => {}
             Err(e) => return Err(io_err(format!("reading {}", params.display()))(e)),
         }
-        slaves.push(slave);
     }
     Ok(Chain::with_stores(slaves, stores))
 }
@@ -219,16 +221,22 @@ fn persistent_chain(dir: &Path, count: usize) -> Result<Chain, RunnerError> {
 /// the last call (write to a temporary file, then rename: atomic).
 fn persist_parameters(dir: &Path, chain: &Chain, saved: &mut [u32]) -> Result<(), RunnerError> {
     for (i, (s, seen)) in chain.slaves().iter().zip(saved.iter_mut()).enumerate() {
-        let count = s.slave().nv().write_count();
+        let Some(nv) = s.nv() else {
+            continue;
+        };
+        let count = nv.write_count();
         if count == *seen {
             continue;
         }
         *seen = count;
+        let mut bytes = vec![0u8; nv.capacity()];
+        if nv.read(0, &mut bytes).is_err() {
+            continue;
+        }
         let sd = slave_dir(dir, i);
         let tmp = sd.join("params.bin.tmp");
         let path = sd.join("params.bin");
-        std::fs::write(&tmp, s.slave().nv().bytes())
-            .map_err(io_err(format!("writing {}", tmp.display())))?;
+        std::fs::write(&tmp, &bytes).map_err(io_err(format!("writing {}", tmp.display())))?;
         std::fs::rename(&tmp, &path).map_err(io_err(format!("renaming to {}", path.display())))?;
     }
     Ok(())
@@ -291,32 +299,35 @@ mod tests {
 
     #[test]
     fn state_dir_keeps_saved_parameters_and_the_firmware_store_across_restarts() {
-        let dir = std::env::temp_dir().join(format!("pam-state-{}", std::process::id()));
+        use crate::testing::{TestApp, line};
+        let dir = std::env::temp_dir().join(format!("ecat-state-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
+        let slaves = || -> Vec<Box<dyn LineSlave>> {
+            (0..2)
+                .map(|_| Box::new(crate::testing::slave()) as Box<dyn LineSlave>)
+                .collect()
+        };
         {
-            let mut chain = persistent_chain(&dir, 2).unwrap();
+            let mut chain = persistent_chain(&dir, slaves()).unwrap();
             let mut saved = vec![0u32; 2];
-            assert_eq!(chain.slaves()[1].slave().firmware_version().as_str(), "10");
-            let slave = chain.slaves_mut()[1].slave_mut();
-            slave.store.set(0x800D, 2, 2345);
-            let store = slave.store.clone();
-            crate::params::save(&store, slave.nv_mut()).unwrap();
+            assert_eq!(chain.slaves()[1].firmware_version(), "10");
+            let s = chain.slave_mut::<TestApp>(1).unwrap().slave_mut();
+            s.od_mut().set(0x8000, 1, 777);
+            let (app, od) = s.app_and_od();
+            crate::params::save(od, &mut app.nv).unwrap();
             persist_parameters(&dir, &chain, &mut saved).unwrap();
         }
         assert!(dir.join("slave-1/params.bin").exists());
         assert!(dir.join("slave-1/firmware").is_dir());
-        let chain = persistent_chain(&dir, 2).unwrap();
+        let chain = persistent_chain(&dir, slaves()).unwrap();
+        assert_eq!(chain.slaves()[1].od().get(0x8000, 1), Some(777), "restored");
         assert_eq!(
-            chain.slaves()[1].slave().store.get(0x800D, 2),
-            Some(2345),
-            "restored"
-        );
-        assert_eq!(
-            chain.slaves()[0].slave().store.get(0x800D, 2),
-            Some(1000),
+            chain.slaves()[0].od().get(0x8000, 1),
+            Some(100),
             "untouched"
         );
-        assert_eq!(chain.slaves()[0].slave().firmware_version().as_str(), "10");
+        assert_eq!(chain.slaves()[0].firmware_version(), "10");
+        let _ = line(1);
         let _ = std::fs::remove_dir_all(&dir);
     }
 
@@ -324,11 +335,21 @@ mod tests {
     fn unknown_interface_is_named_in_the_error() {
         let cfg = RunnerConfig {
             iface: "no-such-if0".into(),
-            count: 1,
             pcap: None,
             state_dir: None,
         };
-        let err = run(&cfg, &AtomicBool::new(false)).unwrap_err();
+        let one: Vec<Box<dyn LineSlave>> = vec![Box::new(crate::testing::slave())];
+        let err = run(&cfg, one, &AtomicBool::new(false)).unwrap_err();
+        assert!(err.to_string().contains("no-such-if0"), "{err}");
+        let err = run(&cfg, Vec::new(), &AtomicBool::new(false)).unwrap_err();
+        assert!(err.to_string().contains("1 to 512"), "{err}");
+        let cfg = RunnerConfig {
+            iface: "no-such-if0".into(),
+            pcap: None,
+            state_dir: None,
+        };
+        let one: Vec<Box<dyn LineSlave>> = vec![Box::new(crate::testing::slave())];
+        let err = run(&cfg, one, &AtomicBool::new(false)).unwrap_err();
         assert!(err.to_string().contains("no-such-if0"), "{err}");
     }
 }

@@ -1,12 +1,18 @@
-//! Object dictionary (layer 2): the one static description of every object
-//! ([`model`]), its types ([`types`]) and the live values ([`store`]).
+//! Object dictionary (layer 2): the engine, not the objects.
 //!
-//! The ESI, the SII, SDO Information, the PDO mapping and the application all
-//! read [`model::OBJECTS`]; nothing about an object is written twice.
+//! A device describes its objects once, as a [`Dictionary`] of [`Object`]s
+//! built with the `const` constructors of [`build`] and checked by
+//! [`Dictionary::validate`]. [`store::ObjectStore`] holds the live values;
+//! [`complete`] does complete access. The ESI, the SII, SDO Information,
+//! the PDO engine and the application all read the one description.
 
+pub mod build;
 pub mod complete;
-pub mod model;
+pub mod dictionary;
 pub mod store;
+mod sub_names;
 pub mod types;
 
+pub use dictionary::{DescriptionError, Dictionary};
+pub use store::{ObjectStore, Od, ValueStorage};
 pub use types::*;

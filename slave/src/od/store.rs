@@ -1,12 +1,20 @@
 //! Live values of the object dictionary (layer 2).
 //!
-//! One slot per entry of [`super::model::OBJECTS`], indexed by the entry's
-//! flat position. SDO access goes through [`ObjectStore::upload`] and
-//! [`ObjectStore::download`], which apply the model's rules (existence,
-//! access in the current state, length, range, enumeration members) and
-//! answer with the CoE abort code a master expects.
+//! One `i64` slot per entry of the device's [`Dictionary`], indexed by the
+//! entry's flat position, plus a few string slots. SDO access goes through
+//! [`ObjectStore::upload`] and [`ObjectStore::download`], which apply the
+//! description's rules (existence, access in the current state, length,
+//! range, enumeration members) and answer with the CoE abort code a master
+//! expects.
+//!
+//! The store is sized by its device without heap and without making every
+//! user generic: [`ObjectStore<V>`] owns its values `V` (`[i64; N]`, N the
+//! dictionary's entry count) as its last field, and [`Od`] is the same
+//! store with the values unsized (`[i64]`). Core and application code take
+//! `&Od` / `&mut Od`; [`ObjectStore::od`] / [`ObjectStore::od_mut`] turn a
+//! sized store into one (the way `heapless`'s `VecView` works).
 
-use super::model::{self, ENTRY_COUNT};
+use super::dictionary::Dictionary;
 use super::types::{Access, DataType, DefaultValue, Entry};
 use crate::al::AlState;
 use crate::wire::coe::SdoAbortCode;
@@ -16,16 +24,78 @@ pub const STRING_CAPACITY: usize = 32;
 /// Number of string entries the store can hold.
 pub const STRING_SLOTS: usize = 4;
 
-/// The live values of every entry.
+type Strings = heapless::Vec<(u16, heapless::String<STRING_CAPACITY>), STRING_SLOTS>;
+
+/// The live values of every entry of one device's dictionary; `V` is the
+/// value storage (`[i64; N]`), or `[i64]` in the unsized view [`Od`].
 #[derive(Debug, Clone)]
-pub struct ObjectStore {
-    values: [i64; ENTRY_COUNT],
-    strings: heapless::Vec<(u16, heapless::String<STRING_CAPACITY>), STRING_SLOTS>,
+pub struct ObjectStore<V: ?Sized = [i64]> {
+    dict: &'static Dictionary,
+    strings: Strings,
+    values: V,
 }
 
-impl Default for ObjectStore {
-    fn default() -> Self {
-        Self::new()
+/// An object store whatever its size: what core and application code take.
+pub type Od = ObjectStore<[i64]>;
+
+/// Storage for a dictionary's values: `[i64; N]` for any `N`.
+pub trait ValueStorage: Sized + Send + 'static {
+    /// All zeros.
+    fn zeroed() -> Self;
+    /// The store as the unsized view.
+    fn view(store: &ObjectStore<Self>) -> &Od;
+    /// The store as the unsized view, mutably.
+    fn view_mut(store: &mut ObjectStore<Self>) -> &mut Od;
+}
+
+impl<const N: usize> ValueStorage for [i64; N] {
+    fn zeroed() -> Self {
+        [0; N]
+    }
+    fn view(store: &ObjectStore<Self>) -> &Od {
+        store
+    }
+    fn view_mut(store: &mut ObjectStore<Self>) -> &mut Od {
+        store
+    }
+}
+
+impl<V: ValueStorage> ObjectStore<V> {
+    /// A store of `dict` holding every entry's default value. `V` must hold
+    /// `dict.entry_count()` values: entries beyond it read as 0 and ignore
+    /// writes ([`DeviceDescription::validate`](crate::device::DeviceDescription)
+    /// and the device's `Values` type keep them equal).
+    pub fn new(dict: &'static Dictionary) -> Self {
+        let mut s = ObjectStore {
+            dict,
+            strings: heapless::Vec::new(),
+            values: V::zeroed(),
+        };
+        s.od_mut().load_defaults();
+        s
+    }
+
+    /// The store as [`Od`].
+    pub fn od(&self) -> &Od {
+        V::view(self)
+    }
+
+    /// The store as [`Od`], mutably.
+    pub fn od_mut(&mut self) -> &mut Od {
+        V::view_mut(self)
+    }
+}
+
+impl<V: ValueStorage> core::ops::Deref for ObjectStore<V> {
+    type Target = Od;
+    fn deref(&self) -> &Od {
+        self.od()
+    }
+}
+
+impl<V: ValueStorage> core::ops::DerefMut for ObjectStore<V> {
+    fn deref_mut(&mut self) -> &mut Od {
+        self.od_mut()
     }
 }
 
@@ -34,22 +104,17 @@ pub fn byte_len(entry: &Entry) -> usize {
     usize::from(entry.bit_len).div_ceil(8)
 }
 
-impl ObjectStore {
-    /// A store holding every entry's default value.
-    pub fn new() -> Self {
-        let mut s = ObjectStore {
-            values: [0; ENTRY_COUNT],
-            strings: heapless::Vec::new(),
-        };
-        s.load_defaults();
-        s
+impl Od {
+    /// The dictionary this store holds the values of.
+    pub fn dictionary(&self) -> &'static Dictionary {
+        self.dict
     }
 
     /// Restores every entry to its default value.
     pub fn load_defaults(&mut self) {
         self.strings.clear();
         let mut flat = 0usize;
-        for obj in model::OBJECTS {
+        for obj in self.dict.objects() {
             for e in obj.entries {
                 match e.default {
                     DefaultValue::Int(v) => {
@@ -89,12 +154,14 @@ impl ObjectStore {
 
     /// The value of `index:sub`, if the entry exists.
     pub fn get(&self, index: u16, sub: u8) -> Option<i64> {
-        model::find_entry(index, sub).map(|(flat, _)| self.value(flat))
+        self.dict
+            .find_entry(index, sub)
+            .map(|(flat, _)| self.value(flat))
     }
 
     /// Sets `index:sub` without checks; returns whether the entry exists.
     pub fn set(&mut self, index: u16, sub: u8, v: i64) -> bool {
-        match model::find_entry(index, sub) {
+        match self.dict.find_entry(index, sub) {
             Some((flat, _)) => {
                 self.set_value(flat, v);
                 true
@@ -114,7 +181,7 @@ impl ObjectStore {
     /// Replaces the string at `index:sub` (e.g. 0x100A after a firmware
     /// update); returns false if it is not a string entry or too long.
     pub fn set_string(&mut self, index: u16, sub: u8, text: &str) -> bool {
-        let Some((flat, _)) = model::find_entry(index, sub) else {
+        let Some((flat, _)) = self.dict.find_entry(index, sub) else {
             return false;
         };
         let Some((_, s)) = self
@@ -158,7 +225,7 @@ impl ObjectStore {
     /// SDO upload of `index:sub` into `out`: checks existence and read
     /// access, returns the number of bytes written.
     pub fn upload(&self, index: u16, sub: u8, out: &mut [u8]) -> Result<usize, SdoAbortCode> {
-        let (flat, entry) = lookup(index, sub)?;
+        let (flat, entry) = self.lookup(index, sub)?;
         if !entry.access.readable() {
             return Err(SdoAbortCode::WriteOnly);
         }
@@ -230,50 +297,64 @@ impl ObjectStore {
         data: &[u8],
         state: AlState,
     ) -> Result<i64, SdoAbortCode> {
-        let (flat, entry) = lookup(index, sub)?;
+        let (flat, entry) = self.lookup(index, sub)?;
         let value = Self::check(entry, data, state)?;
         self.set_value(flat, value);
         Ok(value)
     }
-}
 
-/// Finds an SDO-accessible entry: unknown index aborts 0x06020000, unknown
-/// subindex 0x06090011, a padding gap 0x06010000 (unsupported access: SDO
-/// Information describes a gap as NULL with no access rights, as the SSC
-/// does, so reading it is refused the way the SSC refuses it; MANUAL-NOTES
-/// note 20).
-pub fn lookup(index: u16, sub: u8) -> Result<(usize, &'static Entry), SdoAbortCode> {
-    let Some((_, obj)) = model::find(index) else {
-        return Err(SdoAbortCode::ObjectNotFound);
-    };
-    match model::find_entry(obj.index, sub) {
-        Some((_, e)) if e.gap => Err(SdoAbortCode::UnsupportedAccess),
-        Some((flat, e)) => Ok((flat, e)),
-        None => Err(SdoAbortCode::SubindexNotFound),
+    /// Finds an SDO-accessible entry: unknown index aborts 0x06020000,
+    /// unknown subindex 0x06090011, a padding gap 0x06010000 (unsupported
+    /// access: SDO Information describes a gap as NULL with no access
+    /// rights, as the SSC does, so reading it is refused the way the SSC
+    /// refuses it).
+    pub fn lookup(&self, index: u16, sub: u8) -> Result<(usize, &'static Entry), SdoAbortCode> {
+        let Some((_, obj)) = self.dict.find(index) else {
+            return Err(SdoAbortCode::ObjectNotFound);
+        };
+        match self.dict.find_entry(obj.index, sub) {
+            Some((_, e)) if e.gap => Err(SdoAbortCode::UnsupportedAccess),
+            Some((flat, e)) => Ok((flat, e)),
+            None => Err(SdoAbortCode::SubindexNotFound),
+        }
     }
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+    use crate::testing::store;
 
-    fn up(store: &ObjectStore, index: u16, sub: u8) -> Result<u64, SdoAbortCode> {
+    fn up(s: &Od, index: u16, sub: u8) -> Result<u64, SdoAbortCode> {
         let mut buf = [0u8; 8];
-        let n = store.upload(index, sub, &mut buf)?;
+        let n = s.upload(index, sub, &mut buf)?;
         let mut raw = [0u8; 8];
         raw[..n].copy_from_slice(&buf[..n]);
         Ok(u64::from_le_bytes(raw))
     }
 
     #[test]
-    fn identity_reads_product_code() {
-        let s = ObjectStore::new();
-        assert_eq!(up(&s, 0x1018, 2), Ok(0x00C7_03F3));
+    fn defaults_read_back_and_strings_upload_as_text() {
+        let s = store();
+        assert_eq!(up(&s, 0x1018, 1), Ok(0xABC));
+        assert_eq!(up(&s, 0x8000, 1), Ok(100));
+        let mut buf = [0u8; 16];
+        assert_eq!(s.upload(0x1008, 0, &mut buf), Ok(4));
+        assert_eq!(&buf[..4], b"TD-1");
+    }
+
+    #[test]
+    fn unknown_object_subindex_and_padding_abort_with_their_codes() {
+        let s = store();
+        assert_eq!(up(&s, 0x2000, 0), Err(SdoAbortCode::ObjectNotFound));
+        assert_eq!(up(&s, 0x1018, 9), Err(SdoAbortCode::SubindexNotFound));
+        assert_eq!(up(&s, 0x6000, 2), Err(SdoAbortCode::UnsupportedAccess));
     }
 
     #[test]
     fn sdo_write_read_only_object_aborts_0601_0002() {
-        let mut s = ObjectStore::new();
+        let mut s = store();
         assert_eq!(
             s.download(0x1018, 1, &[1, 0, 0, 0], AlState::PreOp),
             Err(SdoAbortCode::ReadOnly)
@@ -281,92 +362,48 @@ mod tests {
     }
 
     #[test]
-    fn current_above_range_aborts_0609_0031_and_below_0609_0032() {
-        let mut s = ObjectStore::new();
+    fn ranges_types_lengths_and_enumerations_are_checked() {
+        let mut s = store();
+        let w = |s: &mut Od, sub: u8, d: &[u8]| s.download(0x8000, sub, d, AlState::Op);
         assert_eq!(
-            s.download(0x800D, 2, &5000u16.to_le_bytes(), AlState::PreOp),
+            w(&mut s, 1, &1001u16.to_le_bytes()),
             Err(SdoAbortCode::ValueTooHigh)
         );
+        assert_eq!(w(&mut s, 1, &[1]), Err(SdoAbortCode::LengthTooLow));
+        assert_eq!(w(&mut s, 1, &[1, 0, 0]), Err(SdoAbortCode::LengthTooHigh));
         assert_eq!(
-            s.download(0x800D, 2, &100u16.to_le_bytes(), AlState::PreOp),
+            w(&mut s, 2, &[3]),
+            Err(SdoAbortCode::ValueRange),
+            "not a member"
+        );
+        assert_eq!(w(&mut s, 2, &[2]), Ok(2));
+        assert_eq!(
+            w(&mut s, 3, &(-101i16).to_le_bytes()),
             Err(SdoAbortCode::ValueTooLow)
         );
-        assert_eq!(
-            s.download(0x800D, 2, &2000u16.to_le_bytes(), AlState::Op),
-            Ok(2000)
-        );
-        assert_eq!(up(&s, 0x800D, 2), Ok(2000));
-    }
-
-    #[test]
-    fn wrong_lengths_abort_0607_0012_and_0607_0013() {
-        let mut s = ObjectStore::new();
-        assert_eq!(
-            s.download(0x800D, 2, &[0, 0, 0, 0], AlState::PreOp),
-            Err(SdoAbortCode::LengthTooHigh)
-        );
-        assert_eq!(
-            s.download(0x800D, 2, &[7], AlState::PreOp),
-            Err(SdoAbortCode::LengthTooLow)
-        );
-    }
-
-    #[test]
-    fn unknown_object_and_subindex_abort() {
-        let s = ObjectStore::new();
-        assert_eq!(up(&s, 0x1234, 0), Err(SdoAbortCode::ObjectNotFound));
-        assert_eq!(up(&s, 0x1018, 9), Err(SdoAbortCode::SubindexNotFound));
-    }
-
-    #[test]
-    fn write_only_password_cannot_be_read() {
-        let s = ObjectStore::new();
-        assert_eq!(up(&s, 0xF801, 1), Err(SdoAbortCode::WriteOnly));
-    }
-
-    #[test]
-    fn enum_value_outside_its_members_aborts_0609_0030() {
-        let mut s = ObjectStore::new();
-        assert_eq!(
-            s.download(0xF800, 2, &[7], AlState::PreOp),
-            Err(SdoAbortCode::ValueRange)
-        );
-        assert_eq!(
-            s.download(0xF800, 2, &[9], AlState::PreOp),
-            Err(SdoAbortCode::ValueRange),
-            "high bits set in a 3-bit enum"
-        );
-        assert_eq!(s.download(0xF800, 2, &[2], AlState::PreOp), Ok(2));
+        assert_eq!(w(&mut s, 3, &(-100i16).to_le_bytes()), Ok(-100));
+        assert_eq!(s.get(0x8000, 3), Some(-100), "sign extended");
     }
 
     #[test]
     fn pdo_assignment_is_writable_only_in_preop() {
-        let mut s = ObjectStore::new();
+        let mut s = store();
+        let d = 0x1601u16.to_le_bytes();
         assert_eq!(
-            s.download(0x1C12, 1, &0x1600u16.to_le_bytes(), AlState::SafeOp),
+            s.download(0x1C12, 1, &d, AlState::SafeOp),
             Err(SdoAbortCode::InvalidState)
         );
-        assert!(
-            s.download(0x1C12, 1, &0x1600u16.to_le_bytes(), AlState::PreOp)
-                .is_ok()
-        );
+        assert_eq!(s.download(0x1C12, 1, &d, AlState::PreOp), Ok(0x1601));
     }
 
     #[test]
-    fn device_name_uploads_as_string() {
-        let s = ObjectStore::new();
-        let mut buf = [0u8; 32];
-        let n = s.upload(0x1008, 0, &mut buf).unwrap();
-        assert_eq!(&buf[..n], b"PAM-199-P-ETC");
-    }
-
-    #[test]
-    fn negative_curve_point_round_trips() {
-        let mut s = ObjectStore::new();
-        assert_eq!(
-            s.download(0x8006, 1, &(-5000i16).to_le_bytes(), AlState::PreOp),
-            Ok(-5000)
-        );
-        assert_eq!(up(&s, 0x8006, 1), Ok((-5000i16) as u16 as u64));
+    fn a_sized_store_and_its_view_are_the_same_values() {
+        let mut s = store();
+        s.set(0x7000, 3, -7);
+        let od: &Od = s.od();
+        assert_eq!(od.get(0x7000, 3), Some(-7));
+        assert_eq!(od.dictionary().entry_count(), crate::testing::ENTRIES);
+        assert!(s.set_string(0x100A, 0, "11"));
+        assert!(!s.set_string(0x1018, 1, "x"), "not a string entry");
     }
 }

@@ -24,7 +24,7 @@ use super::chain::{DirectionalChain, DirectionalParams, IndependentChain, Indepe
 use super::curve::{DirectionalCurve, IndependentCurve};
 use super::deadband::{Deadband, DirectionalDeadband, MmType};
 use super::power_stage::{Faults, PowerStage, Solenoid, StageParams, acc_gains, pwm_from_code};
-use crate::od::store::ObjectStore;
+use ecat_slave::od::Od;
 
 /// Tick period of the application in microseconds.
 pub const TICK_US: u32 = 1_000;
@@ -132,7 +132,7 @@ impl Default for Amplifier {
     }
 }
 
-fn get(store: &ObjectStore, index: u16, sub: u8) -> i64 {
+fn get(store: &Od, index: u16, sub: u8) -> i64 {
     store.get(index, sub).unwrap_or(0)
 }
 
@@ -140,7 +140,7 @@ fn u16_of(v: i64) -> u16 {
     v.clamp(0, i64::from(u16::MAX)) as u16
 }
 
-fn stage_params(store: &ObjectStore, base: u16) -> StageParams {
+fn stage_params(store: &Od, base: u16) -> StageParams {
     let pwm_hz = pwm_from_code(get(store, base, 5).clamp(0, 255) as u8).unwrap_or(2500);
     StageParams {
         current_ma: u16_of(get(store, base, 2)),
@@ -157,7 +157,7 @@ fn mmtype(v: i64) -> MmType {
     if v == 1 { MmType::Lin } else { MmType::Jmp }
 }
 
-fn directional_params(store: &ObjectStore) -> DirectionalParams {
+fn directional_params(store: &Od) -> DirectionalParams {
     let mut curve = DirectionalCurve::default();
     for sub in 1..=42u8 {
         curve.od_set(sub, get(store, 0x8006, sub).clamp(-10_000, 10_000) as i16);
@@ -182,7 +182,7 @@ fn directional_params(store: &ObjectStore) -> DirectionalParams {
     }
 }
 
-fn independent_params(store: &ObjectStore, ch: u16) -> IndependentParams {
+fn independent_params(store: &Od, ch: u16) -> IndependentParams {
     let off = ch * 0x10;
     let mut curve = IndependentCurve::default();
     for sub in 1..=22u8 {
@@ -205,7 +205,7 @@ fn independent_params(store: &ObjectStore, ch: u16) -> IndependentParams {
 }
 
 /// While ACC is on, PPWM/IPWM show the gains adapted to the PWM frequency.
-fn publish_acc_gains(store: &mut ObjectStore, base: u16) {
+fn publish_acc_gains(store: &mut Od, base: u16) {
     let p = stage_params(store, base);
     if p.acc {
         let g = acc_gains(p.pwm_hz);
@@ -235,7 +235,7 @@ impl Amplifier {
     /// the power stage is then off.
     pub fn run_until<P: PowerStage>(
         &mut self,
-        store: &mut ObjectStore,
+        store: &mut Od,
         stage: &mut P,
         now_ns: u64,
         outputs_valid: bool,
@@ -264,7 +264,7 @@ impl Amplifier {
     /// One 1 ms tick at time `now_ns`.
     pub fn tick<P: PowerStage>(
         &mut self,
-        store: &mut ObjectStore,
+        store: &mut Od,
         stage: &mut P,
         now_ns: u64,
         outputs_valid: bool,
@@ -399,20 +399,14 @@ mod tests {
     use super::*;
     use crate::app::power_stage::{Fault, SimPowerStage};
 
-    fn run(
-        amp: &mut Amplifier,
-        s: &mut ObjectStore,
-        st: &mut SimPowerStage,
-        from: u64,
-        ms: u64,
-    ) -> u64 {
+    fn run(amp: &mut Amplifier, s: &mut Od, st: &mut SimPowerStage, from: u64, ms: u64) -> u64 {
         let to = from + ms * 1_000_000;
         amp.run_until(s, st, to, true);
         to
     }
 
-    fn setup() -> (Amplifier, ObjectStore, SimPowerStage, u64) {
-        let mut s = ObjectStore::new();
+    fn setup() -> (Amplifier, crate::Store, SimPowerStage, u64) {
+        let mut s = crate::store();
         s.set(0x800D, 2, 1500);
         s.set(0x800A, 5, 0); // TRIGGER 0: U = C exactly
         s.set(0x800D, 3, 0); // no dither: a steady current

@@ -75,7 +75,7 @@ pub const DEFAULT_L_H: f32 = 0.03;
 /// The PWM frequencies of DT0803EN05 as (frequency in Hz, enum code), read
 /// from the object dictionary's one description of the enumeration.
 pub fn pwm_table() -> impl Iterator<Item = (u16, u8)> {
-    crate::od::model::DT0803EN05
+    crate::od::DT0803EN05
         .values
         .iter()
         .filter_map(|(code, text)| Some((text.parse::<u16>().ok()?, u8::try_from(*code).ok()?)))
@@ -280,6 +280,11 @@ pub trait PowerStage {
     fn faults(&self) -> Faults;
     /// Advances the stage by `dt_us` (the real board may do nothing here).
     fn step(&mut self, dt_us: u32);
+    /// The board loses power and restarts: outputs off and, for a
+    /// simulation, every state (and injected fault) gone.
+    fn power_cycle(&mut self) {
+        self.disable();
+    }
 }
 
 /// A fault (or operating condition) to inject into [`SimPowerStage`].
@@ -504,6 +509,10 @@ impl SimPowerStage {
 }
 
 impl PowerStage for SimPowerStage {
+    fn power_cycle(&mut self) {
+        *self = SimPowerStage::new();
+    }
+
     fn set_current(
         &mut self,
         solenoid: Solenoid,

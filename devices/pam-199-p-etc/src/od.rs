@@ -1,10 +1,13 @@
 //! The object dictionary of the PAM-199-P-ETC: the one static description.
+//! Built with the core's entry constructors ([`ecat_slave::od::build`])
+//! and its [`ecat_slave::dictionary!`] macro; the device's
+//! [`crate::DEVICE`] description refers to [`DICT`].
 //!
 //! Every object and subindex of the manual's tables 6.1.1-6.1.7, with the
 //! ranges of chapters 6.2-6.4, plus the ETG objects the manual does not list
 //! (0x10F8, 0x1C00, 0x1C12, 0x1C13, 0xF000). The ESI, the SII, SDO
 //! Information, the PDO mapping and the application all read [`OBJECTS`] and
-//! [`ENUMS`]; every choice made where the manual is damaged or contradicts
+//! [`ENUMS`] (through [`DICT`]); every choice made where the manual is damaged or contradicts
 //! itself is recorded in `docs/MANUAL-NOTES.md` (cited as "note n" below).
 //!
 //! Layout rule for blank subindices (note 20): in a parameter or process-data
@@ -17,12 +20,14 @@
 //! The enumeration types 0x0800-0x0805 are data types, not objects: they are
 //! in [`ENUMS`], not in [`OBJECTS`] (note 19).
 
-use super::types::{
-    Access, DataType, DefaultValue, Entry, EnumDesc, Object, ObjectCode, PdoMapping,
-};
 use DataType::{Bool, Int16, Int32, UInt8, UInt16, UInt32};
 use ObjectCode::{Array, Record, Var};
 use PdoMapping::None as NoPdo;
+use ecat_slave::od::build::{
+    assign, assign_count, base, constant, gap, input, map, output, pad, setting, string, sub_name,
+    sub0, var,
+};
+use ecat_slave::od::{Access, DataType, Entry, EnumDesc, Object, ObjectCode, PdoMapping};
 
 // ---------------------------------------------------------------------------
 // Enumeration data types (manual 6.1.7)
@@ -115,191 +120,11 @@ const PWM_2500_HZ: i64 = 0x09;
 // Entry constructors
 // ---------------------------------------------------------------------------
 
-/// Bit size of a value of a fixed-size type (strings: 0, set by [`string`]).
-const fn bits_of(t: DataType) -> u16 {
-    match t {
-        DataType::Bool => 1,
-        DataType::Int8 | DataType::UInt8 => 8,
-        DataType::Int16 | DataType::UInt16 => 16,
-        DataType::Int32 | DataType::UInt32 => 32,
-        DataType::Int64 | DataType::UInt64 => 64,
-        DataType::Bits(n) => n as u16,
-        DataType::Enum(e) => e.bit_len as u16,
-        DataType::VisibleString => 0,
-    }
-}
-
-/// ETG names of unnamed subindices ("SubIndex 002"), used by gaps, padding
-/// mappings and array elements.
-const SUB_NAMES: [&str; 16] = [
-    "SubIndex 000",
-    "SubIndex 001",
-    "SubIndex 002",
-    "SubIndex 003",
-    "SubIndex 004",
-    "SubIndex 005",
-    "SubIndex 006",
-    "SubIndex 007",
-    "SubIndex 008",
-    "SubIndex 009",
-    "SubIndex 010",
-    "SubIndex 011",
-    "SubIndex 012",
-    "SubIndex 013",
-    "SubIndex 014",
-    "SubIndex 015",
-];
-
-#[allow(
-    clippy::indexing_slicing,
-    reason = "only evaluated in const items: an out-of-range subindex fails the build"
-)]
-const fn sub_name(sub: u8) -> &'static str {
-    SUB_NAMES[sub as usize]
-}
-
-/// An entry with no range, no unit, not stored, not a gap.
-const fn base(
-    sub: u8,
-    name: &'static str,
-    data_type: DataType,
-    access: Access,
-    pdo: PdoMapping,
-    default: i64,
-) -> Entry {
-    Entry {
-        sub,
-        name,
-        data_type,
-        bit_len: bits_of(data_type),
-        access,
-        pdo,
-        default: DefaultValue::Int(default),
-        min: None,
-        max: None,
-        unit: "",
-        backup: false,
-        setting: false,
-        gap: false,
-    }
-}
-
-/// Subindex 0 of an array or record: the highest subindex, UINT8, RO.
-const fn sub0(highest: u8) -> Entry {
-    base(
-        0,
-        "SubIndex 000",
-        DataType::UInt8,
-        Access::Ro,
-        PdoMapping::None,
-        highest as i64,
-    )
-}
-
-/// Subindex 0 of a PDO assignment: writable in PRE-OP, at most `capacity`.
-const fn assign_count(count: u8, capacity: u8) -> Entry {
-    Entry {
-        access: Access::RwPreOp,
-        min: Some(0),
-        max: Some(capacity as i64),
-        ..sub0(count)
-    }
-}
-
-/// One PDO assigned by 0x1C12/0x1C13 (UINT16, RW in PRE-OP).
-const fn assign(sub: u8, pdo: u16) -> Entry {
-    base(
-        sub,
-        sub_name(sub),
-        DataType::UInt16,
-        Access::RwPreOp,
-        PdoMapping::None,
-        pdo as i64,
-    )
-}
-
-/// The entry of a VAR object (subindex 0).
-const fn var(name: &'static str, t: DataType, pdo: PdoMapping, default: i64) -> Entry {
-    base(0, name, t, Access::Ro, pdo, default)
-}
-
-/// A read-only VISIBLE_STRING VAR; its size is the default's length.
-const fn string(name: &'static str, text: &'static str) -> Entry {
-    Entry {
-        bit_len: 8 * text.len() as u16,
-        default: DefaultValue::Str(text),
-        ..var(name, DataType::VisibleString, PdoMapping::None, 0)
-    }
-}
-
-/// A read-only constant of a record or array (identity, 0x1C00, 0xF000).
-const fn constant(sub: u8, name: &'static str, t: DataType, value: i64) -> Entry {
-    base(sub, name, t, Access::Ro, PdoMapping::None, value)
-}
-
-/// A PDO mapping entry `index << 16 | sub << 8 | bits` (UINT32, RO).
-const fn map(sub: u8, name: &'static str, mapping: u32) -> Entry {
-    base(
-        sub,
-        name,
-        DataType::UInt32,
-        Access::Ro,
-        PdoMapping::None,
-        mapping as i64,
-    )
-}
-
-/// A padding mapping `0x000000nn` for a blank row of a mapping object.
-const fn pad(sub: u8, bits: u8) -> Entry {
-    map(sub, sub_name(sub), bits as u32)
-}
-
-/// A blank subindex of a record: `bits` zero bits up to the byte boundary.
-const fn gap(sub: u8, bits: u8) -> Entry {
-    Entry {
-        gap: true,
-        ..base(
-            sub,
-            sub_name(sub),
-            DataType::Bits(bits),
-            Access::Ro,
-            PdoMapping::None,
-            0,
-        )
-    }
-}
-
-/// A TxPDO-mappable input (0x6000 and 0xA000 ranges).
-const fn input(sub: u8, name: &'static str, t: DataType) -> Entry {
-    base(sub, name, t, Access::Ro, PdoMapping::Tx, 0)
-}
-
 /// A TxPDO-mappable solenoid current in mA.
 const fn current(sub: u8, name: &'static str) -> Entry {
     Entry {
         unit: "mA",
         ..input(sub, name, DataType::UInt16)
-    }
-}
-
-/// An RxPDO-mappable output (0x7000 range).
-const fn output(sub: u8, name: &'static str, t: DataType) -> Entry {
-    base(sub, name, t, Access::Rw, PdoMapping::Rx, 0)
-}
-
-/// A stored device setting without a range (RW, backup, setting).
-const fn setting(
-    sub: u8,
-    name: &'static str,
-    t: DataType,
-    default: i64,
-    unit: &'static str,
-) -> Entry {
-    Entry {
-        unit,
-        backup: true,
-        setting: true,
-        ..base(sub, name, t, Access::Rw, PdoMapping::None, default)
     }
 }
 
@@ -774,118 +599,39 @@ pub const OBJECTS: &[Object] = &[
 // Positions: objects, flat entry positions, lookup
 // ---------------------------------------------------------------------------
 
+ecat_slave::dictionary!(pub DICT, pub ENTRY_COUNT = OBJECTS, ENUMS);
+
 /// Number of objects in [`OBJECTS`].
 pub const OBJECT_COUNT: usize = OBJECTS.len();
-
-/// Number of objects in [`OBJECTS`] (for const contexts that prefer a fn).
-#[must_use]
-pub const fn object_count() -> usize {
-    OBJECT_COUNT
-}
-
-/// Flat position of the first entry of each object: the prefix sums of
-/// `entries.len()`. A flat value store holds entry `e` of object `o` at
-/// `ENTRY_BASE[o] + e`.
-pub const ENTRY_BASE: [u16; OBJECT_COUNT] = entry_bases();
-
-/// Total number of entries over all objects (gaps and subindex 0 included).
-pub const ENTRY_COUNT: usize = entry_count();
-
-#[allow(
-    clippy::indexing_slicing,
-    reason = "only evaluated in const items: indices are bounded by the loop"
-)]
-const fn entry_bases() -> [u16; OBJECT_COUNT] {
-    let mut out = [0u16; OBJECT_COUNT];
-    let mut acc = 0usize;
-    let mut i = 0;
-    while i < OBJECT_COUNT {
-        out[i] = acc as u16;
-        acc += OBJECTS[i].entries.len();
-        i += 1;
-    }
-    out
-}
-
-const fn entry_count() -> usize {
-    let mut acc = 0usize;
-    let mut rest = OBJECTS;
-    while let Some((obj, tail)) = rest.split_first() {
-        acc += obj.entries.len();
-        rest = tail;
-    }
-    acc
-}
-
-/// Build-time checks the lookups rely on: objects strictly ascending by
-/// index, every object non-empty with entries strictly ascending by
-/// subindex, and flat positions fitting `u16`.
-#[allow(
-    clippy::indexing_slicing,
-    reason = "only evaluated in const items: indices are bounded by the loops"
-)]
-const fn check_order() {
-    assert!(
-        ENTRY_COUNT <= u16::MAX as usize,
-        "flat positions must fit u16"
-    );
-    let mut i = 0;
-    while i < OBJECT_COUNT {
-        let obj = &OBJECTS[i];
-        assert!(!obj.entries.is_empty(), "every object has an entry");
-        if i > 0 {
-            assert!(OBJECTS[i - 1].index < obj.index, "objects must ascend");
-        }
-        let mut j = 1;
-        while j < obj.entries.len() {
-            assert!(
-                obj.entries[j - 1].sub < obj.entries[j].sub,
-                "entries must ascend"
-            );
-            j += 1;
-        }
-        i += 1;
-    }
-}
-
-const _: () = check_order();
 
 /// The object with index `index` and its position in [`OBJECTS`].
 #[must_use]
 pub fn find(index: u16) -> Option<(usize, &'static Object)> {
-    let pos = OBJECTS.binary_search_by_key(&index, |o| o.index).ok()?;
-    OBJECTS.get(pos).map(|o| (pos, o))
+    DICT.find(index)
 }
 
 /// The entry `index:sub` (gaps included) and its flat position.
 #[must_use]
 pub fn find_entry(index: u16, sub: u8) -> Option<(usize, &'static Entry)> {
-    let (pos, obj) = find(index)?;
-    let at = obj.entries.binary_search_by_key(&sub, |e| e.sub).ok()?;
-    let base = usize::from(*ENTRY_BASE.get(pos)?);
-    obj.entries.get(at).map(|e| (base + at, e))
-}
-
-/// The object position and entry of flat position `flat`.
-#[must_use]
-pub fn locate(flat: usize) -> Option<(usize, &'static Entry)> {
-    let pos = ENTRY_BASE
-        .partition_point(|&b| usize::from(b) <= flat)
-        .checked_sub(1)?;
-    let base = usize::from(*ENTRY_BASE.get(pos)?);
-    let entry = OBJECTS.get(pos)?.entries.get(flat - base)?;
-    Some((pos, entry))
+    DICT.find_entry(index, sub)
 }
 
 /// The entry at flat position `flat`.
 #[must_use]
 pub fn entry_at(flat: usize) -> Option<&'static Entry> {
-    locate(flat).map(|(_, e)| e)
+    DICT.entry_at(flat)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use ecat_slave::od::DefaultValue;
+    use ecat_slave::od::dictionary::natural_bits;
+
+    #[test]
+    fn the_dictionary_passes_the_cores_validation() {
+        assert_eq!(DICT.validate(), Ok(()));
+    }
 
     fn records() -> impl Iterator<Item = &'static Object> {
         OBJECTS.iter().filter(|o| o.code != ObjectCode::Var)
@@ -978,7 +724,7 @@ mod tests {
                         assert_eq!(usize::from(e.bit_len), 8 * s.len());
                     }
                     DefaultValue::Int(_) => {
-                        assert_eq!(e.bit_len, bits_of(e.data_type), "{}", e.name)
+                        assert_eq!(e.bit_len, natural_bits(&e.data_type), "{}", e.name)
                     }
                 }
             }
@@ -1087,7 +833,7 @@ mod tests {
                 if index == 0 {
                     assert_eq!(sub, 0);
                     assert!((1..8).contains(&bits), "{:#06x}:{}", o.index, e.sub);
-                    assert_eq!(e.name, SUB_NAMES[usize::from(e.sub)]);
+                    assert_eq!(e.name, sub_name(e.sub));
                     continue;
                 }
                 let (_, target) = find_entry(index, sub).unwrap_or_else(|| panic!("{m:#010x}"));
@@ -1147,7 +893,7 @@ mod tests {
                         (e.access, e.pdo, e.default),
                         (Access::Ro, PdoMapping::None, DefaultValue::Int(0))
                     );
-                    assert_eq!(e.name, SUB_NAMES[usize::from(e.sub)]);
+                    assert_eq!(e.name, sub_name(e.sub));
                     assert!(!e.backup && !e.setting);
                 } else if e.bit_len % 8 == 0 {
                     assert_eq!(off % 8, 0, "{:#06x}:{} starts unaligned", o.index, e.sub);
@@ -1328,15 +1074,15 @@ mod tests {
 
     #[test]
     fn entry_base_prefix_sums_agree_with_find_entry() {
-        assert_eq!(ENTRY_BASE[0], 0);
+        assert_eq!(DICT.base(0), Some(0));
         assert_eq!(
             ENTRY_COUNT,
             OBJECTS.iter().map(|o| o.entries.len()).sum::<usize>()
         );
-        assert_eq!(object_count(), OBJECTS.len());
+        assert_eq!(OBJECT_COUNT, OBJECTS.len());
         let mut flat = 0;
         for (pos, o) in OBJECTS.iter().enumerate() {
-            assert_eq!(usize::from(ENTRY_BASE[pos]), flat);
+            assert_eq!(DICT.base(pos), Some(flat));
             assert_eq!(find(o.index).map(|(p, _)| p), Some(pos));
             for e in o.entries {
                 let (f, found) = find_entry(o.index, e.sub).unwrap();
@@ -1344,7 +1090,7 @@ mod tests {
                 // `OBJECTS` is a const: compare by value, not by address.
                 assert_eq!(found, e);
                 assert_eq!(entry_at(flat), Some(e));
-                assert_eq!(locate(flat).map(|(p, _)| p), Some(pos));
+                assert_eq!(DICT.locate(flat).map(|(p, _)| p), Some(pos));
                 flat += 1;
             }
         }

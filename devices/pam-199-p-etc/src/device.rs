@@ -1,0 +1,345 @@
+//! The PAM-199-P-ETC as a device on the core: its description and its
+//! application (commands of 0xF801, the vendor password, FUNCTION selecting
+//! the PDO set, the ACC gain lock, parameter storage, the amplifier task).
+
+use ecat_slave::al::{AlState, AlStatusCode};
+use ecat_slave::device::{
+    Application, CoeServices, DeviceDescription, DeviceNames, Download, EscConfig, Identity,
+    MailboxConfig, PdoSet, ProcessData, StateChange, Tick, Write,
+};
+use ecat_slave::hal::{MemNv, NvStorage};
+use ecat_slave::od::Od;
+use ecat_slave::params::{self, STORAGE_SIZE, Stored};
+use ecat_slave::wire::coe::SdoAbortCode;
+
+use crate::app::amplifier::Amplifier;
+use crate::app::power_stage::{PowerStage, SimPowerStage};
+use crate::diagnosis::FaultState;
+use crate::od;
+
+/// Vendor ID of W.E.St. Elektronik GmbH.
+pub const VENDOR_ID: u32 = 0x0000_05AE;
+/// Product code of the PAM-199-P-ETC.
+pub const PRODUCT_CODE: u32 = 0x00C7_03F3;
+/// Revision number.
+pub const REVISION: u32 = 7;
+/// Device name.
+pub const DEVICE_NAME: &str = "PAM-199-P-ETC";
+
+/// Name of the default PDO assignment (manual 7.1, "Case 1").
+pub const DIRECTIONAL_MAPPING: &str = "Directional Mode (Extended)";
+/// Name of the alternative PDO assignment (manual 7.1, "Case 2").
+pub const INDEPENDENT_MAPPING: &str = "Independent Mode (Extended)";
+
+/// The PAM-199-P-ETC, described once.
+pub const DEVICE: DeviceDescription = DeviceDescription {
+    identity: Identity {
+        vendor_id: VENDOR_ID,
+        product_code: PRODUCT_CODE,
+        revision: REVISION,
+        serial: 0,
+    },
+    names: DeviceNames {
+        vendor: "W.E.St. Elektronik GmbH",
+        type_name: DEVICE_NAME,
+        name: DEVICE_NAME,
+        group_type: "PAM",
+        group_name: "PAM amplifiers",
+    },
+    dictionary: &od::DICT,
+    process_data: ProcessData {
+        sets: &[
+            PdoSet {
+                name: DIRECTIONAL_MAPPING,
+                rx: &[0x1600],
+                tx: &[0x1A00, 0x1A02],
+            },
+            PdoSet {
+                name: INDEPENDENT_MAPPING,
+                rx: &[0x1601],
+                tx: &[0x1A01, 0x1A03],
+            },
+        ],
+    },
+    mailbox: MailboxConfig {
+        size: 128,
+        boot_size: Some(1024),
+        coe: CoeServices {
+            sdo_info: true,
+            pdo_assign: true,
+            // The mappings are fixed.
+            pdo_config: false,
+            complete_access: true,
+        },
+        foe: true,
+    },
+    esc: EscConfig::DEFAULT,
+};
+
+const _: () = DEVICE.assert_valid();
+
+/// The vendor password that unlocks the manufacturer settings 0xF80F when
+/// written to 0xF801:01 PASSWORD ("WEST" in ASCII, little-endian 0x54534557).
+pub const VENDOR_PASSWORD: u32 = 0x5453_4557;
+
+/// Value a command entry (0xF801:02..04) reads back as acknowledgement.
+pub const COMMAND_ACK: i64 = 0x1111_1111;
+
+/// How long the acknowledgement stays visible.
+pub const COMMAND_ACK_NS: u64 = 500_000_000;
+
+/// Shortest interval between two SAVE commands: SAVE writes the EEPROM and
+/// must not be called cyclically (manual 6.2.2). A faster SAVE is refused
+/// with abort 0x08000021 (local control).
+pub const SAVE_MIN_INTERVAL_NS: u64 = 1_000_000_000;
+
+/// The PDO set F800:02 FUNCTION selects: 0 directional, 1 independent.
+pub fn function_set(od: &Od) -> usize {
+    if od.get(0xF800, 2) == Some(2) { 1 } else { 0 }
+}
+
+/// The PAM-199-P-ETC's behaviour, driving the solenoids through a
+/// [`PowerStage`] and keeping its parameters in an [`NvStorage`].
+pub struct Pam<P: PowerStage = SimPowerStage, N: NvStorage = MemNv<STORAGE_SIZE>> {
+    amplifier: Amplifier,
+    stage: P,
+    nv: N,
+    /// What the parameter storage held at power-on.
+    stored_at_power_on: Stored,
+    unlocked: bool,
+    last_save_ns: Option<u64>,
+    /// A command entry showing its acknowledgement until the given time.
+    ack: Option<(u16, u8, u64)>,
+    /// The faults reported so far (emergencies on new ones).
+    faults: FaultState,
+}
+
+impl<P: PowerStage, N: NvStorage> core::fmt::Debug for Pam<P, N> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Pam")
+            .field("stored_at_power_on", &self.stored_at_power_on)
+            .field("unlocked", &self.unlocked)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Default for Pam {
+    fn default() -> Self {
+        Pam::new(SimPowerStage::new(), MemNv::new())
+    }
+}
+
+impl<P: PowerStage, N: NvStorage> Pam<P, N> {
+    /// The amplifier driving `stage`, with its parameters in `nv` (defaults
+    /// when blank; a corrupt store is an EEPROM data error: power stage off
+    /// until SAVE).
+    pub fn new(stage: P, nv: N) -> Self {
+        Pam {
+            amplifier: Amplifier::new(),
+            stage,
+            nv,
+            stored_at_power_on: Stored::Blank,
+            unlocked: false,
+            last_save_ns: None,
+            ack: None,
+            faults: FaultState::default(),
+        }
+    }
+
+    /// The power stage.
+    pub fn stage(&self) -> &P {
+        &self.stage
+    }
+
+    /// The power stage, mutably (fault injection on the simulation).
+    pub fn stage_mut(&mut self) -> &mut P {
+        &mut self.stage
+    }
+
+    /// The amplifier task.
+    pub fn amplifier(&self) -> &Amplifier {
+        &self.amplifier
+    }
+
+    /// The parameter storage.
+    pub fn nv(&self) -> &N {
+        &self.nv
+    }
+
+    /// The parameter storage, mutably (power-cut simulation).
+    pub fn nv_mut(&mut self) -> &mut N {
+        &mut self.nv
+    }
+
+    /// What the parameter storage held at power-on.
+    pub fn stored_at_power_on(&self) -> Stored {
+        self.stored_at_power_on
+    }
+
+    /// Runs SAVE / DEFAULT / LOADBACK (0xF801:02..04 written with 1).
+    fn command(&mut self, od: &mut Od, sub: u8, now_ns: u64) -> Result<(), SdoAbortCode> {
+        match sub {
+            2 => {
+                if let Some(last) = self.last_save_ns {
+                    if now_ns.saturating_sub(last) < SAVE_MIN_INTERVAL_NS {
+                        return Err(SdoAbortCode::LocalControl);
+                    }
+                }
+                params::save(od, &mut self.nv).map_err(|_| SdoAbortCode::HardwareError)?;
+                self.last_save_ns = Some(now_ns);
+                // Saving valid parameters clears an EEPROM data error.
+                self.amplifier.eeprom_error = false;
+            }
+            3 => params::restore_defaults(od),
+            4 => {
+                params::load(od, &self.nv).map_err(|_| SdoAbortCode::TransferFailed)?;
+            }
+            _ => return Err(SdoAbortCode::SubindexNotFound),
+        }
+        od.set(0xF801, sub, COMMAND_ACK);
+        self.ack = Some((0xF801, sub, now_ns.saturating_add(COMMAND_ACK_NS)));
+        Ok(())
+    }
+}
+
+impl<P: PowerStage + Send + 'static, N: NvStorage + Send + 'static> Application for Pam<P, N> {
+    const DESCRIPTION: &'static DeviceDescription = &DEVICE;
+    type Values = [i64; od::ENTRY_COUNT];
+
+    fn power_on(&mut self, od: &mut Od) {
+        self.stored_at_power_on = params::stored(&self.nv, od.dictionary());
+        match self.stored_at_power_on {
+            Stored::Valid(_) => {
+                if params::load(od, &self.nv).is_err() {
+                    self.amplifier.eeprom_error = true;
+                }
+            }
+            Stored::Blank => {}
+            Stored::Corrupt => self.amplifier.eeprom_error = true,
+        }
+    }
+
+    fn state_change(&mut self, od: &mut Od, change: &StateChange) -> Result<(), AlStatusCode> {
+        // The assignment must match F800:02 FUNCTION (writing FUNCTION in
+        // PRE-OP selects the matching set; a hand-written assignment of the
+        // other set is refused here).
+        if change.from == AlState::PreOp && change.to == AlState::SafeOp {
+            let bit = 1u32 << function_set(od);
+            if change.rx_sets & bit == 0 {
+                return Err(AlStatusCode::InvalidOutputConfig);
+            }
+            if change.tx_sets & bit == 0 {
+                return Err(AlStatusCode::InvalidInputConfig);
+            }
+        }
+        Ok(())
+    }
+
+    fn sdo_download(&mut self, od: &mut Od, d: &Download<'_>) -> Result<Write, SdoAbortCode> {
+        let index = d.index;
+        // 0xF801: PASSWORD unlocks (or with 0 locks) the manufacturer
+        // settings; SAVE / DEFAULT / LOADBACK run when written with 1.
+        if index == 0xF801 {
+            if d.complete_access {
+                // Commands and the password are written one at a time.
+                return Err(SdoAbortCode::CompleteAccessNotSupported);
+            }
+            let value = d.value(d.sub).unwrap_or(0);
+            if d.sub == 1 {
+                self.unlocked = match value as u32 {
+                    VENDOR_PASSWORD => true,
+                    0 => false,
+                    _ => {
+                        self.unlocked = false;
+                        return Err(SdoAbortCode::ValueRange);
+                    }
+                };
+                return Ok(Write::Done);
+            }
+            if value != 1 {
+                return Err(SdoAbortCode::ValueRange);
+            }
+            self.command(od, d.sub, d.now_ns)?;
+            return Ok(Write::Done);
+        }
+        // 0xF80F manufacturer settings need the vendor password first.
+        if index == 0xF80F && !self.unlocked {
+            return Err(SdoAbortCode::UnsupportedAccess);
+        }
+        // Manual 6.4.5: with ACC = ON the controller gains follow the PWM
+        // frequency and cannot be set by the user.
+        if matches!(index, 0x800D | 0x801D | 0x802D) {
+            if d.complete_access {
+                let acc = d.value(7).or(od.get(index, 7)) == Some(1);
+                let gains_change = [9u8, 10]
+                    .iter()
+                    .any(|s| d.value(*s).is_some_and(|v| Some(v) != od.get(index, *s)));
+                if acc && gains_change {
+                    return Err(SdoAbortCode::LocalControl);
+                }
+            } else if matches!(d.sub, 9 | 10) && od.get(index, 7) == Some(1) {
+                return Err(SdoAbortCode::LocalControl);
+            }
+        }
+        // F800:02 FUNCTION changes the process image: PRE-OP only, and it
+        // selects the matching extended PDO assignment.
+        if index == 0xF800 {
+            let old = function_set(od);
+            let new = match d.value(2) {
+                Some(2) => 1,
+                Some(_) => 0,
+                None => old,
+            };
+            let single = !d.complete_access && d.sub == 2;
+            if (single || new != old) && d.state != AlState::PreOp {
+                return Err(SdoAbortCode::InvalidState);
+            }
+            d.apply(od);
+            if single || new != old {
+                ecat_slave::pdo::assign_set(od, &DEVICE.process_data, new);
+            }
+            return Ok(Write::Done);
+        }
+        Ok(Write::Store)
+    }
+
+    fn tick(&mut self, t: &mut Tick<'_>) {
+        t.od.set(0x10F8, 0, t.now_ns as i64);
+        if let Some((index, sub, until)) = self.ack {
+            if t.now_ns >= until {
+                t.od.set(index, sub, 0);
+                self.ack = None;
+            }
+        }
+        self.amplifier
+            .run_until(t.od, &mut self.stage, t.now_ns, t.outputs_valid);
+        let faults = FaultState::from_od(t.od);
+        faults.report(&self.faults, t);
+        self.faults = faults;
+    }
+
+    fn outputs_safe(&mut self, _od: &mut Od) {
+        self.stage.disable();
+    }
+
+    fn pdi_watchdog_expired(&mut self) {
+        self.stage.disable();
+    }
+
+    fn power_cycle(&mut self) {
+        self.amplifier = Amplifier::new();
+        self.stage.power_cycle();
+        self.unlocked = false;
+        self.last_save_ns = None;
+        self.ack = None;
+        self.faults = FaultState::default();
+    }
+
+    fn nv(&self) -> Option<&dyn NvStorage> {
+        Some(&self.nv)
+    }
+
+    fn nv_mut(&mut self) -> Option<&mut dyn NvStorage> {
+        Some(&mut self.nv)
+    }
+}

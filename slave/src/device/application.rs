@@ -1,0 +1,189 @@
+//! The application trait: the behaviour a device adds to the core.
+//!
+//! Everything EtherCAT-generic is done by the core: the AL state machine
+//! with its SyncManager checks, mailbox, CoE (SDO, complete access, SDO
+//! Information, Emergency), FoE, the PDO engine, watchdogs, LEDs. A device
+//! implements [`Application`] for what only it knows; every method has a
+//! default that does nothing, so the smallest device is a description and
+//! an empty `impl`.
+//!
+//! Call order in one [`Slave::poll`](super::Slave::poll):
+//! AL control (the core's checks, then [`Application::state_change`]) →
+//! mailbox (SDO writes pass [`Application::sdo_download`]) → outputs from
+//! SM2 into the dictionary (OP only) → [`Application::tick`] → inputs from
+//! the dictionary into SM3.
+
+use crate::al::{AlState, AlStatusCode};
+use crate::coe::emergency::Emergencies;
+use crate::hal::NvStorage;
+use crate::od::ValueStorage;
+use crate::od::store::Od;
+use crate::wire::coe::SdoAbortCode;
+
+use super::DeviceDescription;
+
+/// Values an SDO download would store, after the core's checks (access in
+/// this state, type, length, range, enumeration, PDO assignment rules).
+#[derive(Debug, Clone, Copy)]
+pub struct Download<'a> {
+    /// The object.
+    pub index: u16,
+    /// The subindex written (a complete access starts at 0 or 1).
+    pub sub: u8,
+    /// Written with complete access.
+    pub complete_access: bool,
+    /// The AL state the write arrives in.
+    pub state: AlState,
+    /// Time of the poll, ns.
+    pub now_ns: u64,
+    /// `(subindex, value)` of every entry the download changes or writes.
+    pub changes: &'a [(u8, i64)],
+}
+
+impl Download<'_> {
+    /// The value the download writes into `sub`, if it writes it.
+    pub fn value(&self, sub: u8) -> Option<i64> {
+        self.changes
+            .iter()
+            .find(|(s, _)| *s == sub)
+            .map(|(_, v)| *v)
+    }
+
+    /// Stores every change into `od` (what [`Write::Store`] makes the core
+    /// do; an application that must act after the values are in place
+    /// calls it itself and answers [`Write::Done`]).
+    pub fn apply(&self, od: &mut Od) {
+        for (sub, v) in self.changes {
+            od.set(self.index, *sub, *v);
+        }
+    }
+}
+
+/// What the core does with a download the application accepted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Write {
+    /// Store the values.
+    Store,
+    /// The application took care of it (stored, or acted on a command
+    /// entry whose value is not kept).
+    Done,
+}
+
+/// A state change requested by the master that passed the core's checks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StateChange {
+    /// State before.
+    pub from: AlState,
+    /// State requested.
+    pub to: AlState,
+    /// PRE-OP→SAFE-OP: PDO sets every assigned RxPDO belongs to (bit n: set
+    /// n of the description); all bits otherwise.
+    pub rx_sets: u32,
+    /// PRE-OP→SAFE-OP: the same for the TxPDOs.
+    pub tx_sets: u32,
+    /// Time of the poll, ns.
+    pub now_ns: u64,
+}
+
+/// What [`Application::tick`] sees and may do.
+pub struct Tick<'a> {
+    /// The dictionary: outputs as the master wrote them (in OP), inputs the
+    /// application writes for the master.
+    pub od: &'a mut Od,
+    /// Time now, ns (monotonic, injected).
+    pub now_ns: u64,
+    /// The outputs are valid: OP with a running SM watchdog. Otherwise the
+    /// application must drive its outputs to their safe state.
+    pub outputs_valid: bool,
+    /// The AL state.
+    pub state: AlState,
+    pub(crate) emergencies: &'a mut Emergencies,
+}
+
+impl Tick<'_> {
+    /// Sets the application's error-register bits (0x1001, see
+    /// [`crate::coe::emergency::register`]); the core adds the
+    /// communication and generic bits.
+    pub fn set_error_bits(&mut self, bits: u8) {
+        self.emergencies.set_app_bits(bits);
+    }
+
+    /// Sends a CoE Emergency (queued; delivered in PRE-OP, SAFE-OP and OP).
+    pub fn emergency(&mut self, code: u16, data: [u8; 5]) {
+        self.emergencies.raise(code, data);
+    }
+}
+
+/// A device's behaviour on the core. See the module documentation.
+pub trait Application {
+    /// The device's static description.
+    const DESCRIPTION: &'static DeviceDescription;
+
+    /// Storage for the dictionary's live values: `[i64; N]` with `N` the
+    /// dictionary's entry count (the [`dictionary!`](crate::dictionary)
+    /// macro defines that constant).
+    type Values: ValueStorage;
+
+    /// Power-on, after the dictionary was set to its defaults: restore
+    /// saved parameters, start hardware.
+    fn power_on(&mut self, od: &mut Od) {
+        let _ = od;
+    }
+
+    /// A state change the master requested passed the core's checks;
+    /// `Err` refuses it with that AL status code (the device stays in the
+    /// lower state with the error indication).
+    fn state_change(&mut self, od: &mut Od, change: &StateChange) -> Result<(), AlStatusCode> {
+        let _ = (od, change);
+        Ok(())
+    }
+
+    /// An SDO upload of `index:sub` is about to be answered (refresh a
+    /// computed value; `Err` refuses it).
+    fn sdo_upload(&mut self, od: &mut Od, index: u16, sub: u8) -> Result<(), SdoAbortCode> {
+        let _ = (od, index, sub);
+        Ok(())
+    }
+
+    /// An SDO download passed the core's checks: accept it ([`Write`]) or
+    /// refuse it with an abort code.
+    fn sdo_download(
+        &mut self,
+        od: &mut Od,
+        download: &Download<'_>,
+    ) -> Result<Write, SdoAbortCode> {
+        let _ = (od, download);
+        Ok(Write::Store)
+    }
+
+    /// The periodic task: called every poll with the time; reads outputs
+    /// and writes inputs in the dictionary.
+    fn tick(&mut self, tick: &mut Tick<'_>) {
+        let _ = tick;
+    }
+
+    /// The outputs were just set to their safe state in the dictionary
+    /// (OP left, watchdog, PDI failure): switch hardware outputs off now.
+    fn outputs_safe(&mut self, od: &mut Od) {
+        let _ = od;
+    }
+
+    /// The application's non-volatile storage (saved parameters), if it
+    /// has one: the host runner keeps it in a file across restarts.
+    fn nv(&self) -> Option<&dyn NvStorage> {
+        None
+    }
+
+    /// The non-volatile storage, mutably (restored from the file at start).
+    fn nv_mut(&mut self) -> Option<&mut dyn NvStorage> {
+        None
+    }
+
+    /// The ESC's PDI watchdog expired while the firmware is not running
+    /// (simulation of the ESC hardware forcing outputs off).
+    fn pdi_watchdog_expired(&mut self) {}
+
+    /// A power cycle: forget everything volatile (non-volatile storage
+    /// stays); [`Self::power_on`] runs next.
+    fn power_cycle(&mut self) {}
+}

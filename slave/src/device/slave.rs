@@ -1,0 +1,890 @@
+//! The firmware loop of any device: [`Slave`] polls the ESC through the PDI
+//! ([`Esc`]), runs the AL state machine on AL control events, serves the
+//! mailbox, moves process data between the SyncManagers and the object
+//! dictionary, and runs the [`Application`].
+
+use crate::al::{self, AlState, AlStatus, AlStatusCode, TransitionChecks};
+use crate::coe::ObjectAccess;
+use crate::coe::emergency::Emergencies;
+use crate::esc::registers::{self as reg, sm as smr};
+use crate::esc::{Esc, EscError};
+use crate::firmware::{self, DeviceIdentity, ImageStore};
+use crate::foe::FoeContext;
+use crate::mailbox::MailboxServer;
+use crate::od::complete;
+use crate::od::store::{ObjectStore, Od};
+use crate::od::types::PdoMapping;
+use crate::od::{Dictionary, ValueStorage};
+use crate::pdo::{Direction, MAX_IMAGE, ProcessImage};
+use crate::wire::coe::SdoAbortCode;
+
+use super::application::{Application, Download, StateChange, Tick, Write};
+use super::description::{DeviceDescription, MAX_MAILBOX, MemoryLayout};
+
+/// SM control bytes the core expects (and the SII advertises): SM0
+/// mailbox out, SM1 mailbox in, SM2 outputs (watchdog), SM3 inputs.
+pub const SM_CONTROL: [u8; 4] = [0x26, 0x22, 0x64, 0x20];
+
+/// Most changes one SDO download hands to the application.
+const MAX_CHANGES: usize = complete::MAX_ENTRIES;
+
+/// A device's firmware on an ESC reached through the PDI.
+pub struct Slave<E: Esc, A: Application> {
+    esc: E,
+    app: A,
+    layout: MemoryLayout,
+    store: ObjectStore<A::Values>,
+    al: AlStatus,
+    outputs: ProcessImage,
+    inputs: ProcessImage,
+    mailbox: MailboxServer,
+    /// A response waiting for SM1 to become free.
+    pending: Option<(usize, [u8; MAX_MAILBOX])>,
+    /// The last response written to SM1, for the repeat service.
+    last_sent: Option<(usize, [u8; MAX_MAILBOX])>,
+    emergencies: Emergencies,
+    emergencies_enabled: bool,
+    pdi_failures: u32,
+    now_ns: u64,
+}
+
+impl<E: Esc, A: Application> core::fmt::Debug for Slave<E, A> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Slave")
+            .field("device", &A::DESCRIPTION.names.type_name)
+            .field("al", &self.al)
+            .finish_non_exhaustive()
+    }
+}
+
+fn read_sm<E: Esc>(esc: &mut E, n: u8) -> Result<(u16, u16, u8, bool), EscError> {
+    let base = reg::sm(n).ok_or(EscError::OutOfRange { addr: 0, len: 0 })?;
+    let mut b = [0u8; 8];
+    esc.read(base, &mut b)?;
+    Ok((
+        u16::from_le_bytes([b[0], b[1]]),
+        u16::from_le_bytes([b[2], b[3]]),
+        b[4],
+        b[6] & smr::ACTIVATE_ENABLE != 0,
+    ))
+}
+
+/// SM0/SM1 are enabled with the given start and length and mailbox
+/// control bits; `Err` when the PDI cannot read them.
+fn mailbox_matches<E: Esc>(
+    esc: &mut E,
+    out: (u16, u16),
+    inp: (u16, u16),
+) -> Result<bool, EscError> {
+    let sm0 = read_sm(esc, 0)?;
+    let sm1 = read_sm(esc, 1)?;
+    Ok(sm0 == (out.0, out.1, sm0.2, true)
+        && sm0.2 & 0x0F == SM_CONTROL[0] & 0x0F
+        && sm1 == (inp.0, inp.1, sm1.2, true)
+        && sm1.2 & 0x0F == SM_CONTROL[1] & 0x0F)
+}
+
+/// What the checks need to see while the AL state machine runs.
+struct Checks<'a, E: Esc, A: Application> {
+    esc: &'a mut E,
+    app: &'a mut A,
+    od: &'a mut Od,
+    layout: MemoryLayout,
+    images: Option<(ProcessImage, ProcessImage)>,
+    now_ns: u64,
+    /// A PDI access that failed during a check: the check refuses with
+    /// 0x0001 and the firmware goes to its fail-safe state (never "assume
+    /// all is well").
+    pdi_error: Option<EscError>,
+}
+
+impl<E: Esc, A: Application> Checks<'_, E, A> {
+    /// Records a failed PDI access; the refusal code of a check that could
+    /// not read the ESC.
+    fn pdi_failed(&mut self, e: EscError) -> AlStatusCode {
+        self.pdi_error.get_or_insert(e);
+        AlStatusCode::Unspecified
+    }
+}
+
+impl<E: Esc, A: Application> TransitionChecks for Checks<'_, E, A> {
+    fn check_mailbox(&mut self) -> Result<(), AlStatusCode> {
+        match mailbox_matches(self.esc, self.layout.mbx_out, self.layout.mbx_in) {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(AlStatusCode::InvalidMailboxPreOp),
+            Err(e) => Err(self.pdi_failed(e)),
+        }
+    }
+
+    fn check_boot_mailbox(&mut self) -> Result<(), AlStatusCode> {
+        if !self.layout.has_boot() {
+            return Err(AlStatusCode::BootNotSupported);
+        }
+        match mailbox_matches(self.esc, self.layout.boot_out, self.layout.boot_in) {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(AlStatusCode::InvalidMailboxBoot),
+            Err(e) => Err(self.pdi_failed(e)),
+        }
+    }
+
+    fn check_process_data(&mut self) -> Result<(), AlStatusCode> {
+        let pd = &A::DESCRIPTION.process_data;
+        let outputs = ProcessImage::build(self.od, Direction::Outputs, pd)
+            .map_err(|_| AlStatusCode::InvalidOutputConfig)?;
+        let inputs = ProcessImage::build(self.od, Direction::Inputs, pd)
+            .map_err(|_| AlStatusCode::InvalidInputConfig)?;
+        // Both directions must come from one PDO set.
+        if outputs.sets() & inputs.sets() == 0 {
+            return Err(AlStatusCode::InvalidInputConfig);
+        }
+        let sm2 = read_sm(self.esc, 2).map_err(|e| self.pdi_failed(e))?;
+        let sm3 = read_sm(self.esc, 3).map_err(|e| self.pdi_failed(e))?;
+        let out_ok = if outputs.byte_len() == 0 {
+            !sm2.3
+        } else {
+            sm2.3
+                && sm2.0 == self.layout.pd_out
+                && usize::from(sm2.1) == outputs.byte_len()
+                && sm2.2 & 0x0F == SM_CONTROL[2] & 0x0F
+        };
+        if !out_ok {
+            return Err(AlStatusCode::InvalidOutputConfig);
+        }
+        let in_ok = if inputs.byte_len() == 0 {
+            !sm3.3
+        } else {
+            sm3.3
+                && sm3.0 == self.layout.pd_in
+                && usize::from(sm3.1) == inputs.byte_len()
+                && sm3.2 & 0x0F == SM_CONTROL[3] & 0x0F
+        };
+        if !in_ok {
+            return Err(AlStatusCode::InvalidInputConfig);
+        }
+        self.images = Some((outputs, inputs));
+        Ok(())
+    }
+
+    fn check_outputs(&mut self) -> Result<(), AlStatusCode> {
+        // SAFE-OP -> OP needs valid outputs: an expired SyncManager watchdog
+        // is re-armed only by fresh outputs from the master.
+        let time = self
+            .esc
+            .read_u16(reg::WATCHDOG_TIME_PD)
+            .map_err(|e| self.pdi_failed(e))?;
+        let status = self
+            .esc
+            .read_u16(reg::WATCHDOG_STATUS_PD)
+            .map_err(|e| self.pdi_failed(e))?;
+        if time != 0 && status & 1 == 0 {
+            return Err(AlStatusCode::SmWatchdog);
+        }
+        Ok(())
+    }
+
+    fn accept(&mut self, from: AlState, to: AlState) -> Result<(), AlStatusCode> {
+        let (rx_sets, tx_sets) = self
+            .images
+            .as_ref()
+            .map_or((u32::MAX, u32::MAX), |(o, i)| (o.sets(), i.sets()));
+        let change = StateChange {
+            from,
+            to,
+            rx_sets,
+            tx_sets,
+            now_ns: self.now_ns,
+        };
+        self.app.state_change(self.od, &change)
+    }
+}
+
+impl<E: Esc, A: Application> Slave<E, A> {
+    /// The device's description.
+    pub const DESCRIPTION: &'static DeviceDescription = A::DESCRIPTION;
+
+    /// The firmware in its power-on state on `esc`, running `app`.
+    pub fn new(esc: E, mut app: A) -> Self {
+        let mut store = ObjectStore::<A::Values>::new(A::DESCRIPTION.dictionary);
+        app.power_on(A::Values::view_mut(&mut store));
+        Slave {
+            esc,
+            app,
+            layout: A::DESCRIPTION.layout(),
+            store,
+            al: AlStatus::INIT,
+            outputs: ProcessImage::default(),
+            inputs: ProcessImage::default(),
+            mailbox: MailboxServer::new(),
+            pending: None,
+            last_sent: None,
+            emergencies: Emergencies::default(),
+            emergencies_enabled: true,
+            pdi_failures: 0,
+            now_ns: 0,
+        }
+    }
+
+    /// The firmware restarts (a power cycle, seen from the firmware): every
+    /// volatile state is lost, the application forgets its own
+    /// ([`Application::power_cycle`]) and powers on again with the
+    /// dictionary at its defaults. The ESC is not touched.
+    pub fn restart(&mut self) {
+        self.app.power_cycle();
+        let mut store = ObjectStore::<A::Values>::new(A::DESCRIPTION.dictionary);
+        self.app.power_on(A::Values::view_mut(&mut store));
+        self.store = store;
+        self.al = AlStatus::INIT;
+        self.outputs = ProcessImage::default();
+        self.inputs = ProcessImage::default();
+        self.mailbox = MailboxServer::new();
+        self.pending = None;
+        self.last_sent = None;
+        self.emergencies = Emergencies::default();
+        self.pdi_failures = 0;
+        self.now_ns = 0;
+    }
+
+    /// Uses another memory layout (standard mailbox size); it must match
+    /// the SII the ESC serves.
+    pub fn set_layout(&mut self, layout: MemoryLayout) {
+        self.layout = layout;
+    }
+
+    /// The memory layout (mailboxes, process data buffers).
+    pub fn layout(&self) -> &MemoryLayout {
+        &self.layout
+    }
+
+    /// The ESC.
+    pub fn esc(&self) -> &E {
+        &self.esc
+    }
+
+    /// The ESC, mutably.
+    pub fn esc_mut(&mut self) -> &mut E {
+        &mut self.esc
+    }
+
+    /// The application.
+    pub fn app(&self) -> &A {
+        &self.app
+    }
+
+    /// The application, mutably.
+    pub fn app_mut(&mut self) -> &mut A {
+        &mut self.app
+    }
+
+    /// The live object dictionary.
+    pub fn od(&self) -> &Od {
+        A::Values::view(&self.store)
+    }
+
+    /// The live object dictionary, mutably.
+    pub fn od_mut(&mut self) -> &mut Od {
+        A::Values::view_mut(&mut self.store)
+    }
+
+    /// The current AL status.
+    pub fn al_status(&self) -> AlStatus {
+        self.al
+    }
+
+    /// The application and the dictionary together (a test or a board
+    /// support package acting on both).
+    pub fn app_and_od(&mut self) -> (&mut A, &mut Od) {
+        (&mut self.app, A::Values::view_mut(&mut self.store))
+    }
+
+    /// Consumes the firmware, returning the ESC and the application (a
+    /// power cycle reuses both).
+    pub fn into_parts(self) -> (E, A) {
+        (self.esc, self.app)
+    }
+
+    /// The running firmware version (0x100A, if the device has it).
+    pub fn firmware_version(&self) -> heapless::String<32> {
+        let mut v = heapless::String::new();
+        let od = self.od();
+        if let Some((flat, _)) = od.dictionary().find_entry(0x100A, 0) {
+            let _ = v.push_str(od.string(flat).unwrap_or(""));
+        }
+        v
+    }
+
+    /// Sets 0x100A to the version the bootloader started.
+    pub fn set_firmware_version(&mut self, version: &str) -> bool {
+        self.od_mut().set_string(0x100A, 0, version)
+    }
+
+    /// Runs the firmware once at time `now_ns`: AL control, mailbox,
+    /// process data, application. Returns an error only if the PDI itself
+    /// fails.
+    pub fn poll(&mut self, now_ns: u64) -> Result<(), EscError> {
+        self.poll_with(now_ns, None)
+    }
+
+    /// [`Slave::poll`] with the firmware image store: FoE writes go there
+    /// (in BOOT) and BOOT→INIT marks a downloaded image pending for the
+    /// bootloader. Without a store FoE answers "unsupported protocol".
+    ///
+    /// A failed PDI access is never taken as "all is well": the firmware
+    /// goes to its fail-safe state (outputs off, OP left for SAFE-OP, AL
+    /// error 0x0001, Emergency 0x5000) and the error is returned.
+    pub fn poll_with<'s>(
+        &mut self,
+        now_ns: u64,
+        images: Option<&mut (dyn ImageStore + 's)>,
+    ) -> Result<(), EscError> {
+        match self.run_once(now_ns, images) {
+            Ok(()) => Ok(()),
+            Err(e) => {
+                self.pdi_failure(e);
+                Err(e)
+            }
+        }
+    }
+
+    /// The fail-safe reaction to a PDI failure `e`: outputs to their safe
+    /// state and hardware outputs off at once, OP left for SAFE-OP, the
+    /// error indication set with AL status code 0x0001 (unspecified error;
+    /// ETG.1000.6 has no code for "the firmware cannot reach its ESC") and
+    /// an Emergency 0x5000 (device hardware) queued. Writing the AL status
+    /// is attempted; when the PDI is still down the master sees the
+    /// silence of the SM watchdog and the PDI watchdog instead.
+    fn pdi_failure(&mut self, e: EscError) {
+        self.safe_outputs();
+        self.pdi_failures = self.pdi_failures.saturating_add(1);
+        let state = if self.al.state == AlState::Op {
+            AlState::SafeOp
+        } else {
+            self.al.state
+        };
+        let first = !(self.al.error && self.al.code == AlStatusCode::Unspecified);
+        self.al = AlStatus {
+            state,
+            error: true,
+            code: AlStatusCode::Unspecified,
+        };
+        if first && self.emergencies_enabled && state != AlState::Init && state != AlState::Boot {
+            self.emergencies.pdi_failure(e);
+        }
+        let _ = self.esc.write_u16(reg::AL_STATUS_CODE, self.al.code.code());
+        let _ = self.esc.write_u16(reg::AL_STATUS, self.al.register());
+    }
+
+    /// How many polls ended in a PDI failure since power-on.
+    pub fn pdi_failures(&self) -> u32 {
+        self.pdi_failures
+    }
+
+    fn run_once<'s>(
+        &mut self,
+        now_ns: u64,
+        mut images: Option<&mut (dyn ImageStore + 's)>,
+    ) -> Result<(), EscError> {
+        self.now_ns = now_ns;
+        let events = self.esc.read_u32(reg::AL_EVENT_REQUEST)?;
+        if events & reg::AL_EVENT_AL_CONTROL != 0 {
+            let control = self.esc.read_u16(reg::AL_CONTROL)?;
+            let before = self.al.state;
+            self.al_control(control)?;
+            if before == AlState::Boot && self.al.state == AlState::Init {
+                // "Change to INIT, the bootloader copies the new software":
+                // the downloaded image becomes pending. A store that cannot
+                // record it is reported, not ignored: INIT with the error
+                // indication and 0x0007 "firmware update not successful,
+                // old firmware still running".
+                if let Some(st) = images.as_deref_mut() {
+                    if firmware::commit_pending(st).is_err() {
+                        self.al = AlStatus {
+                            state: AlState::Init,
+                            error: true,
+                            code: AlStatusCode::FirmwareUpdateFailed,
+                        };
+                        self.esc
+                            .write_u16(reg::AL_STATUS_CODE, self.al.code.code())?;
+                        self.esc.write_u16(reg::AL_STATUS, self.al.register())?;
+                    }
+                }
+            }
+        }
+        self.supervise()?;
+        if matches!(
+            self.al.state,
+            AlState::PreOp | AlState::SafeOp | AlState::Op | AlState::Boot
+        ) {
+            self.serve_mailbox(images)?;
+        }
+        let pd = matches!(self.al.state, AlState::SafeOp | AlState::Op);
+        if pd {
+            self.read_outputs(events)?;
+        }
+        let outputs_valid = self.al.state == AlState::Op;
+        let state = self.al.state;
+        {
+            let mut tick = Tick {
+                od: A::Values::view_mut(&mut self.store),
+                now_ns,
+                outputs_valid,
+                state,
+                emergencies: &mut self.emergencies,
+            };
+            self.app.tick(&mut tick);
+        }
+        self.update_error_register();
+        if pd {
+            self.write_inputs()?;
+        }
+        Ok(())
+    }
+
+    /// Changes state on the device's own account (error indication set).
+    fn local_error(&mut self, state: AlState, code: AlStatusCode) -> Result<(), EscError> {
+        if self.al.state == AlState::Op && state != AlState::Op {
+            self.safe_outputs();
+        }
+        if matches!(state, AlState::Init) {
+            self.pending = None;
+            self.last_sent = None;
+            self.mailbox = MailboxServer::new();
+        }
+        self.al = AlStatus {
+            state,
+            error: true,
+            code,
+        };
+        self.esc.write_u16(reg::AL_STATUS_CODE, code.code())?;
+        self.esc.write_u16(reg::AL_STATUS, self.al.register())
+    }
+
+    /// Watches what can end a state without a request: the SyncManager
+    /// watchdog in OP (-> SAFE-OP, 0x001B), a changed mailbox SM above INIT
+    /// (-> INIT, 0x0016 / 0x0015 in BOOT) and a changed process-data SM in
+    /// SAFE-OP/OP (-> PRE-OP, 0x001D / 0x001E).
+    fn supervise(&mut self) -> Result<(), EscError> {
+        if self.al.state == AlState::Op {
+            let time = self.esc.read_u16(reg::WATCHDOG_TIME_PD)?;
+            let status = self.esc.read_u16(reg::WATCHDOG_STATUS_PD)?;
+            if time != 0 && status & 1 == 0 {
+                return self.local_error(AlState::SafeOp, AlStatusCode::SmWatchdog);
+            }
+        }
+        if self.al.state != AlState::Init {
+            let boot = self.al.state == AlState::Boot;
+            let (out, inp) = self.mailbox_layout();
+            if !mailbox_matches(&mut self.esc, out, inp)? {
+                let code = if boot {
+                    AlStatusCode::InvalidMailboxBoot
+                } else {
+                    AlStatusCode::InvalidMailboxPreOp
+                };
+                return self.local_error(AlState::Init, code);
+            }
+        }
+        if matches!(self.al.state, AlState::SafeOp | AlState::Op) {
+            let sm2 = read_sm(&mut self.esc, 2)?;
+            let sm3 = read_sm(&mut self.esc, 3)?;
+            let out_ok = self.outputs.byte_len() == 0
+                || (sm2.3
+                    && sm2.0 == self.layout.pd_out
+                    && usize::from(sm2.1) == self.outputs.byte_len());
+            let in_ok = self.inputs.byte_len() == 0
+                || (sm3.3
+                    && sm3.0 == self.layout.pd_in
+                    && usize::from(sm3.1) == self.inputs.byte_len());
+            if !out_ok {
+                return self.local_error(AlState::PreOp, AlStatusCode::InvalidOutputConfig);
+            }
+            if !in_ok {
+                return self.local_error(AlState::PreOp, AlStatusCode::InvalidInputConfig);
+            }
+        }
+        Ok(())
+    }
+
+    /// Sends CoE Emergency messages (default on). Masters that cannot take
+    /// an unsolicited emergency in the mailbox (ethercrab 0.7.1 fails when
+    /// one arrives instead of an SDO response) may switch them off; 0x1001
+    /// is kept either way.
+    pub fn set_emergencies(&mut self, enabled: bool) {
+        self.emergencies_enabled = enabled;
+    }
+
+    /// Emergencies waiting for the master.
+    pub fn emergencies_waiting(&self) -> usize {
+        self.emergencies.len()
+    }
+
+    /// The core's part of the error register after the application's tick:
+    /// the SM watchdog as a communication error, 0x0000 when every fault is
+    /// gone; writes 0x1001 (when the device has it).
+    fn update_error_register(&mut self) {
+        let comm = self.al.error && self.al.code == AlStatusCode::SmWatchdog;
+        let reg = self.emergencies.update(comm, self.al.code.code());
+        self.od_mut().set(0x1001, 0, i64::from(reg));
+        // No mailbox in INIT (and BOOT has only the bootstrap mailbox for
+        // FoE): what is queued there would reach the next master session
+        // as a stale message (SOEM's config_map then fails). Like the SSC
+        // and SOES, INIT empties the queue; 0x1001 stays consistent.
+        if !self.emergencies_enabled || matches!(self.al.state, AlState::Init | AlState::Boot) {
+            self.emergencies.clear();
+        }
+    }
+
+    /// RUN and ERR LED patterns (ETG.1300); `pdi_watchdog_expired` comes
+    /// from the ESC.
+    pub fn led_patterns(
+        &self,
+        pdi_watchdog_expired: bool,
+    ) -> (crate::led::LedPattern, crate::led::LedPattern) {
+        crate::led::patterns(&self.al, pdi_watchdog_expired)
+    }
+
+    fn al_control(&mut self, control: u16) -> Result<(), EscError> {
+        let before = self.al;
+        let mut checks = Checks {
+            esc: &mut self.esc,
+            app: &mut self.app,
+            od: A::Values::view_mut(&mut self.store),
+            layout: self.layout,
+            images: None,
+            now_ns: self.now_ns,
+            pdi_error: None,
+        };
+        let after = al::transition(before, control, &mut checks);
+        if let Some(e) = checks.pdi_error {
+            // The check could not read the ESC: fail safe (see poll_with).
+            return Err(e);
+        }
+        if after.error && !before.error && before.state == AlState::PreOp && (control & 0x0F) == 4 {
+            self.emergencies.transition_refused(after.code.code());
+        }
+        if let Some((o, i)) = checks.images.take() {
+            self.outputs = o;
+            self.inputs = i;
+        }
+        if after.state != AlState::Op && before.state == AlState::Op {
+            self.safe_outputs();
+        }
+        if matches!(after.state, AlState::Init | AlState::Boot) && before.state != after.state {
+            self.pending = None;
+            self.last_sent = None;
+            self.mailbox = MailboxServer::new();
+        }
+        self.al = after;
+        self.esc.write_u16(reg::AL_STATUS_CODE, after.code.code())?;
+        self.esc.write_u16(reg::AL_STATUS, after.register())?;
+        Ok(())
+    }
+
+    /// Outputs to their safe state: every RxPDO-mappable entry back to
+    /// zero, then the application switches its hardware outputs off.
+    fn safe_outputs(&mut self) {
+        let od = A::Values::view_mut(&mut self.store);
+        let dict = od.dictionary();
+        for (flat, _, e) in dict.entries() {
+            if e.pdo == PdoMapping::Rx {
+                od.set_value(flat, 0);
+            }
+        }
+        self.app.outputs_safe(od);
+    }
+
+    fn mailbox_layout(&self) -> ((u16, u16), (u16, u16)) {
+        if self.al.state == AlState::Boot {
+            (self.layout.boot_out, self.layout.boot_in)
+        } else {
+            (self.layout.mbx_out, self.layout.mbx_in)
+        }
+    }
+
+    /// Writes the waiting response into SM1 if SM1 is free. The whole
+    /// buffer is written so that the ESC sees its last byte and marks the
+    /// mailbox full.
+    fn deliver_pending(&mut self) -> Result<(), EscError> {
+        if self.pending.is_none() || self.sm_full(1)? {
+            return Ok(());
+        }
+        let (_, inp) = self.mailbox_layout();
+        if let Some((len, buf)) = self.pending.take() {
+            let n = usize::from(inp.1).min(MAX_MAILBOX);
+            let mut frame = [0u8; MAX_MAILBOX];
+            if let (Some(dst), Some(src)) = (frame.get_mut(..len), buf.get(..len)) {
+                dst.copy_from_slice(src);
+            }
+            if let Some(f) = frame.get(..n) {
+                self.esc.write(inp.0, f)?;
+            }
+            self.last_sent = Some((len, frame));
+        }
+        Ok(())
+    }
+
+    /// Mailbox repeat (ETG.1000.4 SyncManager repeat): when the master
+    /// toggles the repeat request bit of SM1 (activate byte bit 1), the
+    /// last response is put into SM1 again and the repeat acknowledge bit
+    /// (PDI control bit 1) is toggled to match.
+    fn serve_repeat(&mut self) -> Result<(), EscError> {
+        let base = reg::sm(1).ok_or(EscError::OutOfRange { addr: 0, len: 0 })?;
+        let request = self.esc.read_u8(base + smr::ACTIVATE)? & smr::ACTIVATE_REPEAT;
+        let pdi = self.esc.read_u8(base + smr::PDI_CONTROL)?;
+        if request == pdi & smr::PDI_REPEAT_ACK {
+            return Ok(());
+        }
+        if !self.sm_full(1)? {
+            if let Some((_, frame)) = &self.last_sent {
+                let (_, inp) = self.mailbox_layout();
+                let n = usize::from(inp.1).min(MAX_MAILBOX);
+                let copy = *frame;
+                if let Some(f) = copy.get(..n) {
+                    self.esc.write(inp.0, f)?;
+                }
+            }
+        }
+        self.esc.write(
+            base + smr::PDI_CONTROL,
+            &[(pdi & !smr::PDI_REPEAT_ACK) | request],
+        )
+    }
+
+    fn serve_mailbox<'s>(
+        &mut self,
+        images: Option<&mut (dyn ImageStore + 's)>,
+    ) -> Result<(), EscError> {
+        self.serve_repeat()?;
+        self.deliver_pending()?;
+        // One request at a time: a new request waits in SM0 until the
+        // previous response has left.
+        if self.pending.is_some() {
+            return Ok(());
+        }
+        let dict: &'static Dictionary = A::DESCRIPTION.dictionary;
+        if !self.sm_full(0)? {
+            // Nothing new: continue a response that spans several mailboxes.
+            let (_, inp) = self.mailbox_layout();
+            let max = usize::from(inp.1).min(MAX_MAILBOX);
+            let mut response = [0u8; MAX_MAILBOX];
+            let mut produced = response
+                .get_mut(..max)
+                .and_then(|r| self.mailbox.next_pending(r, dict));
+            if produced.is_none() && self.emergencies_enabled && !self.emergencies.is_empty() {
+                produced = response.get_mut(..max).and_then(|r| {
+                    let body = r.get_mut(crate::wire::mailbox::HEADER_LEN..)?;
+                    let n = self.emergencies.pop_into(body)?;
+                    self.mailbox.frame_coe(r, n)
+                });
+            }
+            if let Some(len) = produced {
+                self.pending = Some((len, response));
+                self.deliver_pending()?;
+            }
+            return Ok(());
+        }
+        let (out, inp) = self.mailbox_layout();
+        let mut request = [0u8; MAX_MAILBOX];
+        let n = usize::from(out.1).min(MAX_MAILBOX);
+        let Some(req) = request.get_mut(..n) else {
+            return Ok(());
+        };
+        self.esc.read(out.0, req)?;
+        let mut response = [0u8; MAX_MAILBOX];
+        let max = usize::from(inp.1).min(MAX_MAILBOX);
+        let state = self.al.state;
+        let mut mailbox = core::mem::take(&mut self.mailbox);
+        let version = self.firmware_version();
+        let id = &A::DESCRIPTION.identity;
+        let foe_offered = A::DESCRIPTION.mailbox.foe;
+        let mut ctx = images.filter(|_| foe_offered).map(|store| FoeContext {
+            store,
+            identity: DeviceIdentity {
+                vendor_id: id.vendor_id,
+                product_code: id.product_code,
+                revision: id.revision,
+            },
+            version: version.as_str(),
+            in_boot: state == AlState::Boot,
+            busy: false,
+        });
+        let now_ns = self.now_ns;
+        let produced = match response.get_mut(..max) {
+            Some(resp) => mailbox.handle(
+                req,
+                resp,
+                &mut OdAccess {
+                    app: &mut self.app,
+                    od: A::Values::view_mut(&mut self.store),
+                    state,
+                    now_ns,
+                },
+                ctx.as_mut(),
+            ),
+            None => None,
+        };
+        self.mailbox = mailbox;
+        if let Some(len) = produced {
+            self.pending = Some((len, response));
+            self.deliver_pending()?;
+        }
+        Ok(())
+    }
+
+    fn sm_full(&mut self, n: u8) -> Result<bool, EscError> {
+        let base = reg::sm(n).ok_or(EscError::OutOfRange { addr: 0, len: 0 })?;
+        Ok(self.esc.read_u8(base + smr::STATUS)? & smr::STATUS_MAILBOX_FULL != 0)
+    }
+
+    fn read_outputs(&mut self, events: u32) -> Result<(), EscError> {
+        let mut buf = [0u8; MAX_IMAGE];
+        if events & reg::al_event_sm(2) != 0 && self.outputs.byte_len() > 0 {
+            let n = self.outputs.byte_len();
+            if let Some(b) = buf.get_mut(..n) {
+                self.esc.read(self.layout.pd_out, b)?;
+                if self.al.state == AlState::Op {
+                    let od = A::Values::view_mut(&mut self.store);
+                    self.outputs.unpack(od, b);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn write_inputs(&mut self) -> Result<(), EscError> {
+        let n = self.inputs.byte_len();
+        if n > 0 {
+            let mut inb = [0u8; MAX_IMAGE];
+            if let Some(b) = inb.get_mut(..n) {
+                self.inputs.pack(A::Values::view(&self.store), b);
+                self.esc.write(self.layout.pd_in, b)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The object dictionary as the CoE server sees it: the store, the core's
+/// rules for the PDO assignment, and the application's hooks.
+struct OdAccess<'a, A: Application> {
+    app: &'a mut A,
+    od: &'a mut Od,
+    state: AlState,
+    now_ns: u64,
+}
+
+impl<A: Application> OdAccess<'_, A> {
+    /// The core's rules for 0x1C12/0x1C13: only PDOs of the assignment's
+    /// direction that exist, no more than its capacity, all of one PDO set.
+    fn check_assignment(&self, index: u16, changes: &[(u8, i64)]) -> Result<(), SdoAbortCode> {
+        let dir = match index {
+            0x1C12 => Direction::Outputs,
+            0x1C13 => Direction::Inputs,
+            _ => return Ok(()),
+        };
+        let new = |s: u8| -> Option<i64> {
+            changes
+                .iter()
+                .find(|(x, _)| *x == s)
+                .map(|(_, v)| *v)
+                .or_else(|| self.od.get(index, s))
+        };
+        let dict = self.od.dictionary();
+        let cap = dict.find(index).map_or(0, |(_, o)| o.max_sub());
+        let count = new(0).unwrap_or(0);
+        if count > i64::from(cap) {
+            return Err(SdoAbortCode::ValueTooHigh);
+        }
+        let (lo, hi) = dir.pdo_range();
+        // Every written PDO must be one of the direction's mapping objects.
+        for (s, v) in changes.iter().filter(|(s, _)| *s != 0) {
+            let pdo = *v as u16;
+            if pdo < lo || pdo > hi || dict.find(pdo).is_none() {
+                let _ = s;
+                return Err(SdoAbortCode::ValueRange);
+            }
+        }
+        // The assigned PDOs (1..=count) must share a PDO set.
+        let pd = &A::DESCRIPTION.process_data;
+        if !pd.sets.is_empty() {
+            let mut sets = u32::MAX;
+            for s in 1..=count.clamp(0, 255) as u8 {
+                let pdo = new(s).unwrap_or(0) as u16;
+                let m = crate::pdo::sets_of(pd, pdo);
+                if m == 0 {
+                    continue;
+                }
+                if sets & m == 0 {
+                    return Err(SdoAbortCode::ParameterIncompatible);
+                }
+                sets &= m;
+            }
+        }
+        Ok(())
+    }
+
+    fn hand_over(
+        &mut self,
+        index: u16,
+        sub: u8,
+        complete_access: bool,
+        changes: &[(u8, i64)],
+    ) -> Result<(), SdoAbortCode> {
+        self.check_assignment(index, changes)?;
+        let d = Download {
+            index,
+            sub,
+            complete_access,
+            state: self.state,
+            now_ns: self.now_ns,
+            changes,
+        };
+        match self.app.sdo_download(self.od, &d)? {
+            Write::Store => d.apply(self.od),
+            Write::Done => {}
+        }
+        Ok(())
+    }
+}
+
+impl<A: Application> ObjectAccess for OdAccess<'_, A> {
+    fn dictionary(&self) -> &'static Dictionary {
+        A::DESCRIPTION.dictionary
+    }
+
+    fn sdo_upload(
+        &mut self,
+        index: u16,
+        sub: u8,
+        complete_access: bool,
+        out: &mut [u8],
+    ) -> Result<usize, SdoAbortCode> {
+        self.app.sdo_upload(self.od, index, sub)?;
+        if complete_access {
+            return complete::upload(self.od, index, sub, out);
+        }
+        self.od.upload(index, sub, out)
+    }
+
+    fn sdo_download(
+        &mut self,
+        index: u16,
+        sub: u8,
+        complete_access: bool,
+        data: &[u8],
+    ) -> Result<(), SdoAbortCode> {
+        if complete_access {
+            let flat_changes = complete::check_download(self.od, index, sub, data, self.state)?;
+            let dict = self.od.dictionary();
+            let mut changes: heapless::Vec<(u8, i64), MAX_CHANGES> = heapless::Vec::new();
+            for (flat, v) in flat_changes {
+                let s = dict.entry_at(flat).map_or(0, |e| e.sub);
+                changes
+                    .push((s, v))
+                    .map_err(|_| SdoAbortCode::ObjectTooLong)?;
+            }
+            return self.hand_over(index, sub, true, &changes);
+        }
+        let (_, entry) = self.od.lookup(index, sub)?;
+        let value = Od::check(entry, data, self.state)?;
+        self.hand_over(index, sub, false, &[(sub, value)])
+    }
+}

@@ -1,0 +1,147 @@
+//! A device on the software ESC: a [`Slave`] whose ESC processes EtherCAT
+//! frames itself, for simulated lines (the virtual link, the raw-socket
+//! runner) and tests.
+
+use crate::esc::EscError;
+use crate::esc::soft::{FrameOutcome, SoftEsc};
+use crate::firmware::ImageStore;
+use crate::led::LedPattern;
+
+use super::application::Application;
+use super::description::MemoryLayout;
+use super::slave::Slave;
+
+/// A device on the software ESC: takes EtherCAT frames.
+pub struct SoftSlave<A: Application> {
+    inner: Slave<SoftEsc, A>,
+    port1_link: bool,
+    stalled: bool,
+    now_ns: u64,
+}
+
+impl<A: Application> core::fmt::Debug for SoftSlave<A> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        self.inner.fmt(f)
+    }
+}
+
+impl<A: Application + Default> Default for SoftSlave<A> {
+    fn default() -> Self {
+        Self::new(A::default())
+    }
+}
+
+impl<A: Application> SoftSlave<A> {
+    /// `app` in its power-on state on a software ESC serving the device's
+    /// SII image.
+    pub fn new(app: A) -> Self {
+        let sii = A::DESCRIPTION.sii_image();
+        SoftSlave {
+            inner: Slave::new(SoftEsc::new(&sii), app),
+            port1_link: false,
+            stalled: false,
+            now_ns: 0,
+        }
+    }
+
+    /// A slave whose standard mailboxes have another layout (the SII it
+    /// serves says so, so masters configure SM0/SM1 accordingly).
+    pub fn with_layout(app: A, layout: MemoryLayout) -> Self {
+        let sii = A::DESCRIPTION.sii_image_for(&layout);
+        let mut inner = Slave::new(SoftEsc::new(&sii), app);
+        inner.set_layout(layout);
+        SoftSlave {
+            inner,
+            port1_link: false,
+            stalled: false,
+            now_ns: 0,
+        }
+    }
+
+    /// A power cycle: ESC registers and firmware restart; the EEPROM (SII)
+    /// and the application's non-volatile storage keep what they hold.
+    pub fn power_cycle(&mut self) {
+        self.inner.esc_mut().power_on();
+        self.inner.esc_mut().set_port1_link(self.port1_link);
+        self.inner.restart();
+        self.stalled = false;
+    }
+
+    /// Passes an Ethernet frame through the ESC (in place).
+    pub fn process_frame(&mut self, frame: &mut [u8]) -> FrameOutcome {
+        self.inner.esc_mut().process_frame(frame)
+    }
+
+    /// Runs the ESC's watchdogs and then the firmware once. A PDI failure
+    /// (only possible here when injected with
+    /// [`SoftEsc::set_pdi_fault`]) puts the firmware in its fail-safe state
+    /// (see [`Slave::poll_with`]) and is returned. While the firmware is
+    /// stalled ([`SoftSlave::set_stalled`]) only the ESC runs; once its PDI
+    /// watchdog expires the application's hardware outputs go off
+    /// ([`Application::pdi_watchdog_expired`]).
+    pub fn poll(&mut self, now_ns: u64) -> Result<(), EscError> {
+        self.poll_with(now_ns, None)
+    }
+
+    /// [`SoftSlave::poll`] with the firmware image store (see
+    /// [`Slave::poll_with`]).
+    pub fn poll_with<'s>(
+        &mut self,
+        now_ns: u64,
+        images: Option<&mut (dyn ImageStore + 's)>,
+    ) -> Result<(), EscError> {
+        self.inner.esc_mut().update_watchdogs(now_ns);
+        if self.stalled {
+            if self.inner.esc().pdi_watchdog_expired() {
+                self.inner.app_mut().pdi_watchdog_expired();
+            }
+            return Ok(());
+        }
+        let result = self.inner.poll_with(now_ns, images);
+        // Stamp the firmware's PDI accesses with the time they happened.
+        self.inner.esc_mut().update_watchdogs(now_ns);
+        self.now_ns = now_ns;
+        result
+    }
+
+    /// Switches CoE Emergency messages on or off (see
+    /// [`Slave::set_emergencies`]).
+    pub fn set_emergencies(&mut self, enabled: bool) {
+        self.inner.set_emergencies(enabled);
+    }
+
+    /// Simulates the application task stalling (it stops serving the ESC)
+    /// or resuming.
+    pub fn set_stalled(&mut self, stalled: bool) {
+        self.stalled = stalled;
+    }
+
+    /// RUN and ERR LED patterns now.
+    pub fn led_patterns(&self) -> (LedPattern, LedPattern) {
+        self.inner
+            .led_patterns(self.inner.esc().pdi_watchdog_expired())
+    }
+
+    /// Whether RUN and ERR are lit at the last poll's time.
+    pub fn leds(&self) -> (bool, bool) {
+        let (run, err) = self.led_patterns();
+        let t = self.now_ns / 1_000_000;
+        (run.is_on(t), err.is_on(t))
+    }
+
+    /// Sets whether port 1 has a link (every slave but the last).
+    pub fn set_port1_link(&mut self, link: bool) {
+        self.port1_link = link;
+        self.inner.esc_mut().set_port1_link(link);
+    }
+
+    /// The firmware.
+    pub fn slave(&self) -> &Slave<SoftEsc, A> {
+        &self.inner
+    }
+
+    /// The firmware, mutably.
+    pub fn slave_mut(&mut self) -> &mut Slave<SoftEsc, A> {
+        &mut self.inner
+    }
+}

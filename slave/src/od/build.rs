@@ -1,0 +1,188 @@
+//! `const` constructors for dictionary entries, so a device's object table
+//! reads like the manual's: one line per subindex.
+//!
+//! Every constructor fills the bit length from the data type (strings from
+//! their default), so the table cannot contradict itself there; ranges,
+//! units and flags are set with struct update syntax:
+//!
+//! ```
+//! use ecat_slave::od::build::{setting, sub0};
+//! use ecat_slave::od::{DataType, Entry};
+//! const CURRENT: Entry = Entry {
+//!     min: Some(500),
+//!     max: Some(3000),
+//!     ..setting(2, "CURRENT", DataType::UInt16, 1000, "mA")
+//! };
+//! const ZERO: Entry = sub0(2);
+//! assert_eq!(CURRENT.bit_len, 16);
+//! assert_eq!(ZERO.name, "SubIndex 000");
+//! ```
+
+use super::dictionary::natural_bits;
+use super::sub_names::SUB_NAMES;
+use super::types::{Access, DataType, DefaultValue, Entry, PdoMapping};
+
+/// `"SubIndex nnn"`, the ETG name of an unnamed subindex.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "a u8 index into a table of 256 names cannot be out of range"
+)]
+pub const fn sub_name(sub: u8) -> &'static str {
+    SUB_NAMES[sub as usize]
+}
+
+/// An entry with no range, no unit, not stored, not a gap.
+pub const fn base(
+    sub: u8,
+    name: &'static str,
+    data_type: DataType,
+    access: Access,
+    pdo: PdoMapping,
+    default: i64,
+) -> Entry {
+    Entry {
+        sub,
+        name,
+        data_type,
+        bit_len: natural_bits(&data_type),
+        access,
+        pdo,
+        default: DefaultValue::Int(default),
+        min: None,
+        max: None,
+        unit: "",
+        backup: false,
+        setting: false,
+        gap: false,
+    }
+}
+
+/// Subindex 0 of an array or record: the highest subindex, UINT8, RO.
+pub const fn sub0(highest: u8) -> Entry {
+    base(
+        0,
+        "SubIndex 000",
+        DataType::UInt8,
+        Access::Ro,
+        PdoMapping::None,
+        highest as i64,
+    )
+}
+
+/// Subindex 0 of a PDO assignment (0x1C12/0x1C13): `count` PDOs assigned,
+/// writable in PRE-OP, at most `capacity`.
+pub const fn assign_count(count: u8, capacity: u8) -> Entry {
+    Entry {
+        access: Access::RwPreOp,
+        min: Some(0),
+        max: Some(capacity as i64),
+        ..sub0(count)
+    }
+}
+
+/// One PDO assigned by 0x1C12/0x1C13 (UINT16, RW in PRE-OP).
+pub const fn assign(sub: u8, pdo: u16) -> Entry {
+    base(
+        sub,
+        sub_name(sub),
+        DataType::UInt16,
+        Access::RwPreOp,
+        PdoMapping::None,
+        pdo as i64,
+    )
+}
+
+/// The entry of a read-only VAR object (subindex 0).
+pub const fn var(name: &'static str, t: DataType, pdo: PdoMapping, default: i64) -> Entry {
+    base(0, name, t, Access::Ro, pdo, default)
+}
+
+/// A read-only VISIBLE_STRING VAR sized by its default (0x1008-0x100A).
+pub const fn string(name: &'static str, text: &'static str) -> Entry {
+    Entry {
+        bit_len: 8 * text.len() as u16,
+        default: DefaultValue::Str(text),
+        ..var(name, DataType::VisibleString, PdoMapping::None, 0)
+    }
+}
+
+/// A read-only constant of a record or array (identity, 0x1C00, 0xF000).
+pub const fn constant(sub: u8, name: &'static str, t: DataType, value: i64) -> Entry {
+    base(sub, name, t, Access::Ro, PdoMapping::None, value)
+}
+
+/// A PDO mapping entry `index << 16 | sub << 8 | bits` (UINT32, RO).
+pub const fn map(sub: u8, name: &'static str, mapping: u32) -> Entry {
+    base(
+        sub,
+        name,
+        DataType::UInt32,
+        Access::Ro,
+        PdoMapping::None,
+        mapping as i64,
+    )
+}
+
+/// A padding mapping `0x000000nn` (index 0) in a PDO mapping object.
+pub const fn pad(sub: u8, bits: u8) -> Entry {
+    map(sub, sub_name(sub), bits as u32)
+}
+
+/// A padding gap of a record: `bits` zero bits up to a byte boundary, no
+/// access (SDO Information: NULL, access 0; upload 0x06010000).
+pub const fn gap(sub: u8, bits: u8) -> Entry {
+    Entry {
+        gap: true,
+        ..base(
+            sub,
+            sub_name(sub),
+            DataType::Bits(bits),
+            Access::Ro,
+            PdoMapping::None,
+            0,
+        )
+    }
+}
+
+/// A TxPDO-mappable input (read-only).
+pub const fn input(sub: u8, name: &'static str, t: DataType) -> Entry {
+    base(sub, name, t, Access::Ro, PdoMapping::Tx, 0)
+}
+
+/// An RxPDO-mappable output (read/write).
+pub const fn output(sub: u8, name: &'static str, t: DataType) -> Entry {
+    base(sub, name, t, Access::Rw, PdoMapping::Rx, 0)
+}
+
+/// A stored device setting (RW, backup, setting) without a range.
+pub const fn setting(
+    sub: u8,
+    name: &'static str,
+    t: DataType,
+    default: i64,
+    unit: &'static str,
+) -> Entry {
+    Entry {
+        unit,
+        backup: true,
+        setting: true,
+        ..base(sub, name, t, Access::Rw, PdoMapping::None, default)
+    }
+}
+
+/// A stored setting with a range.
+pub const fn ranged(
+    sub: u8,
+    name: &'static str,
+    t: DataType,
+    default: i64,
+    min: i64,
+    max: i64,
+    unit: &'static str,
+) -> Entry {
+    Entry {
+        min: Some(min),
+        max: Some(max),
+        ..setting(sub, name, t, default, unit)
+    }
+}

@@ -1,0 +1,711 @@
+//! A device's object dictionary as one static description (layer 2).
+//!
+//! A [`Dictionary`] is a device's objects (strictly ascending by index,
+//! entries strictly ascending by subindex), its enumeration data types and
+//! the prefix sums that give every entry a *flat position*: the slot of its
+//! live value in an [`ObjectStore`](super::store::ObjectStore). It is built
+//! in `const` context, without heap, with the [`dictionary!`](crate::dictionary)
+//! macro:
+//!
+//! ```
+//! use ecat_slave::od::build::{sub0, var, constant};
+//! use ecat_slave::od::{DataType, Object, ObjectCode, PdoMapping};
+//!
+//! const OBJECTS: &[Object] = &[
+//!     Object { index: 0x1000, name: "Device type", code: ObjectCode::Var, entries: &[
+//!         var("Device type", DataType::UInt32, PdoMapping::None, 0x0000_1389),
+//!     ] },
+//!     Object { index: 0x1018, name: "Identity", code: ObjectCode::Record, entries: &[
+//!         sub0(1),
+//!         constant(1, "Vendor ID", DataType::UInt32, 0x0000_0ABC),
+//!     ] },
+//! ];
+//! ecat_slave::dictionary!(pub DICT, pub ENTRIES = OBJECTS, &[]);
+//! assert_eq!(ENTRIES, 3);
+//! assert_eq!(DICT.find_entry(0x1018, 1).map(|(flat, _)| flat), Some(2));
+//! ```
+//!
+//! Everything the ESI, the SII, SDO Information, the PDO engine and the
+//! application know about objects comes from here; [`Dictionary::validate`]
+//! (a `const fn`, so a device can run it at compile time) refuses a
+//! description that contradicts itself.
+
+use super::types::{
+    Access, DataType, DefaultValue, Entry, EnumDesc, Object, ObjectCode, PdoMapping,
+};
+
+/// One device's objects, enumerations and flat positions.
+#[derive(Debug, Clone, Copy)]
+pub struct Dictionary {
+    objects: &'static [Object],
+    enums: &'static [&'static EnumDesc],
+    /// Flat position of the first entry of each object.
+    entry_base: &'static [u16],
+    entry_count: usize,
+}
+
+/// Total number of entries of `objects` (gaps and subindex 0 included): the
+/// length of the device's value storage.
+pub const fn entry_count(objects: &[Object]) -> usize {
+    let mut acc = 0usize;
+    let mut rest = objects;
+    while let Some((obj, tail)) = rest.split_first() {
+        acc += obj.entries.len();
+        rest = tail;
+    }
+    acc
+}
+
+/// Flat position of the first entry of each of the `N` objects (the prefix
+/// sums of their entry counts). `N` must be `objects.len()`.
+pub const fn entry_bases<const N: usize>(objects: &[Object]) -> [u16; N] {
+    let mut out = [0u16; N];
+    let mut acc = 0usize;
+    let mut i = 0;
+    let mut rest = objects;
+    while let Some((obj, tail)) = rest.split_first() {
+        if i < N {
+            out[i] = acc as u16;
+        }
+        acc += obj.entries.len();
+        i += 1;
+        rest = tail;
+    }
+    out
+}
+
+/// Defines a [`Dictionary`] constant and the constant holding its entry
+/// count (the length of the value storage, `[i64; COUNT]`).
+///
+/// `dictionary!(pub NAME, pub COUNT = OBJECTS, ENUMS);` where `OBJECTS` is a
+/// `&'static [Object]` and `ENUMS` a `&'static [&'static EnumDesc]`.
+#[macro_export]
+macro_rules! dictionary {
+    ($vis:vis $name:ident, $cvis:vis $count:ident = $objects:expr, $enums:expr $(,)?) => {
+        /// Number of entries of the dictionary (the value storage length).
+        $cvis const $count: usize = $crate::od::dictionary::entry_count($objects);
+        /// The object dictionary.
+        $vis const $name: $crate::od::Dictionary = {
+            const __DICTIONARY_OBJECTS: &[$crate::od::Object] = $objects;
+            const __DICTIONARY_N: usize = __DICTIONARY_OBJECTS.len();
+            const __DICTIONARY_BASE: [u16; __DICTIONARY_N] =
+                $crate::od::dictionary::entry_bases::<__DICTIONARY_N>(__DICTIONARY_OBJECTS);
+            $crate::od::Dictionary::new(__DICTIONARY_OBJECTS, $enums, &__DICTIONARY_BASE)
+        };
+    };
+}
+
+/// A contradiction in a device description, found by
+/// [`Dictionary::validate`] or
+/// [`DeviceDescription::validate`](crate::device::DeviceDescription::validate).
+///
+/// Each variant names the object (and subindex) at fault; [`Self::message`]
+/// is a fixed text usable in a `const` panic.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum DescriptionError {
+    /// Objects are not strictly ascending by index.
+    #[error("object {index:#06x} is out of order (objects must ascend)")]
+    ObjectOrder {
+        /// The object.
+        index: u16,
+    },
+    /// An object has no entry.
+    #[error("object {index:#06x} has no entry")]
+    EmptyObject {
+        /// The object.
+        index: u16,
+    },
+    /// Entries of an object are not strictly ascending by subindex.
+    #[error("object {index:#06x} subindex {sub} is out of order")]
+    EntryOrder {
+        /// The object.
+        index: u16,
+        /// The entry.
+        sub: u8,
+    },
+    /// A VAR object has other than exactly subindex 0.
+    #[error("VAR object {index:#06x} must have exactly subindex 0")]
+    VarShape {
+        /// The object.
+        index: u16,
+    },
+    /// Subindex 0 of a record or array is not a read-only UINT8 holding the
+    /// highest subindex (writable only for PDO assignments).
+    #[error("object {index:#06x}: subindex 0 must be UINT8 holding the highest subindex")]
+    SubIndexZero {
+        /// The object.
+        index: u16,
+    },
+    /// The bit length does not match the data type (or string default).
+    #[error("{index:#06x}:{sub}: bit length does not match the data type")]
+    BitLength {
+        /// The object.
+        index: u16,
+        /// The entry.
+        sub: u8,
+    },
+    /// The default lies outside the entry's range or enumeration.
+    #[error("{index:#06x}:{sub}: default outside the range or enumeration")]
+    DefaultOutOfRange {
+        /// The object.
+        index: u16,
+        /// The entry.
+        sub: u8,
+    },
+    /// `min` is above `max`.
+    #[error("{index:#06x}:{sub}: minimum above maximum")]
+    EmptyRange {
+        /// The object.
+        index: u16,
+        /// The entry.
+        sub: u8,
+    },
+    /// A padding gap is accessible or mappable.
+    #[error("{index:#06x}:{sub}: a padding gap must be read-only, unmapped BITn")]
+    GapShape {
+        /// The object.
+        index: u16,
+        /// The entry.
+        sub: u8,
+    },
+    /// An entry's type is an enumeration the dictionary does not list.
+    #[error("{index:#06x}:{sub}: enumeration type not listed in the dictionary")]
+    UnknownEnum {
+        /// The object.
+        index: u16,
+        /// The entry.
+        sub: u8,
+    },
+    /// A string entry is not read-only or does not fit the string store.
+    #[error("{index:#06x}:{sub}: strings must be read-only and at most 32 bytes")]
+    StringEntry {
+        /// The object.
+        index: u16,
+        /// The entry.
+        sub: u8,
+    },
+    /// More string entries than the store holds.
+    #[error("more than {max} string entries")]
+    TooManyStrings {
+        /// The store's capacity.
+        max: usize,
+    },
+    /// More entries than flat positions can address.
+    #[error("more than 65535 entries")]
+    TooManyEntries,
+    /// A PDO mapping entry maps an entry that does not exist, is not
+    /// mappable in the PDO's direction, or has another bit length.
+    #[error(
+        "PDO {pdo:#06x}:{sub} maps an entry that is missing, not mappable this way or of another size"
+    )]
+    BadMapping {
+        /// The PDO mapping object.
+        pdo: u16,
+        /// The mapping entry.
+        sub: u8,
+    },
+    /// A PDO (or the PDOs of one set) is larger than the process image.
+    #[error("PDO set {set}: the process image exceeds its maximum size")]
+    ImageTooLarge {
+        /// The PDO set.
+        set: usize,
+    },
+    /// A PDO set names an object that is not a PDO mapping object of the
+    /// right direction (0x1600-0x17FF receive, 0x1A00-0x1BFF transmit).
+    #[error("PDO set {set} names {pdo:#06x}, which is not a mapping object of its direction")]
+    UnknownPdo {
+        /// The PDO set.
+        set: usize,
+        /// The PDO index.
+        pdo: u16,
+    },
+    /// The defaults of 0x1C12/0x1C13 differ from the first (default) PDO set.
+    #[error("the defaults of 0x1C12/0x1C13 must be the first PDO set")]
+    DefaultAssignment,
+    /// 0x1018 disagrees with the description's identity.
+    #[error("0x1018 disagrees with the identity")]
+    Identity,
+    /// A mandatory object (0x1000, 0x1018) is missing.
+    #[error("mandatory object {index:#06x} is missing")]
+    MissingObject {
+        /// The object.
+        index: u16,
+    },
+    /// The mailbox sizes are outside 16..=1024 bytes, or the bootstrap
+    /// mailbox is smaller than the standard one.
+    #[error("mailbox sizes must be 16..=1024 bytes")]
+    MailboxSize,
+    /// A device name (type, name, group) is empty or longer than 64 bytes.
+    #[error("device names must be 1..=64 bytes")]
+    Name,
+}
+
+impl DescriptionError {
+    /// A fixed text for `const` panics (the `Display` text has the details).
+    pub const fn message(&self) -> &'static str {
+        match self {
+            Self::ObjectOrder { .. } => "objects must be strictly ascending by index",
+            Self::EmptyObject { .. } => "every object needs an entry",
+            Self::EntryOrder { .. } => "entries must be strictly ascending by subindex",
+            Self::VarShape { .. } => "a VAR object has exactly subindex 0",
+            Self::SubIndexZero { .. } => "subindex 0 must be UINT8 holding the highest subindex",
+            Self::BitLength { .. } => "an entry's bit length does not match its type",
+            Self::DefaultOutOfRange { .. } => "a default lies outside its range or enumeration",
+            Self::EmptyRange { .. } => "an entry's minimum is above its maximum",
+            Self::GapShape { .. } => "a padding gap must be a read-only, unmapped BITn",
+            Self::UnknownEnum { .. } => "an enumeration type is not listed in the dictionary",
+            Self::StringEntry { .. } => "strings must be read-only and at most 32 bytes",
+            Self::TooManyStrings { .. } => "more string entries than the store holds",
+            Self::TooManyEntries => "more than 65535 entries",
+            Self::BadMapping { .. } => {
+                "a PDO maps an entry that is missing, not mappable that way or of another size"
+            }
+            Self::ImageTooLarge { .. } => "a PDO set exceeds the process image",
+            Self::UnknownPdo { .. } => {
+                "a PDO set names an object that is not a PDO of its direction"
+            }
+            Self::DefaultAssignment => "0x1C12/0x1C13 defaults must be the first PDO set",
+            Self::Identity => "0x1018 disagrees with the identity",
+            Self::MissingObject { .. } => "a mandatory object (0x1000, 0x1018) is missing",
+            Self::MailboxSize => "mailbox sizes must be 16..=1024 bytes",
+            Self::Name => "device names must be 1..=64 bytes",
+        }
+    }
+}
+
+/// Natural bit size of a type (strings: 0, sized by their default).
+pub const fn natural_bits(t: &DataType) -> u16 {
+    match t {
+        DataType::Bool => 1,
+        DataType::Int8 | DataType::UInt8 => 8,
+        DataType::Int16 | DataType::UInt16 => 16,
+        DataType::Int32 | DataType::UInt32 => 32,
+        DataType::Int64 | DataType::UInt64 => 64,
+        DataType::Bits(n) => *n as u16,
+        DataType::Enum(e) => e.bit_len as u16,
+        DataType::VisibleString => 0,
+    }
+}
+
+/// The range a value of `t` can take in `bits` bits.
+pub const fn natural_range(t: &DataType, bits: u16) -> (i64, i64) {
+    let bits = if bits > 64 { 64 } else { bits as u32 };
+    if t.is_signed() {
+        if bits == 0 {
+            return (0, 0);
+        }
+        let max = if bits >= 64 {
+            i64::MAX
+        } else {
+            (1i64 << (bits - 1)) - 1
+        };
+        (-max - 1, max)
+    } else if bits >= 63 {
+        (0, i64::MAX)
+    } else {
+        (0, (1i64 << bits) - 1)
+    }
+}
+
+/// Most string entries a store holds (see
+/// [`STRING_SLOTS`](super::store::STRING_SLOTS)).
+const MAX_STRINGS: usize = super::store::STRING_SLOTS;
+/// Longest string value (see [`STRING_CAPACITY`](super::store::STRING_CAPACITY)).
+const MAX_STRING: usize = super::store::STRING_CAPACITY;
+
+const fn enum_listed(enums: &[&EnumDesc], e: &EnumDesc) -> bool {
+    let mut rest = enums;
+    while let Some((x, tail)) = rest.split_first() {
+        if x.index == e.index {
+            return true;
+        }
+        rest = tail;
+    }
+    false
+}
+
+const fn enum_contains(e: &EnumDesc, v: i64) -> bool {
+    let mut rest = e.values;
+    while let Some(((x, _), tail)) = rest.split_first() {
+        if *x == v {
+            return true;
+        }
+        rest = tail;
+    }
+    false
+}
+
+const fn check_entry(
+    index: u16,
+    code: ObjectCode,
+    highest: u8,
+    e: &Entry,
+    enums: &[&EnumDesc],
+) -> Result<(), DescriptionError> {
+    let sub = e.sub;
+    if let DataType::Enum(en) = e.data_type {
+        if !enum_listed(enums, en) {
+            return Err(DescriptionError::UnknownEnum { index, sub });
+        }
+    }
+    if e.gap {
+        let ok = matches!(e.data_type, DataType::Bits(_))
+            && matches!(e.access, Access::Ro)
+            && matches!(e.pdo, PdoMapping::None);
+        if !ok {
+            return Err(DescriptionError::GapShape { index, sub });
+        }
+    }
+    match e.default {
+        DefaultValue::Str(s) => {
+            let ok =
+                matches!(e.data_type, DataType::VisibleString) && e.bit_len as usize == 8 * s.len();
+            if !ok {
+                return Err(DescriptionError::BitLength { index, sub });
+            }
+            if !matches!(e.access, Access::Ro) || s.len() > MAX_STRING {
+                return Err(DescriptionError::StringEntry { index, sub });
+            }
+        }
+        DefaultValue::Int(v) => {
+            if matches!(e.data_type, DataType::VisibleString)
+                || e.bit_len != natural_bits(&e.data_type)
+            {
+                return Err(DescriptionError::BitLength { index, sub });
+            }
+            if let (Some(lo), Some(hi)) = (e.min, e.max) {
+                if lo > hi {
+                    return Err(DescriptionError::EmptyRange { index, sub });
+                }
+            }
+            let (lo, hi) = natural_range(&e.data_type, e.bit_len);
+            let lo = match e.min {
+                Some(m) if m > lo => m,
+                _ => lo,
+            };
+            let hi = match e.max {
+                Some(m) if m < hi => m,
+                _ => hi,
+            };
+            let in_enum = match e.data_type {
+                DataType::Enum(en) => enum_contains(en, v),
+                _ => true,
+            };
+            if v < lo || v > hi || !in_enum {
+                return Err(DescriptionError::DefaultOutOfRange { index, sub });
+            }
+            if sub == 0 && !matches!(code, ObjectCode::Var) {
+                let assignment = index == 0x1C12 || index == 0x1C13;
+                let ok = matches!(e.data_type, DataType::UInt8)
+                    && v == highest as i64
+                    && (matches!(e.access, Access::Ro)
+                        || (assignment && matches!(e.access, Access::RwPreOp)));
+                // A PDO assignment's subindex 0 is the number of assigned
+                // PDOs, not the capacity.
+                let ok = ok || (assignment && v <= highest as i64);
+                if !ok {
+                    return Err(DescriptionError::SubIndexZero { index });
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+impl Dictionary {
+    /// A dictionary over `objects` and `enums`; `entry_base` must be
+    /// [`entry_bases`] of `objects` (the [`dictionary!`](crate::dictionary)
+    /// macro computes it).
+    pub const fn new(
+        objects: &'static [Object],
+        enums: &'static [&'static EnumDesc],
+        entry_base: &'static [u16],
+    ) -> Self {
+        Dictionary {
+            objects,
+            enums,
+            entry_base,
+            entry_count: entry_count(objects),
+        }
+    }
+
+    /// Every object, ascending by index.
+    pub const fn objects(&self) -> &'static [Object] {
+        self.objects
+    }
+
+    /// The enumeration data types.
+    pub const fn enums(&self) -> &'static [&'static EnumDesc] {
+        self.enums
+    }
+
+    /// Number of entries (the value storage length).
+    pub const fn entry_count(&self) -> usize {
+        self.entry_count
+    }
+
+    /// Checks the description for contradictions: order and shape of
+    /// objects and entries, bit lengths, defaults within ranges and
+    /// enumerations, padding gaps, strings, flat positions. PDO mappings
+    /// and sets are checked with the whole device
+    /// ([`DeviceDescription::validate`](crate::device::DeviceDescription::validate)).
+    pub const fn validate(&self) -> Result<(), DescriptionError> {
+        if self.entry_count > u16::MAX as usize {
+            return Err(DescriptionError::TooManyEntries);
+        }
+        let mut strings = 0usize;
+        let mut prev: Option<u16> = None;
+        let mut objs = self.objects;
+        let mut i = 0usize;
+        while let Some((o, tail)) = objs.split_first() {
+            let index = o.index;
+            if let Some(p) = prev {
+                if p >= index {
+                    return Err(DescriptionError::ObjectOrder { index });
+                }
+            }
+            prev = Some(index);
+            // The flat positions handed in must be the prefix sums.
+            if i >= self.entry_base.len() || self.entry_base.len() != self.objects.len() {
+                return Err(DescriptionError::TooManyEntries);
+            }
+            let Some((first, _)) = o.entries.split_first() else {
+                return Err(DescriptionError::EmptyObject { index });
+            };
+            let mut highest = 0u8;
+            let mut es = o.entries;
+            while let Some((e, t)) = es.split_first() {
+                if e.sub > highest {
+                    highest = e.sub;
+                }
+                es = t;
+            }
+            if matches!(o.code, ObjectCode::Var) && (o.entries.len() != 1 || first.sub != 0) {
+                return Err(DescriptionError::VarShape { index });
+            }
+            if !matches!(o.code, ObjectCode::Var) && first.sub != 0 {
+                return Err(DescriptionError::SubIndexZero { index });
+            }
+            let mut last: Option<u8> = None;
+            let mut es = o.entries;
+            while let Some((e, t)) = es.split_first() {
+                if let Some(l) = last {
+                    if l >= e.sub {
+                        return Err(DescriptionError::EntryOrder { index, sub: e.sub });
+                    }
+                }
+                last = Some(e.sub);
+                if let Err(err) = check_entry(index, o.code, highest, e, self.enums) {
+                    return Err(err);
+                }
+                if matches!(e.default, DefaultValue::Str(_)) {
+                    strings += 1;
+                }
+                es = t;
+            }
+            i += 1;
+            objs = tail;
+        }
+        if strings > MAX_STRINGS {
+            return Err(DescriptionError::TooManyStrings { max: MAX_STRINGS });
+        }
+        // The bases must be the prefix sums.
+        let mut acc = 0usize;
+        let mut objs = self.objects;
+        let mut bases = self.entry_base;
+        while let Some((o, tail)) = objs.split_first() {
+            match bases.split_first() {
+                Some((b, rest)) if *b as usize == acc => bases = rest,
+                _ => return Err(DescriptionError::TooManyEntries),
+            }
+            acc += o.entries.len();
+            objs = tail;
+        }
+        Ok(())
+    }
+
+    /// The object with index `index` and its position.
+    pub fn find(&self, index: u16) -> Option<(usize, &'static Object)> {
+        let pos = self
+            .objects
+            .binary_search_by_key(&index, |o| o.index)
+            .ok()?;
+        self.objects.get(pos).map(|o| (pos, o))
+    }
+
+    /// The entry `index:sub` (gaps included) and its flat position.
+    pub fn find_entry(&self, index: u16, sub: u8) -> Option<(usize, &'static Entry)> {
+        let (pos, obj) = self.find(index)?;
+        let at = obj.entries.binary_search_by_key(&sub, |e| e.sub).ok()?;
+        let base = usize::from(*self.entry_base.get(pos)?);
+        obj.entries.get(at).map(|e| (base + at, e))
+    }
+
+    /// Flat position of the first entry of the object at position `pos`.
+    pub fn base(&self, pos: usize) -> Option<usize> {
+        self.entry_base.get(pos).map(|b| usize::from(*b))
+    }
+
+    /// The object position and entry at flat position `flat`.
+    pub fn locate(&self, flat: usize) -> Option<(usize, &'static Entry)> {
+        let pos = self
+            .entry_base
+            .partition_point(|&b| usize::from(b) <= flat)
+            .checked_sub(1)?;
+        let base = usize::from(*self.entry_base.get(pos)?);
+        let entry = self.objects.get(pos)?.entries.get(flat - base)?;
+        Some((pos, entry))
+    }
+
+    /// The entry at flat position `flat`.
+    pub fn entry_at(&self, flat: usize) -> Option<&'static Entry> {
+        self.locate(flat).map(|(_, e)| e)
+    }
+
+    /// Every entry with its flat position and object, in dictionary order.
+    pub fn entries(&self) -> impl Iterator<Item = (usize, &'static Object, &'static Entry)> {
+        self.objects
+            .iter()
+            .flat_map(|o| o.entries.iter().map(move |e| (o, e)))
+            .enumerate()
+            .map(|(flat, (o, e))| (flat, o, e))
+    }
+
+    /// The enumeration with data type index `index`.
+    pub fn find_enum(&self, index: u16) -> Option<&'static EnumDesc> {
+        self.enums.iter().find(|e| e.index == index).copied()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::od::build::{constant, gap, sub0, var};
+    use crate::od::types::PdoMapping;
+
+    const GOOD: &[Object] = &[
+        Object {
+            index: 0x1000,
+            name: "Device type",
+            code: ObjectCode::Var,
+            entries: &[var("Device type", DataType::UInt32, PdoMapping::None, 5001)],
+        },
+        Object {
+            index: 0x6000,
+            name: "Inputs",
+            code: ObjectCode::Record,
+            entries: &[sub0(2), constant(1, "Bit", DataType::Bool, 0), gap(2, 7)],
+        },
+    ];
+    crate::dictionary!(DICT, COUNT = GOOD, &[]);
+
+    #[test]
+    fn flat_positions_are_prefix_sums() {
+        assert_eq!(COUNT, 4);
+        assert_eq!(DICT.find_entry(0x1000, 0).map(|x| x.0), Some(0));
+        assert_eq!(DICT.find_entry(0x6000, 2).map(|x| x.0), Some(3));
+        assert_eq!(DICT.locate(2).map(|(p, e)| (p, e.sub)), Some((1, 1)));
+        assert!(DICT.find_entry(0x6000, 3).is_none());
+        assert!(DICT.find(0x2000).is_none());
+        assert_eq!(DICT.validate(), Ok(()));
+    }
+
+    const OUT_OF_ORDER: &[Object] = &[
+        Object {
+            index: 0x6000,
+            name: "Inputs",
+            code: ObjectCode::Var,
+            entries: &[var("Inputs", DataType::UInt8, PdoMapping::None, 0)],
+        },
+        Object {
+            index: 0x1000,
+            name: "Device type",
+            code: ObjectCode::Var,
+            entries: &[var("Device type", DataType::UInt32, PdoMapping::None, 5001)],
+        },
+    ];
+    crate::dictionary!(BAD_ORDER, BAD_ORDER_N = OUT_OF_ORDER, &[]);
+
+    #[test]
+    fn objects_out_of_order_are_refused() {
+        assert_eq!(
+            BAD_ORDER.validate(),
+            Err(DescriptionError::ObjectOrder { index: 0x1000 })
+        );
+        let _ = BAD_ORDER_N;
+    }
+
+    const BAD_DEFAULT: &[Object] = &[Object {
+        index: 0x8000,
+        name: "Setting",
+        code: ObjectCode::Var,
+        entries: &[Entry {
+            min: Some(10),
+            max: Some(20),
+            ..var("Setting", DataType::UInt16, PdoMapping::None, 30)
+        }],
+    }];
+    crate::dictionary!(BAD_DEF, BAD_DEF_N = BAD_DEFAULT, &[]);
+
+    #[test]
+    fn a_default_outside_its_range_is_refused() {
+        assert_eq!(
+            BAD_DEF.validate(),
+            Err(DescriptionError::DefaultOutOfRange {
+                index: 0x8000,
+                sub: 0
+            })
+        );
+        let _ = BAD_DEF_N;
+    }
+
+    const BAD_SUB0: &[Object] = &[Object {
+        index: 0x6000,
+        name: "Inputs",
+        code: ObjectCode::Record,
+        entries: &[sub0(3), constant(1, "Bit", DataType::Bool, 0)],
+    }];
+    crate::dictionary!(BAD_S0, BAD_S0_N = BAD_SUB0, &[]);
+
+    #[test]
+    fn subindex_zero_must_hold_the_highest_subindex() {
+        assert_eq!(
+            BAD_S0.validate(),
+            Err(DescriptionError::SubIndexZero { index: 0x6000 })
+        );
+        let _ = BAD_S0_N;
+    }
+
+    const BAD_BITS: &[Object] = &[Object {
+        index: 0x2000,
+        name: "x",
+        code: ObjectCode::Var,
+        entries: &[Entry {
+            bit_len: 8,
+            ..var("x", DataType::UInt16, PdoMapping::None, 0)
+        }],
+    }];
+    crate::dictionary!(BAD_B, BAD_B_N = BAD_BITS, &[]);
+
+    #[test]
+    fn a_bit_length_that_is_not_the_types_is_refused() {
+        assert_eq!(
+            BAD_B.validate(),
+            Err(DescriptionError::BitLength {
+                index: 0x2000,
+                sub: 0
+            })
+        );
+        assert!(!BAD_B.validate().unwrap_err().message().is_empty());
+        let _ = BAD_B_N;
+    }
+
+    #[test]
+    fn natural_ranges() {
+        assert_eq!(natural_range(&DataType::Int16, 16), (-32768, 32767));
+        assert_eq!(natural_range(&DataType::UInt16, 16), (0, 65535));
+        assert_eq!(natural_range(&DataType::Bits(7), 7), (0, 127));
+        assert_eq!(natural_range(&DataType::UInt64, 64), (0, i64::MAX));
+        assert_eq!(natural_range(&DataType::Int64, 64), (i64::MIN, i64::MAX));
+    }
+}
