@@ -8,7 +8,7 @@
 
 use std::fmt;
 
-use pam_slave::sii::{
+use ecat_slave::sii::{
     FmmuUsage, PdoDirection, SiiError, SiiReader, SiiStrings, SmType, pdo_flags, protocols,
 };
 
@@ -366,12 +366,12 @@ pub fn check(esi: &str, sii: &[u8]) -> Result<Vec<Mismatch>, CheckError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::esi::{Capabilities, generate};
-    use pam_slave::sii::{CategoryType, crc8};
+    use crate::esi::generate;
+    use ecat_slave::sii::{CategoryType, crc8};
 
     fn ours() -> (String, Vec<u8>) {
-        let esi = String::from_utf8(generate(&Capabilities::default()).unwrap()).unwrap();
-        (esi, crate::sii_image())
+        let esi = String::from_utf8(generate(&pam_199_p_etc::DEVICE).unwrap()).unwrap();
+        (esi, crate::sii_image(&pam_199_p_etc::DEVICE))
     }
 
     /// Byte offset of the data of the first category of `kind`.
@@ -497,11 +497,9 @@ mod tests {
     #[test]
     fn flipped_capability_is_reported_against_the_sii() {
         let (_, sii) = ours();
-        let caps = Capabilities {
-            complete_access: false,
-            ..Capabilities::default()
-        };
-        let esi = String::from_utf8(generate(&caps).unwrap()).unwrap();
+        let mut dev = pam_199_p_etc::DEVICE;
+        dev.mailbox.coe.complete_access = false;
+        let esi = String::from_utf8(generate(&dev).unwrap()).unwrap();
         let m = check(&esi, &sii).unwrap();
         assert_eq!(m.len(), 1, "{m:#?}");
         assert!(m[0].what.starts_with("CoE CompleteAccess"));

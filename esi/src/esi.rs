@@ -1,84 +1,36 @@
-//! ESI (ETG.2000 v1.17) XML generation from the device model (host tool).
+//! ESI (ETG.2000 v1.17) XML generation from a device description (host
+//! tool).
 //!
-//! Everything comes from `pam-slave`: the dictionary from
-//! [`pam_slave::od::model`], identity from [`pam_slave::device`], and the
-//! communication layout (SyncManagers, FMMUs, mailbox, PDO assignment,
-//! ConfigData, BootStrap) by decoding the device's own SII image, so the ESI
-//! and the EEPROM cannot disagree. The XML is written with quick-xml's
+//! Everything comes from the [`DeviceDescription`] the slave runs: the
+//! dictionary, identity, names and PDO sets, and the communication layout
+//! (SyncManagers, FMMUs, mailbox, PDO assignment, ConfigData, BootStrap) by
+//! decoding the device's own SII image, so the ESI and the EEPROM cannot
+//! disagree. The XML is written with quick-xml's
 //! [`Writer`], never by string concatenation, and is byte-for-byte
 //! deterministic.
 
 use std::collections::BTreeMap;
 use std::io;
 
-use pam_slave::device;
-use pam_slave::esc::Esc;
-use pam_slave::esc::registers as reg;
-use pam_slave::esc::soft::SoftEsc;
-use pam_slave::od::model::{ENUMS, OBJECTS};
-use pam_slave::od::types::{Access, DataType, DefaultValue, Entry, Object, ObjectCode, PdoMapping};
-use pam_slave::sii::{self, FmmuUsage, PdoDirection, SiiError, SiiReader, SmType};
+use ecat_slave::device::DeviceDescription;
+use ecat_slave::esc::Esc;
+use ecat_slave::esc::registers as reg;
+use ecat_slave::esc::soft::SoftEsc;
+use ecat_slave::od::Dictionary;
+use ecat_slave::od::types::{
+    Access, DataType, DefaultValue, Entry, Object, ObjectCode, PdoMapping,
+};
+use ecat_slave::sii::{self, FmmuUsage, PdoDirection, SiiError, SiiReader, SmType};
 use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, BytesText, Event};
 
 /// ETG.2000 schema version the file follows.
 pub const ESI_VERSION: &str = "1.17";
-/// Vendor name of vendor id 0x05AE.
-pub const VENDOR_NAME: &str = "W.E.St. Elektronik GmbH";
-/// Display name of the device group (the group type comes from the SII).
-pub const GROUP_NAME: &str = "PAM amplifiers";
-/// Name of the default PDO assignment (manual 7.1, "Case 1").
-pub const DIRECTIONAL_MAPPING: &str = "Directional Mode (Extended)";
-/// Name of the alternative PDO assignment (manual 7.1, "Case 2").
-pub const INDEPENDENT_MAPPING: &str = "Independent Mode (Extended)";
-
 /// AL state machine timeouts in ms (ESI `Info/StateMachine/Timeout`):
 /// PRE-OP, SAFE-OP/OP, back to INIT, back to SAFE-OP.
 pub const STATE_MACHINE_TIMEOUTS_MS: [u32; 4] = [2000, 9000, 5000, 200];
 /// Mailbox request and response timeouts in ms (ESI `Info/Mailbox/Timeout`).
 pub const MAILBOX_TIMEOUTS_MS: [u32; 2] = [100, 2000];
-
-/// CoE services the slave supports, written as `Mailbox/CoE` attributes.
-///
-/// The defaults are what the slave implements today; flip a field when the
-/// service lands (and its bit in the SII General category, which `check`
-/// compares).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Capabilities {
-    /// SDO Information service (SII CoE details bit 1).
-    pub sdo_info: bool,
-    /// PDO assignment via 0x1C12/0x1C13 (SII CoE details bit 2).
-    pub pdo_assign: bool,
-    /// PDO mapping configuration via 0x16xx/0x1Axx (SII CoE details bit 3).
-    pub pdo_config: bool,
-    /// SDO complete access (SII CoE details bit 5).
-    pub complete_access: bool,
-    /// Segmented SDO transfer.
-    pub segmented_sdo: bool,
-}
-
-impl Default for Capabilities {
-    fn default() -> Self {
-        Capabilities {
-            sdo_info: true,
-            pdo_assign: true,
-            pdo_config: false,
-            complete_access: true,
-            segmented_sdo: true,
-        }
-    }
-}
-
-impl Capabilities {
-    /// The SII General "CoE details" byte these capabilities imply (bit 0
-    /// SDO is always set).
-    pub fn coe_details(&self) -> u8 {
-        0x01 | u8::from(self.sdo_info) << 1
-            | u8::from(self.pdo_assign) << 2
-            | u8::from(self.pdo_config) << 3
-            | u8::from(self.complete_access) << 5
-    }
-}
 
 /// Why the ESI could not be generated.
 #[derive(Debug, thiserror::Error)]
@@ -268,10 +220,10 @@ pub fn object_bit_size(o: &Object) -> u32 {
     }
 }
 
-fn write_base_types(w: &mut W) -> io::Result<()> {
+fn write_base_types(w: &mut W, dict: &Dictionary) -> io::Result<()> {
     // Name -> (sort key, bit size); sorted by CoE code then name.
     let mut base: BTreeMap<(u16, String), u32> = BTreeMap::new();
-    for o in OBJECTS {
+    for o in dict.objects() {
         for e in o.entries {
             if matches!(e.data_type, DataType::Enum(_)) {
                 continue;
@@ -285,7 +237,7 @@ fn write_base_types(w: &mut W) -> io::Result<()> {
         text(w, "BitSize", &bits.to_string())?;
         end(w, "DataType")?;
     }
-    for en in ENUMS {
+    for en in dict.enums() {
         start(w, "DataType", &[])?;
         text(w, "Index", &hex(u32::from(en.index), 4))?;
         text(w, "Name", en.name)?;
@@ -330,8 +282,8 @@ fn write_sub_item(
     end(w, "SubItem")
 }
 
-fn write_complex_types(w: &mut W) -> io::Result<()> {
-    for o in OBJECTS {
+fn write_complex_types(w: &mut W, dict: &Dictionary) -> io::Result<()> {
+    for o in dict.objects() {
         match o.code {
             ObjectCode::Var => {}
             ObjectCode::Record => {
@@ -412,8 +364,8 @@ fn object_access(o: &Object) -> Access {
     }
 }
 
-fn write_objects(w: &mut W) -> io::Result<()> {
-    for o in OBJECTS {
+fn write_objects(w: &mut W, dict: &Dictionary) -> io::Result<()> {
+    for o in dict.objects() {
         start(w, "Object", &[])?;
         text(w, "Index", &hex(u32::from(o.index), 4))?;
         text(w, "Name", o.name)?;
@@ -449,9 +401,9 @@ fn write_objects(w: &mut W) -> io::Result<()> {
     Ok(())
 }
 
-fn write_unit_types(w: &mut W) -> io::Result<()> {
+fn write_unit_types(w: &mut W, dict: &Dictionary) -> io::Result<()> {
     let mut units: BTreeMap<u32, (&str, &str)> = BTreeMap::new();
-    for e in OBJECTS.iter().flat_map(|o| o.entries) {
+    for e in dict.objects().iter().flat_map(|o| o.entries) {
         if let Some((code, name, symbol)) = unit_code(e.unit) {
             units.insert(code, (name, symbol));
         }
@@ -471,15 +423,15 @@ fn write_unit_types(w: &mut W) -> io::Result<()> {
     end(w, "UnitTypes")
 }
 
-fn write_dictionary(w: &mut W) -> io::Result<()> {
+fn write_dictionary(w: &mut W, dict: &Dictionary) -> io::Result<()> {
     start(w, "Dictionary", &[])?;
-    write_unit_types(w)?;
+    write_unit_types(w, dict)?;
     start(w, "DataTypes", &[])?;
-    write_base_types(w)?;
-    write_complex_types(w)?;
+    write_base_types(w, dict)?;
+    write_complex_types(w, dict)?;
     end(w, "DataTypes")?;
     start(w, "Objects", &[])?;
-    write_objects(w)?;
+    write_objects(w, dict)?;
     end(w, "Objects")?;
     end(w, "Dictionary")
 }
@@ -511,63 +463,59 @@ pub fn sii_pdos(r: &SiiReader<'_>) -> Result<Vec<PdoSlot>, SiiError> {
     Ok(out)
 }
 
-/// Entries of a PDO as the model's mapping object lists them:
+/// Entries of a PDO as the mapping object's defaults list them:
 /// `(index, sub, bits)`, padding as index 0.
-pub fn mapping_entries(pdo: u16) -> Vec<(u16, u8, u8)> {
-    let Some((_, o)) = pam_slave::od::model::find(pdo) else {
-        return Vec::new();
-    };
-    o.entries
-        .iter()
-        .filter(|e| e.sub >= 1)
-        .filter_map(|e| match e.default {
-            DefaultValue::Int(m) => {
-                let m = m as u32;
-                Some(((m >> 16) as u16, (m >> 8) as u8, m as u8))
-            }
-            DefaultValue::Str(_) => None,
-        })
-        .collect()
+pub fn mapping_entries(dict: &Dictionary, pdo: u16) -> Vec<(u16, u8, u8)> {
+    ecat_slave::device::mapping_entries(dict, pdo).collect()
 }
 
-fn write_pdo(w: &mut W, slot: &PdoSlot, all: &[PdoSlot]) -> Result<(), EsiError> {
+fn write_pdo(
+    w: &mut W,
+    dev: &DeviceDescription,
+    slot: &PdoSlot,
+    all: &[PdoSlot],
+) -> Result<(), EsiError> {
+    let dict = dev.dictionary;
     let tag = match slot.direction {
         PdoDirection::Rx => "RxPdo",
         PdoDirection::Tx => "TxPdo",
     };
     let sm = slot.sm.map(|s| s.to_string());
     let mut attrs: Vec<(&str, &str)> = Vec::new();
-    // The same flags the SII carries (pam_slave::pdo::sii_flags).
-    let flags = pam_slave::pdo::sii_flags(slot.index);
-    if flags & pam_slave::sii::pdo_flags::FIXED_CONTENT != 0 {
+    // The same flags the SII carries (ecat_slave::pdo::sii_flags).
+    let flags = ecat_slave::pdo::sii_flags(dict, slot.index);
+    if flags & ecat_slave::sii::pdo_flags::FIXED_CONTENT != 0 {
         attrs.push(("Fixed", "1"));
     }
-    if flags & pam_slave::sii::pdo_flags::MANDATORY != 0 {
+    if flags & ecat_slave::sii::pdo_flags::MANDATORY != 0 {
         attrs.push(("Mandatory", "1"));
     }
     if let Some(sm) = &sm {
         attrs.push(("Sm", sm));
     }
-    let name = pam_slave::od::model::find(slot.index)
+    let name = dict
+        .find(slot.index)
         .map(|(_, o)| o.name)
         .ok_or_else(|| EsiError::Model(format!("PDO {:#06x} has no mapping object", slot.index)))?;
     start(w, tag, &attrs)?;
     text(w, "Index", &hex(u32::from(slot.index), 4))?;
     text(w, "Name", name)?;
-    // A default PDO excludes every alternative of its direction and back.
+    // PDOs of one direction that share no PDO set exclude each other.
+    let mine = dev.pdo_sets_of(slot.index);
     for other in all
         .iter()
-        .filter(|o| o.direction == slot.direction && o.sm.is_some() != slot.sm.is_some())
+        .filter(|o| o.direction == slot.direction && o.index != slot.index)
+        .filter(|o| dev.pdo_sets_of(o.index) & mine == 0)
     {
         text(w, "Exclude", &hex(u32::from(other.index), 4))?;
     }
-    for (index, sub, bits) in mapping_entries(slot.index) {
+    for (index, sub, bits) in mapping_entries(dict, slot.index) {
         start(w, "Entry", &[])?;
         if index == 0 {
             text(w, "Index", "#x0")?;
             text(w, "BitLen", &bits.to_string())?;
         } else {
-            let (_, e) = pam_slave::od::model::find_entry(index, sub).ok_or_else(|| {
+            let (_, e) = dict.find_entry(index, sub).ok_or_else(|| {
                 EsiError::Model(format!(
                     "{:#06x} maps missing {index:#06x}:{sub}",
                     slot.index
@@ -585,20 +533,21 @@ fn write_pdo(w: &mut W, slot: &PdoSlot, all: &[PdoSlot]) -> Result<(), EsiError>
     Ok(())
 }
 
-fn write_alternative_mappings(w: &mut W, pdos: &[PdoSlot]) -> io::Result<()> {
+fn write_alternative_mappings(w: &mut W, dev: &DeviceDescription) -> io::Result<()> {
+    let sets = dev.process_data.sets;
+    if sets.len() < 2 {
+        return Ok(());
+    }
     start(w, "VendorSpecific", &[])?;
     start(w, "TwinCAT", &[])?;
-    for (name, default) in [(DIRECTIONAL_MAPPING, true), (INDEPENDENT_MAPPING, false)] {
-        let attrs: &[(&str, &str)] = if default { &[("Default", "1")] } else { &[] };
+    for (n, set) in sets.iter().enumerate() {
+        let attrs: &[(&str, &str)] = if n == 0 { &[("Default", "1")] } else { &[] };
         start(w, "AlternativeSmMapping", attrs)?;
-        text(w, "Name", name)?;
-        for (sm, direction) in [("2", PdoDirection::Rx), ("3", PdoDirection::Tx)] {
+        text(w, "Name", set.name)?;
+        for (sm, list) in [("2", set.rx), ("3", set.tx)] {
             start(w, "Sm", &[("No", sm)])?;
-            for p in pdos
-                .iter()
-                .filter(|p| p.direction == direction && p.sm.is_some() == default)
-            {
-                text(w, "Pdo", &hex(u32::from(p.index), 4))?;
+            for pdo in list {
+                text(w, "Pdo", &hex(u32::from(*pdo), 4))?;
             }
             end(w, "Sm")?;
         }
@@ -652,9 +601,9 @@ fn watchdog_registers(image: &[u8]) -> [u16; 3] {
     .map(|a| esc.read_u16(a).unwrap_or(0))
 }
 
-/// Generates the ESI XML of the PAM-199-P-ETC.
-pub fn generate(caps: &Capabilities) -> Result<Vec<u8>, EsiError> {
-    let image = device::sii_image();
+/// Generates the ESI XML of the device `dev`.
+pub fn generate(dev: &DeviceDescription) -> Result<Vec<u8>, EsiError> {
+    let image = dev.sii_image();
     let r = SiiReader::new(&image)?;
     let strings = r.strings()?;
     let general = r
@@ -662,7 +611,7 @@ pub fn generate(caps: &Capabilities) -> Result<Vec<u8>, EsiError> {
         .ok_or_else(|| EsiError::Model("SII has no General category".into()))?
         .resolve(&strings);
     let pdos = sii_pdos(&r)?;
-    let profile = match pam_slave::od::model::find_entry(0x1000, 0) {
+    let profile = match dev.dictionary.find_entry(0x1000, 0) {
         Some((_, e)) => match e.default {
             DefaultValue::Int(v) => v & 0xFFFF,
             DefaultValue::Str(_) => 0,
@@ -682,15 +631,15 @@ pub fn generate(caps: &Capabilities) -> Result<Vec<u8>, EsiError> {
         ],
     )?;
     start(&mut w, "Vendor", &[])?;
-    text(&mut w, "Id", &hex(device::VENDOR_ID, 8))?;
-    text_attrs(&mut w, "Name", &[("LcId", "1033")], VENDOR_NAME)?;
+    text(&mut w, "Id", &hex(dev.identity.vendor_id, 8))?;
+    text_attrs(&mut w, "Name", &[("LcId", "1033")], dev.names.vendor)?;
     end(&mut w, "Vendor")?;
 
     start(&mut w, "Descriptions", &[])?;
     start(&mut w, "Groups", &[])?;
     start(&mut w, "Group", &[])?;
     text(&mut w, "Type", general.group)?;
-    text_attrs(&mut w, "Name", &[("LcId", "1033")], GROUP_NAME)?;
+    text_attrs(&mut w, "Name", &[("LcId", "1033")], dev.names.group_name)?;
     end(&mut w, "Group")?;
     end(&mut w, "Groups")?;
 
@@ -700,8 +649,8 @@ pub fn generate(caps: &Capabilities) -> Result<Vec<u8>, EsiError> {
         &mut w,
         "Type",
         &[
-            ("ProductCode", &hex(device::PRODUCT_CODE, 8)),
-            ("RevisionNo", &hex(device::REVISION, 8)),
+            ("ProductCode", &hex(dev.identity.product_code, 8)),
+            ("RevisionNo", &hex(dev.identity.revision, 8)),
         ],
         general.order,
     )?;
@@ -736,7 +685,7 @@ pub fn generate(caps: &Capabilities) -> Result<Vec<u8>, EsiError> {
     text(&mut w, "GroupType", general.group)?;
     start(&mut w, "Profile", &[])?;
     text(&mut w, "ProfileNo", &profile.to_string())?;
-    write_dictionary(&mut w)?;
+    write_dictionary(&mut w, dev.dictionary)?;
     end(&mut w, "Profile")?;
 
     for u in r.fmmus()? {
@@ -758,10 +707,11 @@ pub fn generate(caps: &Capabilities) -> Result<Vec<u8>, EsiError> {
         )?;
     }
     for slot in &pdos {
-        write_pdo(&mut w, slot, &pdos)?;
+        write_pdo(&mut w, dev, slot, &pdos)?;
     }
 
     let protocols = r.mailbox_protocols();
+    let coe = dev.mailbox.coe;
     let mut mbx_attrs: Vec<(&str, &str)> = Vec::new();
     if general.flags & 0x04 != 0 {
         mbx_attrs.push(("DataLinkLayer", "1"));
@@ -775,11 +725,12 @@ pub fn generate(caps: &Capabilities) -> Result<Vec<u8>, EsiError> {
             &mut w,
             "CoE",
             &[
-                ("SdoInfo", flag(caps.sdo_info)),
-                ("PdoAssign", flag(caps.pdo_assign)),
-                ("PdoConfig", flag(caps.pdo_config)),
-                ("CompleteAccess", flag(caps.complete_access)),
-                ("SegmentedSdo", flag(caps.segmented_sdo)),
+                ("SdoInfo", flag(coe.sdo_info)),
+                ("PdoAssign", flag(coe.pdo_assign)),
+                ("PdoConfig", flag(coe.pdo_config)),
+                ("CompleteAccess", flag(coe.complete_access)),
+                // The core's SDO server always does segmented transfers.
+                ("SegmentedSdo", flag(true)),
             ],
         )?;
     }
@@ -805,7 +756,7 @@ pub fn generate(caps: &Capabilities) -> Result<Vec<u8>, EsiError> {
     )?;
     end(&mut w, "Eeprom")?;
 
-    write_alternative_mappings(&mut w, &pdos)?;
+    write_alternative_mappings(&mut w, dev)?;
     end(&mut w, "Device")?;
     end(&mut w, "Devices")?;
     end(&mut w, "Descriptions")?;
@@ -819,12 +770,13 @@ pub fn generate(caps: &Capabilities) -> Result<Vec<u8>, EsiError> {
 mod tests {
     use super::*;
     use crate::xml::{self, Element, hex_binary as unhex, hex_dec};
-    use pam_slave::od::model;
+    use pam_199_p_etc::od as model;
+    use pam_199_p_etc::{DEVICE, DIRECTIONAL_MAPPING, INDEPENDENT_MAPPING};
     use std::path::PathBuf;
     use std::process::Command;
 
     fn generated() -> Vec<u8> {
-        generate(&Capabilities::default()).unwrap()
+        generate(&DEVICE).unwrap()
     }
 
     fn device(doc: &Element) -> &Element {
@@ -909,7 +861,7 @@ mod tests {
 
     #[test]
     fn sii_image_matches_the_golden_file() {
-        golden("eeprom.bin", &crate::sii_image());
+        golden("eeprom.bin", &crate::sii_image(&DEVICE));
     }
 
     #[test]
@@ -1136,29 +1088,23 @@ mod tests {
     }
 
     #[test]
-    fn mailbox_coe_attributes_follow_the_capabilities() {
-        let caps = Capabilities {
-            sdo_info: true,
-            complete_access: true,
-            ..Capabilities::default()
-        };
-        let doc = xml::parse(std::str::from_utf8(&generate(&caps).unwrap()).unwrap()).unwrap();
+    fn mailbox_coe_attributes_follow_the_description() {
+        let doc = xml::parse(std::str::from_utf8(&generated()).unwrap()).unwrap();
         let coe = device(&doc).path("Mailbox/CoE").unwrap();
         assert_eq!(coe.attr("SdoInfo"), Some("1"));
         assert_eq!(coe.attr("CompleteAccess"), Some("1"));
         assert_eq!(coe.attr("PdoAssign"), Some("1"));
+        assert_eq!(coe.attr("PdoConfig"), Some("0"));
         assert_eq!(coe.attr("SegmentedSdo"), Some("1"));
         assert!(device(&doc).path("Mailbox/FoE").is_some());
-        assert_eq!(caps.coe_details(), 0x01 | 0x02 | 0x04 | 0x20);
-        // The defaults are what the slave implements (and its SII says).
-        assert_eq!(Capabilities::default().coe_details(), 0x27);
+        assert_eq!(DEVICE.mailbox.coe.details(), 0x27);
     }
 
     #[test]
     fn eeprom_section_mirrors_the_sii_header() {
         let doc = xml::parse(std::str::from_utf8(&generated()).unwrap()).unwrap();
         let ee = device(&doc).child("Eeprom").unwrap();
-        let img = crate::sii_image();
+        let img = crate::sii_image(&DEVICE);
         assert_eq!(ee.text_at("ByteSize"), Some("2048"));
         assert_eq!(unhex(ee.text_at("ConfigData").unwrap()).unwrap(), img[..14]);
         // Bootstrap mailbox: out 0x1000+1024, in 0x1400+1024.

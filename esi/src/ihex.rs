@@ -170,7 +170,7 @@ mod tests {
 
     #[test]
     fn decode_round_trips_the_sii_image() {
-        let sii = crate::sii_image();
+        let sii = crate::sii_image(&pam_199_p_etc::DEVICE);
         assert_eq!(decode(&encode(&sii)).unwrap(), sii);
     }
 

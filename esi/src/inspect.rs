@@ -7,7 +7,7 @@
 
 use std::fmt::Write as _;
 
-use pam_slave::sii::{
+use ecat_slave::sii::{
     CategoryType, DcEntry, PdoDirection, SiiError, SiiGeneralRaw, SiiIdentity, SiiMailbox,
     SiiReader, SiiStrings, SiiSyncManager, SmType, protocols,
 };
@@ -773,7 +773,7 @@ mod tests {
 
     #[test]
     fn our_image_decodes_cleanly_with_identity_and_pdos() {
-        let i = inspect(&crate::sii_image()).unwrap();
+        let i = inspect(&crate::sii_image(&pam_199_p_etc::DEVICE)).unwrap();
         assert!(i.problems.is_empty(), "{:?}", i.problems);
         assert!(i.crc_ok());
         assert_eq!(i.identity.vendor_id, 0x05AE);
@@ -817,7 +817,7 @@ mod tests {
 
     #[test]
     fn bad_checksum_is_reported_not_fatal() {
-        let mut img = crate::sii_image();
+        let mut img = crate::sii_image(&pam_199_p_etc::DEVICE);
         img[0] ^= 0x01;
         let i = inspect(&img).unwrap();
         assert!(!i.crc_ok());
@@ -827,7 +827,7 @@ mod tests {
 
     #[test]
     fn category_past_the_end_is_reported() {
-        let img = crate::sii_image();
+        let img = crate::sii_image(&pam_199_p_etc::DEVICE);
         // Cut the image inside the category chain.
         let i = inspect(&img[..200]).unwrap();
         assert!(
@@ -845,7 +845,7 @@ mod tests {
 
     #[test]
     fn unknown_categories_are_listed_and_reported() {
-        let mut img = crate::sii_image();
+        let mut img = crate::sii_image(&pam_199_p_etc::DEVICE);
         img[0x80] = 0x34; // first category type -> 0x1234
         img[0x81] = 0x12;
         let i = inspect(&img).unwrap();
@@ -878,7 +878,10 @@ mod tests {
 
     #[test]
     fn json_has_the_identity_and_pdo_entries() {
-        let j = inspect(&crate::sii_image()).unwrap().to_json().to_pretty();
+        let j = inspect(&crate::sii_image(&pam_199_p_etc::DEVICE))
+            .unwrap()
+            .to_json()
+            .to_pretty();
         assert!(j.contains("\"product_code\": 13042675"));
         assert!(j.contains("\"name\": \"COMMAND VALUE\""));
         assert!(j.contains("\"crc_ok\": true"));

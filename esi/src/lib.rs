@@ -1,15 +1,16 @@
-//! ESI XML and SII image tooling for the PAM-199-P-ETC (host tools).
+//! ESI XML and SII image tooling for any device on the `ecat-slave` core
+//! (host tools).
 //!
-//! Everything is generated from the `pam-slave` device model, so the
-//! EtherCAT master's view (ESI), the EEPROM (SII) and the firmware cannot
-//! disagree:
+//! Everything is generated from the device's description (the one the
+//! slave runs), so the EtherCAT master's view (ESI), the EEPROM (SII) and
+//! the firmware cannot disagree:
 //!
 //! - [`sii_image`] is the SII EEPROM image as the slave's own encoder
-//!   ([`pam_slave::device::sii_image`]) produces it; [`ihex`] writes it as
+//!   ([`DeviceDescription::sii_image`]) produces it; [`ihex`] writes it as
 //!   Intel HEX.
 //! - [`esi::generate`] writes the ETG.2000 v1.17 ESI XML (dictionary, PDOs,
 //!   SyncManagers, mailbox, EEPROM, alternative PDO assignments) with
-//!   quick-xml's writer; [`esi::Capabilities`] states the CoE services.
+//!   quick-xml's writer.
 //! - [`inspect::inspect`] decodes any SII image (ours or a vendor's dump)
 //!   into a listing or JSON, reporting broken images instead of failing.
 //! - [`check::check`] cross-checks an ESI file against an SII image.
@@ -25,9 +26,10 @@ pub mod inspect;
 pub mod json;
 pub mod xml;
 
-pub use esi::{Capabilities, generate};
+use ecat_slave::device::DeviceDescription;
+pub use esi::generate;
 
-/// The SII EEPROM image of the PAM-199-P-ETC, as the software ESC serves it.
-pub fn sii_image() -> Vec<u8> {
-    pam_slave::device::sii_image().to_vec()
+/// The SII EEPROM image of `dev`, as the software ESC serves it.
+pub fn sii_image(dev: &DeviceDescription) -> Vec<u8> {
+    dev.sii_image().to_vec()
 }

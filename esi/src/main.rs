@@ -1,5 +1,6 @@
-//! `esi`: generate the PAM-199-P-ETC's ESI XML and SII image, inspect SII
-//! images and cross-check an ESI against an SII.
+//! `esi`: generate a device's ESI XML and SII image (the PAM-199-P-ETC by
+//! default, any device of the catalog with `--device`), inspect SII images
+//! and cross-check an ESI against an SII.
 //!
 //! Exit codes: 0 success, 1 `check` found mismatches, 2 an input or output
 //! file could not be read, parsed or written.
@@ -8,9 +9,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use pam_esi::{Capabilities, check, esi, ihex, inspect};
+use ecat_esi::{check, esi, ihex, inspect};
 
-/// ESI and SII tooling for the PAM-199-P-ETC.
+/// ESI and SII tooling for the devices of the ecat-slave catalog.
 #[derive(Debug, Parser)]
 #[command(name = "esi", version, about)]
 struct Cli {
@@ -25,9 +26,17 @@ enum Command {
         /// Output file, e.g. PAM-199-P-ETC.xml.
         #[arg(short, long)]
         output: Option<PathBuf>,
+        /// The device (pam, io8, ...; `esi devices` lists them).
+        #[arg(long, default_value = "pam")]
+        device: String,
     },
+    /// List the devices of the catalog.
+    Devices,
     /// Write the SII EEPROM image (binary; Intel HEX with --hex).
     Sii {
+        /// The device (pam, io8, ...).
+        #[arg(long, default_value = "pam")]
+        device: String,
         /// Output file, e.g. eeprom.bin (stdout without -o).
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -86,15 +95,32 @@ fn write(path: Option<&Path>, data: &[u8]) -> Result<(), Failure> {
     }
 }
 
+fn find(name: &str) -> Result<&'static device_catalog::DeviceEntry, Failure> {
+    device_catalog::find(name).map_err(|e| Failure(e.to_string()))
+}
+
 fn run(cli: Cli) -> Result<ExitCode, Failure> {
     match cli.command {
-        Command::Generate { output } => {
-            let xml = esi::generate(&Capabilities::default())
+        Command::Generate { output, device } => {
+            let dev = find(&device)?;
+            let xml = esi::generate(dev.description)
                 .map_err(|e| Failure(format!("cannot generate the ESI: {e}")))?;
             write(output.as_deref(), &xml)?;
         }
-        Command::Sii { output, hex } => {
-            let image = pam_esi::sii_image();
+        Command::Devices => {
+            let mut text = String::new();
+            for d in device_catalog::DEVICES {
+                let n = &d.description.names;
+                text.push_str(&format!("{:<6} {:<16} {}\n", d.key, n.type_name, d.summary));
+            }
+            write(None, text.as_bytes())?;
+        }
+        Command::Sii {
+            output,
+            hex,
+            device,
+        } => {
+            let image = ecat_esi::sii_image(find(&device)?.description);
             let data = if hex {
                 ihex::encode(&image).into_bytes()
             } else {

@@ -25,10 +25,10 @@
 #![allow(missing_docs)]
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use ecat_slave::wire::coe::{CoeHeader, CoeService, DownloadKind, SdoRequest, SdoResponse};
+use ecat_slave::wire::mailbox::MailboxType;
 use master_test::VirtualBus;
 use master_test::mailbox::{ClientError, MailboxClient, MailboxGeometry};
-use pam_slave::wire::coe::{CoeHeader, CoeService, DownloadKind, SdoRequest, SdoResponse};
-use pam_slave::wire::mailbox::MailboxType;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 

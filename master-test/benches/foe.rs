@@ -8,11 +8,11 @@
 #![allow(missing_docs)]
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use ecat_slave::firmware::{EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, pack};
 use master_test::VirtualBus;
 use master_test::foe::{self, enter_boot};
 use master_test::mailbox::{MailboxClient, MailboxGeometry};
-use pam_slave::device::{PRODUCT_CODE, VENDOR_ID};
-use pam_slave::firmware::{EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, pack};
+use pam_199_p_etc::{PRODUCT_CODE, VENDOR_ID};
 use std::time::{Duration, Instant};
 
 const LEN: usize = 1024 * 1024;

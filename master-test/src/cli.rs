@@ -6,9 +6,25 @@
 //! Everything here is pure (no bus); the subcommands of the `master-test`
 //! binary and [`crate::od`] do the talking.
 
-use pam_slave::od::model::ENUMS;
-use pam_slave::od::types::EnumDesc;
+use ecat_slave::od::types::EnumDesc;
 use std::fmt;
+use std::sync::RwLock;
+
+/// The enumeration data types of the device the tool talks to (SDO
+/// Information reports an enumeration only by its type index).
+static ENUMS: RwLock<&'static [&'static EnumDesc]> = RwLock::new(pam_199_p_etc::od::ENUMS);
+
+/// Uses the enumeration types of another device (from its dictionary) to
+/// name enumeration values.
+pub fn use_enums(enums: &'static [&'static EnumDesc]) {
+    if let Ok(mut e) = ENUMS.write() {
+        *e = enums;
+    }
+}
+
+fn enums() -> &'static [&'static EnumDesc] {
+    ENUMS.read().map_or(&[][..], |e| *e)
+}
 
 /// Parses an object address `INDEX:SUB`.
 ///
@@ -95,7 +111,7 @@ pub fn kind(code: u16) -> Kind {
         0x0002..=0x0004 | 0x0015 => Kind::Signed,
         0x0005..=0x0007 | 0x001B | 0x0030..=0x0037 => Kind::Unsigned,
         0x0009 => Kind::Text,
-        c => ENUMS
+        c => enums()
             .iter()
             .find(|e| e.index == c)
             .map_or(Kind::Other, |e| Kind::Enum(e)),

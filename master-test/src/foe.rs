@@ -3,9 +3,9 @@
 //! download, INIT).
 
 use crate::mailbox::{ClientError, MailboxClient};
+use ecat_slave::wire::foe::{FoeRepr, HEADER_LEN};
+use ecat_slave::wire::mailbox::MailboxType;
 use ethercrab::{Command, MainDevice};
-use pam_slave::wire::foe::{FoeRepr, HEADER_LEN};
-use pam_slave::wire::mailbox::MailboxType;
 use std::time::{Duration, Instant};
 
 fn reply(payload: &[u8]) -> Result<FoeRepr<'_>, ClientError> {
@@ -180,10 +180,20 @@ pub async fn request_state(
     }
 }
 
-/// INIT, SM0/SM1 set to the bootstrap mailbox from the SII, then BOOT.
+/// INIT, SM0/SM1 set to the PAM-199-P-ETC's bootstrap mailbox, then BOOT
+/// (see [`enter_boot_with`] for another device).
 pub async fn enter_boot(md: &MainDevice<'_>, station: u16) -> Result<(), ClientError> {
+    enter_boot_with(md, station, &pam_199_p_etc::DEVICE.layout()).await
+}
+
+/// INIT, SM0/SM1 set to the bootstrap mailbox of `l` (what the device's SII
+/// says), then BOOT.
+pub async fn enter_boot_with(
+    md: &MainDevice<'_>,
+    station: u16,
+    l: &ecat_slave::device::MemoryLayout,
+) -> Result<(), ClientError> {
     request_state(md, station, 0x11).await?;
-    let l = pam_slave::device::LAYOUT;
     for (n, (start, len), control) in [(0u16, l.boot_out, 0x26u8), (1, l.boot_in, 0x22)] {
         let mut b = [0u8; 8];
         b[0..2].copy_from_slice(&start.to_le_bytes());

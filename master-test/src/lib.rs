@@ -1,8 +1,9 @@
-//! # master-test: an ethercrab master for software PAM-199 slaves
+//! # master-test: an ethercrab master for software slaves
 //!
 //! [`VirtualBus`] puts an ethercrab [`MainDevice`] on a virtual link
-//! ([`link`]) to a chain of software slaves: real EtherCAT frames, no
-//! sockets, no root. Integration tests and the demo CLI use it.
+//! ([`link`]) to a line of software slaves of any devices of the catalog
+//! (PAM-199-P-ETC by default): real EtherCAT frames, no sockets, no root.
+//! Integration tests and the demo CLI use it.
 
 pub mod cli;
 pub mod foe;
@@ -43,6 +44,14 @@ pub enum BusError {
     /// Not every slave reached OP within 10 s of cyclic exchange.
     #[error("not every slave reached OP within 10 s")]
     NotOp,
+    /// The line named an unknown device.
+    #[error("{0}")]
+    Line(device_catalog::CatalogError),
+}
+
+/// A line of `n` PAM-199-P-ETC slaves in their power-on state.
+pub fn pam_line(n: usize) -> Chain {
+    Chain::of(n, pam_199_p_etc::Pam::default)
 }
 
 /// Timeouts suited to the in-process link on a busy CI machine.
@@ -69,23 +78,35 @@ pub struct VirtualBus {
 }
 
 impl VirtualBus {
-    /// `n` slaves on real time.
+    /// `n` PAM-199-P-ETC slaves on real time.
     pub fn new(n: usize) -> Result<Self, BusError> {
         Self::with_clock(n, Clock::real())
     }
 
-    /// `n` slaves whose firmware sees `clock`.
+    /// `n` PAM-199-P-ETC slaves whose firmware sees `clock`.
     pub fn with_clock(n: usize, clock: Clock) -> Result<Self, BusError> {
         Self::with_options(n, clock, None)
     }
 
-    /// `n` slaves on `clock`, capturing every frame to the pcap file `pcap`.
+    /// `n` PAM-199-P-ETC slaves on `clock`, capturing every frame to the
+    /// pcap file `pcap`.
     pub fn with_options(
         n: usize,
         clock: Clock,
         pcap: Option<&std::path::Path>,
     ) -> Result<Self, BusError> {
-        Self::with_chain(Chain::new(n), clock, pcap)
+        Self::with_chain(pam_line(n), clock, pcap)
+    }
+
+    /// The line `spec` of catalog devices (`pam,io8,pam`, `io8*4`) on
+    /// `clock`.
+    pub fn line(spec: &str, clock: Clock) -> Result<Self, BusError> {
+        let entries = device_catalog::parse_line(spec).map_err(BusError::Line)?;
+        Self::with_chain(
+            Chain::with_slaves(device_catalog::slaves(&entries)),
+            clock,
+            None,
+        )
     }
 
     /// A bus over a prepared line of slaves.
@@ -95,7 +116,7 @@ impl VirtualBus {
         pcap: Option<&std::path::Path>,
     ) -> Result<Self, BusError> {
         let pcap = pcap
-            .map(pam_slave::host::pcap::PcapWriter::create)
+            .map(ecat_slave::host::pcap::PcapWriter::create)
             .transpose()?;
         Self::on_shared(Arc::new(Mutex::new(chain)), clock, pcap)
     }
@@ -111,7 +132,7 @@ impl VirtualBus {
     fn on_shared(
         chain: SharedChain,
         clock: Clock,
-        pcap: Option<pam_slave::host::pcap::PcapWriter<std::io::BufWriter<std::fs::File>>>,
+        pcap: Option<ecat_slave::host::pcap::PcapWriter<std::io::BufWriter<std::fs::File>>>,
     ) -> Result<Self, BusError> {
         // Each bus owns its storage for the life of the process; tests
         // create a handful, so leaking is the simple, safe choice.

@@ -6,9 +6,9 @@
 //! [`PduRx`]. The slaves' firmware is polled after every frame and at least
 //! every millisecond, with time from a [`Clock`] the test controls.
 
+pub use ecat_slave::host::chain::Chain;
+use ecat_slave::host::pcap::PcapWriter;
 use ethercrab::{PduRx, PduTx};
-pub use pam_slave::host::chain::Chain;
-use pam_slave::host::pcap::PcapWriter;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::task::{Wake, Waker};

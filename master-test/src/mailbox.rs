@@ -4,17 +4,17 @@
 //! mailbox (SM1) status and reads it with FPRD, and implements what
 //! ethercrab 0.7 lacks: normal and segmented SDO transfers in both
 //! directions, complete access, mailbox error replies and repeat requests.
-//! Frames are encoded and decoded with `pam_slave::wire`, the same views
+//! Frames are encoded and decoded with `ecat_slave::wire`, the same views
 //! the slave uses; the SDO state machine on each side is separate code.
 
-use ethercrab::{Command, MainDevice};
-use pam_slave::wire::coe::{
+use ecat_slave::wire::coe::{
     CoeHeader, CoeService, DownloadKind, SdoAbortCode, SdoRequest, SdoResponse,
 };
-use pam_slave::wire::mailbox::{
+use ecat_slave::wire::mailbox::{
     HEADER_LEN, Mailbox, MailboxError as WireMailboxError, MailboxErrorCode, MailboxRepr,
     MailboxType, next_counter,
 };
+use ethercrab::{Command, MainDevice};
 use std::time::{Duration, Instant};
 
 /// Errors of the mailbox client.
@@ -97,22 +97,27 @@ pub struct MailboxGeometry {
 }
 
 impl MailboxGeometry {
-    /// The PAM-199's bootstrap mailbox (BOOT state).
+    /// The PAM-199-P-ETC's bootstrap mailbox (BOOT state).
     pub fn bootstrap() -> Self {
-        let l = pam_slave::device::LAYOUT;
+        Self::bootstrap_of(&pam_199_p_etc::DEVICE.layout())
+    }
+
+    /// The PAM-199-P-ETC's standard mailbox (128 bytes at 0x1000/0x1080,
+    /// the core's default).
+    pub fn standard() -> Self {
+        Self::of(&pam_199_p_etc::DEVICE.layout())
+    }
+
+    /// The bootstrap mailbox of a memory layout.
+    pub fn bootstrap_of(l: &ecat_slave::device::MemoryLayout) -> Self {
         MailboxGeometry {
             out: l.boot_out,
             inp: l.boot_in,
         }
     }
 
-    /// The PAM-199's standard mailbox.
-    pub fn standard() -> Self {
-        Self::of(&pam_slave::device::LAYOUT)
-    }
-
     /// The standard mailbox of a memory layout.
-    pub fn of(l: &pam_slave::device::MemoryLayout) -> Self {
+    pub fn of(l: &ecat_slave::device::MemoryLayout) -> Self {
         MailboxGeometry {
             out: l.mbx_out,
             inp: l.mbx_in,

@@ -1,5 +1,6 @@
-//! `master-test`: the demo and tools for software PAM-199 slaves on the
-//! built-in virtual EtherCAT link.
+//! `master-test`: the demo and tools for software slaves on the built-in
+//! virtual EtherCAT link (the PAM-199-P-ETC, or any catalog device with
+//! `--device`).
 //!
 //! * `demo` (the default): OP, SDO parameters, a set-point.
 //! * `sdo read|write INDEX:SUB [VALUE]`: one entry, typed by the slave's
@@ -24,6 +25,10 @@ use std::time::Duration;
     about = "ethercrab master driving software PAM-199-P-ETC slaves on a virtual EtherCAT link"
 )]
 struct Cli {
+    /// The device the `sdo`, `od`, `foe` and `firmware` commands talk to
+    /// (pam, io8, ...; see `esi devices`). The demo always runs the PAM.
+    #[arg(long, global = true, default_value = "pam")]
+    device: String,
     #[command(subcommand)]
     command: Option<Cmd>,
 }
@@ -162,6 +167,14 @@ enum OdCmd {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let dev = match device_catalog::find(&cli.device) {
+        Ok(d) => d,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    cli::use_enums(dev.description.dictionary.enums());
     let cmd = cli.command.unwrap_or(Cmd::Demo {
         slaves: 1,
         current: 1500,
@@ -179,13 +192,13 @@ fn main() -> ExitCode {
         } => smol::block_on(demo(slaves, current, command, cycles, pcap.as_deref())),
         Cmd::Sdo {
             op: SdoCmd::Read { address, raw },
-        } => smol::block_on(sdo_read(&address, raw)),
+        } => smol::block_on(sdo_read(dev, &address, raw)),
         Cmd::Sdo {
             op: SdoCmd::Write { address, value },
-        } => smol::block_on(sdo_write(&address, &value)),
+        } => smol::block_on(sdo_write(dev, &address, &value)),
         Cmd::Od {
             op: OdCmd::Dump { json },
-        } => smol::block_on(od_dump(json)),
+        } => smol::block_on(od_dump(dev, json)),
         Cmd::Foe {
             op:
                 FoeCmd::Write {
@@ -193,10 +206,10 @@ fn main() -> ExitCode {
                     password,
                     name,
                 },
-        } => smol::block_on(foe_write(&file, &password, &name)),
+        } => smol::block_on(foe_write(dev, &file, &password, &name)),
         Cmd::Foe {
             op: FoeCmd::Read { name, output },
-        } => smol::block_on(foe_read(&name, output.as_deref())),
+        } => smol::block_on(foe_read(dev, &name, output.as_deref())),
         Cmd::Firmware {
             op:
                 FirmwareCmd::Pack {
@@ -206,7 +219,7 @@ fn main() -> ExitCode {
                     revision_min,
                     revision_max,
                 },
-        } => firmware_pack(&binary, &version, &output, revision_min, revision_max),
+        } => firmware_pack(dev, &binary, &version, &output, revision_min, revision_max),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -310,13 +323,13 @@ async fn demo(
     {
         let chain = lock(&bus.chain);
         for (i, s) in chain.slaves().iter().enumerate() {
-            let st = &s.slave().store;
+            let st = s.od();
             println!(
                 "slave {i}: 0x7000:01 ENABLE = {}, 0x7000:03 COMMAND VALUE = {}, IA = {} mA, AL {}",
                 st.get(0x7000, 1).unwrap_or(0),
                 st.get(0x7000, 3).unwrap_or(0),
                 st.get(0x6000, 6).unwrap_or(0),
-                s.slave().al_status().state
+                s.al_status().state
             );
         }
     }
@@ -340,16 +353,18 @@ type BoxError = Box<dyn std::error::Error>;
 /// Runs `f` with a mailbox client for the one slave of a fresh virtual bus
 /// in PRE-OP.
 async fn with_client<T>(
+    dev: &device_catalog::DeviceEntry,
     f: impl AsyncFnOnce(&mut MailboxClient<'_>) -> Result<T, BoxError>,
 ) -> Result<T, BoxError> {
-    let bus = VirtualBus::new(1)?;
+    let bus = VirtualBus::line(dev.key, master_test::link::Clock::real())?;
     let md = &*bus.maindevice;
     let group = bus.init().await?;
     let station = group
         .subdevice(md, 0)
         .map_err(|e| format!("no slave on the virtual bus: {e}"))?
         .configured_address();
-    let mut client = MailboxClient::new(md, station, MailboxGeometry::standard());
+    let geometry = MailboxGeometry::of(&dev.description.layout());
+    let mut client = MailboxClient::new(md, station, geometry);
     f(&mut client).await
 }
 
@@ -372,9 +387,13 @@ fn describe(e: &EntryInfo, value: &str, unit: bool) -> String {
     )
 }
 
-async fn sdo_read(address: &str, raw: bool) -> Result<(), BoxError> {
+async fn sdo_read(
+    dev: &device_catalog::DeviceEntry,
+    address: &str,
+    raw: bool,
+) -> Result<(), BoxError> {
     let (index, sub) = cli::parse_address(address)?;
-    with_client(async |c| {
+    with_client(dev, async |c| {
         let e = sdo_info::entry_description(c, index, sub, value_info::UNIT).await?;
         let bytes = c.sdo_upload(index, sub, false).await?;
         let shown = if raw {
@@ -388,9 +407,13 @@ async fn sdo_read(address: &str, raw: bool) -> Result<(), BoxError> {
     .await
 }
 
-async fn sdo_write(address: &str, value: &str) -> Result<(), BoxError> {
+async fn sdo_write(
+    dev: &device_catalog::DeviceEntry,
+    address: &str,
+    value: &str,
+) -> Result<(), BoxError> {
     let (index, sub) = cli::parse_address(address)?;
-    with_client(async |c| {
+    with_client(dev, async |c| {
         let e = sdo_info::entry_description(c, index, sub, value_info::UNIT).await?;
         let bytes = cli::parse_value(e.data_type, e.bit_len, value).map_err(|m| {
             format!(
@@ -420,8 +443,8 @@ async fn sdo_write(address: &str, value: &str) -> Result<(), BoxError> {
     .await
 }
 
-async fn od_dump(json: bool) -> Result<(), BoxError> {
-    let result = with_client(async |c| {
+async fn od_dump(dev: &device_catalog::DeviceEntry, json: bool) -> Result<(), BoxError> {
+    let result = with_client(dev, async |c| {
         let stdout = std::io::stdout();
         let mut out = std::io::BufWriter::new(stdout.lock());
         let objects = sdo_info::od_list(c, sdo_info::list_type::ALL).await?;
@@ -576,6 +599,7 @@ fn describe_inputs(b: &[u8]) -> String {
 
 /// `foe write`: BOOT, download with a progress bar, INIT, power cycle.
 async fn foe_write(
+    dev: &device_catalog::DeviceEntry,
     file: &std::path::Path,
     password: &str,
     name: &str,
@@ -583,14 +607,22 @@ async fn foe_write(
     let image = std::fs::read(file).map_err(|e| format!("cannot read {}: {e}", file.display()))?;
     let password = u32::from_str_radix(password.trim_start_matches("0x"), 16)
         .map_err(|_| format!("--password must be hex, got '{password}'"))?;
-    let bus = VirtualBus::new(1)?;
+    let layout = dev.description.layout();
+    if !dev.description.mailbox.foe || !layout.has_boot() {
+        return Err(format!(
+            "{} offers no firmware update over FoE",
+            dev.description.names.type_name
+        )
+        .into());
+    }
+    let bus = VirtualBus::line(dev.key, master_test::link::Clock::real())?;
     let md = &*bus.maindevice;
     let group = bus.init().await?;
     let station = group.subdevice(md, 0)?.configured_address();
     let before: heapless::String<32> = group.subdevice(md, 0)?.sdo_read(0x100A, 0).await?;
     println!("slave {station:#06x} runs firmware {before}; switching to BOOT");
-    master_test::foe::enter_boot(md, station).await?;
-    let mut client = MailboxClient::new(md, station, MailboxGeometry::bootstrap());
+    master_test::foe::enter_boot_with(md, station, &layout).await?;
+    let mut client = MailboxClient::new(md, station, MailboxGeometry::bootstrap_of(&layout));
     let bar = indicatif::ProgressBar::new(image.len() as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
@@ -620,14 +652,16 @@ async fn foe_write(
 
 /// `foe read`: a file from one slave in PRE-OP.
 async fn foe_read(
+    dev: &device_catalog::DeviceEntry,
     name: &str,
     output: Option<&std::path::Path>,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    let bus = VirtualBus::new(1)?;
+    let bus = VirtualBus::line(dev.key, master_test::link::Clock::real())?;
     let md = &*bus.maindevice;
     let group = bus.init().await?;
     let station = group.subdevice(md, 0)?.configured_address();
-    let mut client = MailboxClient::new(md, station, MailboxGeometry::standard());
+    let geometry = MailboxGeometry::of(&dev.description.layout());
+    let mut client = MailboxClient::new(md, station, geometry);
     let data = master_test::foe::read(&mut client, name, 0).await?;
     match output {
         Some(p) => {
@@ -641,13 +675,14 @@ async fn foe_read(
 
 /// `firmware pack`: header with identity, revision range, version, CRC.
 fn firmware_pack(
+    dev: &device_catalog::DeviceEntry,
     binary: &std::path::Path,
     version: &str,
     output: &std::path::Path,
     revision_min: u32,
     revision_max: u32,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    use pam_slave::firmware::{EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, pack};
+    use ecat_slave::firmware::{EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, pack};
     let payload =
         std::fs::read(binary).map_err(|e| format!("cannot read {}: {e}", binary.display()))?;
     let version = FirmwareVersion::new(version)
@@ -655,8 +690,8 @@ fn firmware_pack(
     let header = EfwHeaderRepr {
         header_len: EFW_HEADER_LEN as u16,
         flags: 0,
-        vendor_id: pam_slave::device::VENDOR_ID,
-        product_code: pam_slave::device::PRODUCT_CODE,
+        vendor_id: dev.description.identity.vendor_id,
+        product_code: dev.description.identity.product_code,
         revision_min,
         revision_max,
         version,

@@ -2,7 +2,7 @@
 //!
 //! Get OD List, Get Object Description and Get Entry Description, with
 //! reassembly of fragmented responses. Frames are built and read with the
-//! views of `pam_slave::wire::coe`; the service data layout (list types,
+//! views of `ecat_slave::wire::coe`; the service data layout (list types,
 //! value info, the order of the optional values) is decoded here from the
 //! specification, independently of the slave's server, so that an encoding
 //! mistake on one side shows up as a test failure.
@@ -12,10 +12,10 @@
 //! lists); Emergency messages arriving in between are skipped.
 
 use crate::mailbox::{ClientError, MailboxClient};
-use pam_slave::wire::coe::{
+use ecat_slave::wire::coe::{
     CoeHeader, CoeService, SDO_INFO_HEADER_LEN, SdoAbortCode, SdoInfo, SdoInfoOpcode,
 };
-use pam_slave::wire::mailbox::{MailboxError as WireMailboxError, MailboxType};
+use ecat_slave::wire::mailbox::{MailboxError as WireMailboxError, MailboxType};
 
 /// OD list types of Get OD List (ETG.1000.6 5.6.3.3).
 pub mod list_type {

@@ -5,7 +5,8 @@
 use crate::common::abort_code;
 use master_test::link::{Clock, lock};
 use master_test::{Group, VirtualBus};
-use pam_slave::app::power_stage::{Fault, Solenoid};
+use pam_199_p_etc::Pam;
+use pam_199_p_etc::app::power_stage::{Fault, Solenoid};
 use std::time::Duration;
 
 type OpGroup = Group<ethercrab::subdevice_group::Op>;
@@ -71,8 +72,11 @@ fn open_wire_drops_ready_and_sens_on_recovers_only_after_enable_off_on() {
         let (bus, group) = setup(2).await;
         let md = &*bus.maindevice;
         cycles(&bus, &group, 200, true, 5000).await;
-        lock(&bus.chain).slaves_mut()[0]
+        lock(&bus.chain)
+            .slave_mut::<Pam>(0)
+            .expect("a PAM")
             .slave_mut()
+            .app_mut()
             .stage_mut()
             .inject(Fault::OpenWire(Solenoid::A));
         let inp = cycles(&bus, &group, 20, true, 5000).await;
@@ -86,8 +90,11 @@ fn open_wire_drops_ready_and_sens_on_recovers_only_after_enable_off_on() {
         let sd = group.subdevice(md, 0).expect("slave");
         let open: u8 = sd.sdo_read(0xA010, 2).await.expect("diag");
         assert_eq!(open, 1);
-        lock(&bus.chain).slaves_mut()[0]
+        lock(&bus.chain)
+            .slave_mut::<Pam>(0)
+            .expect("a PAM")
             .slave_mut()
+            .app_mut()
             .stage_mut()
             .clear_faults();
         let inp = cycles(&bus, &group, 2000, true, 5000).await;
@@ -108,14 +115,20 @@ fn sens_auto_resumes_by_itself_once_the_fault_has_gone() {
     smol::block_on(async {
         let (bus, group) = setup(3).await;
         cycles(&bus, &group, 200, true, 5000).await;
-        lock(&bus.chain).slaves_mut()[0]
+        lock(&bus.chain)
+            .slave_mut::<Pam>(0)
+            .expect("a PAM")
             .slave_mut()
+            .app_mut()
             .stage_mut()
             .inject(Fault::OpenWire(Solenoid::A));
         let inp = cycles(&bus, &group, 20, true, 5000).await;
         assert_eq!(inp[0] & 1, 0);
-        lock(&bus.chain).slaves_mut()[0]
+        lock(&bus.chain)
+            .slave_mut::<Pam>(0)
+            .expect("a PAM")
             .slave_mut()
+            .app_mut()
             .stage_mut()
             .clear_faults();
         // Checked each second: within 1.2 s it runs again.
@@ -185,7 +198,7 @@ fn manufacturer_settings_need_the_vendor_password() {
             .await
             .expect_err("wrong password");
         assert_eq!(abort_code(&e), Some(0x0609_0030));
-        sd.sdo_write(0xF801, 1, pam_slave::device::VENDOR_PASSWORD)
+        sd.sdo_write(0xF801, 1, pam_199_p_etc::VENDOR_PASSWORD)
             .await
             .expect("password");
         sd.sdo_write(0xF80F, 1, 7u16).await.expect("unlocked");
@@ -226,11 +239,11 @@ fn eeprom_data_error_at_power_on_keeps_the_stage_off_until_save() {
         let md = &*bus.maindevice;
         {
             let mut chain = lock(&bus.chain);
-            let slave = &mut chain.slaves_mut()[0];
+            let slave = chain.slave_mut::<Pam>(0).expect("a PAM");
             // A stored set with one flipped bit: CRC mismatch, no valid set.
-            let store = slave.slave().store.clone();
-            pam_slave::params::save(&store, slave.slave_mut().nv_mut()).expect("save");
-            slave.slave_mut().nv_mut().bytes_mut()[40] ^= 0x01;
+            let (app, od) = slave.slave_mut().app_and_od();
+            ecat_slave::params::save(od, app.nv_mut()).expect("save");
+            app.nv_mut().bytes_mut()[40] ^= 0x01;
             slave.power_cycle();
         }
         let group = bus.init().await.expect("init");

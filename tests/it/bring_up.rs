@@ -46,16 +46,8 @@ async fn bring_up(n: usize) {
     }
     let chain = lock(&bus.chain);
     for (i, s) in chain.slaves().iter().enumerate() {
-        assert_eq!(
-            s.slave().store.get(0x7000, 1),
-            Some(1),
-            "ENABLE reached slave {i}"
-        );
-        assert_eq!(
-            s.slave().store.get(0x7000, 3),
-            Some(i as i64 * 10),
-            "slave {i}"
-        );
+        assert_eq!(s.od().get(0x7000, 1), Some(1), "ENABLE reached slave {i}");
+        assert_eq!(s.od().get(0x7000, 3), Some(i as i64 * 10), "slave {i}");
     }
 }
 
@@ -96,8 +88,7 @@ fn outputs_reach_the_slave_and_inputs_reach_the_master_at_the_mapped_offset() {
         }
         // IA (0x6000:06) set inside the second slave.
         lock(&bus.chain).slaves_mut()[1]
-            .slave_mut()
-            .store
+            .od_mut()
             .set(0x6000, 6, 750);
         for _ in 0..3 {
             group.tx_rx(md).await.expect("tx_rx");
@@ -105,12 +96,8 @@ fn outputs_reach_the_slave_and_inputs_reach_the_master_at_the_mapped_offset() {
         {
             let chain = lock(&bus.chain);
             for (i, s) in chain.slaves().iter().enumerate() {
-                assert_eq!(
-                    s.slave().store.get(0x7000, 1),
-                    Some(1),
-                    "ENABLE of slave {i}"
-                );
-                assert_eq!(s.slave().store.get(0x7000, 3), Some(-1234 - i as i64));
+                assert_eq!(s.od().get(0x7000, 1), Some(1), "ENABLE of slave {i}");
+                assert_eq!(s.od().get(0x7000, 3), Some(-1234 - i as i64));
             }
         }
         let sd = group.subdevice(md, 1).expect("slave 1");

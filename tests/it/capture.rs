@@ -1,9 +1,9 @@
 //! pcap capture of the virtual link: every frame in both directions, in a
 //! file Wireshark's EtherCAT dissector reads.
 
+use ecat_slave::host::pcap::read_all;
 use master_test::VirtualBus;
 use master_test::link::Clock;
-use pam_slave::host::pcap::read_all;
 use std::process::Command;
 
 #[test]

@@ -1,10 +1,10 @@
 //! CoE through the test master's own mailbox client: complete access,
 //! segmented transfers, mailbox errors and counters.
 
+use ecat_slave::wire::coe::SdoAbortCode;
+use ecat_slave::wire::mailbox::{MailboxErrorCode, MailboxType};
 use master_test::VirtualBus;
 use master_test::mailbox::{ClientError, MailboxClient, MailboxGeometry};
-use pam_slave::wire::coe::SdoAbortCode;
-use pam_slave::wire::mailbox::{MailboxErrorCode, MailboxType};
 
 #[test]
 fn complete_access_reads_and_writes_all_42_curve_points_in_one_transfer() {
@@ -168,8 +168,8 @@ fn malformed_mailboxes_get_error_replies_and_repeated_counters_run_once() {
             "no second response: not executed again"
         );
         let writes = master_test::link::lock(&bus.chain).slaves()[0]
-            .slave()
             .nv()
+            .expect("the PAM stores parameters")
             .write_count();
         assert_eq!(writes, 1, "EEPROM written once");
         // Same counter, different content (another master's sequence): served.
@@ -182,8 +182,8 @@ fn malformed_mailboxes_get_error_replies_and_repeated_counters_run_once() {
 }
 
 /// A valid value other than the default for an RW entry, as bytes.
-fn other_value(e: &pam_slave::od::types::Entry) -> Option<Vec<u8>> {
-    use pam_slave::od::types::{DataType, DefaultValue};
+fn other_value(e: &ecat_slave::od::types::Entry) -> Option<Vec<u8>> {
+    use ecat_slave::od::types::{DataType, DefaultValue};
     let DefaultValue::Int(d) = e.default else {
         return None;
     };
@@ -202,16 +202,15 @@ fn other_value(e: &pam_slave::od::types::Entry) -> Option<Vec<u8>> {
 
 #[test]
 fn every_entry_reads_its_default_and_every_rw_entry_round_trips_both_paths() {
-    use pam_slave::od::model;
-    use pam_slave::od::store::ObjectStore;
-    use pam_slave::od::types::Access;
+    use ecat_slave::od::types::Access;
+    use pam_199_p_etc::od as model;
     smol::block_on(async {
         let bus = VirtualBus::new(1).expect("bus");
         let md = &*bus.maindevice;
         let group = bus.init().await.expect("init");
         let station = group.subdevice(md, 0).expect("slave").configured_address();
         let mut c = MailboxClient::new(md, station, MailboxGeometry::standard());
-        let defaults = ObjectStore::new();
+        let defaults = pam_199_p_etc::store();
         let (mut read, mut written) = (0, 0);
         for obj in model::OBJECTS {
             for e in obj.entries {
@@ -275,9 +274,9 @@ fn every_entry_reads_its_default_and_every_rw_entry_round_trips_both_paths() {
 
 #[test]
 fn an_injected_fault_produces_an_emergency_the_master_decodes() {
+    use ecat_slave::wire::coe::{CoeHeader, CoeService, Emergency, EmergencyRepr};
     use master_test::link::lock;
-    use pam_slave::app::power_stage::{Fault, Solenoid};
-    use pam_slave::wire::coe::{CoeHeader, CoeService, Emergency, EmergencyRepr};
+    use pam_199_p_etc::app::power_stage::{Fault, Solenoid};
     smol::block_on(async {
         // Simulated time: 1 ms per cycle, so no SM watchdog trip on a slow
         // machine can put another emergency first.
@@ -295,8 +294,11 @@ fn an_injected_fault_produces_an_emergency_the_master_decodes() {
             bus.clock.advance(std::time::Duration::from_millis(1));
             group.tx_rx(md).await.unwrap();
         }
-        lock(&bus.chain).slaves_mut()[0]
+        lock(&bus.chain)
+            .slave_mut::<pam_199_p_etc::Pam>(0)
+            .expect("a PAM")
             .slave_mut()
+            .app_mut()
             .stage_mut()
             .inject(Fault::ShortCircuit(Solenoid::A));
         let mut c = MailboxClient::new(md, station, MailboxGeometry::standard());
@@ -324,13 +326,18 @@ fn an_injected_fault_produces_an_emergency_the_master_decodes() {
 
 #[test]
 fn a_48_byte_mailbox_is_advertised_in_the_sii_and_long_uploads_are_segmented() {
+    use ecat_slave::device::{MemoryLayout, SoftSlave};
     use master_test::link::{Chain, Clock};
-    use pam_slave::device::{MemoryLayout, SoftSlave};
-    let layout = MemoryLayout::with_mailbox_size(48).expect("valid size");
-    assert!(MemoryLayout::with_mailbox_size(8).is_none());
-    assert!(MemoryLayout::with_mailbox_size(4096).is_none());
+    let pam = pam_199_p_etc::DEVICE.layout();
+    let layout = pam.with_mailbox_size(48).expect("valid size");
+    assert!(pam.with_mailbox_size(8).is_none());
+    assert!(pam.with_mailbox_size(4096).is_none());
+    let _ = MemoryLayout::new(48, None).expect("a layout without BOOT");
     smol::block_on(async {
-        let chain = Chain::with_slaves(vec![SoftSlave::with_layout(layout)]);
+        let chain = Chain::with_slaves(vec![Box::new(SoftSlave::with_layout(
+            pam_199_p_etc::Pam::default(),
+            layout,
+        ))]);
         let bus = VirtualBus::with_chain(chain, Clock::real(), None).expect("bus");
         let md = &*bus.maindevice;
         let group = bus
@@ -409,7 +416,7 @@ fn od_dump_of_a_fresh_slave_has_no_error_rows_and_padding_agrees_everywhere() {
 
 #[test]
 fn an_abort_travels_in_coe_service_2_as_etg_1000_6_and_soem_expect() {
-    use pam_slave::wire::coe::{CoeHeader, CoeService, SdoRequest};
+    use ecat_slave::wire::coe::{CoeHeader, CoeService, SdoRequest};
     smol::block_on(async {
         let bus = VirtualBus::new(1).expect("bus");
         let md = &*bus.maindevice;

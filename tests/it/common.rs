@@ -68,10 +68,12 @@ pub fn runner_binary() -> Option<PathBuf> {
     let exe = std::env::current_exe().ok()?;
     let dir = exe.parent()?.parent()?;
     let bin = dir.join("pam-slave");
-    if !bin.exists() {
+    // Always (re)build: cargo does nothing when it is up to date, and a
+    // stale runner from an older checkout must not be tested.
+    {
         let profile_release = dir.file_name().is_some_and(|n| n == "release");
         let mut cmd = Command::new(env!("CARGO"));
-        cmd.args(["build", "-p", "pam-slave", "--bin", "pam-slave"]);
+        cmd.args(["build", "-p", "device-catalog", "--bin", "pam-slave"]);
         if profile_release {
             cmd.arg("--release");
         }

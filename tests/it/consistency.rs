@@ -1,11 +1,11 @@
 //! One source of truth: the generated ESI, the model and what the live
 //! slave reports over SDO Information and SDO must agree.
 
+use ecat_esi::xml::{Element, hex_binary, hex_dec};
 use master_test::VirtualBus;
 use master_test::mailbox::{MailboxClient, MailboxGeometry};
 use master_test::sdo_info::{entry_description, object_description, od_list};
-use pam_esi::xml::{Element, hex_binary, hex_dec};
-use pam_slave::od::model;
+use pam_199_p_etc::od as model;
 use std::collections::BTreeMap;
 
 /// CoE data type code of an ESI type name.
@@ -175,8 +175,8 @@ fn access_bits(esi: &str) -> Option<u16> {
 
 #[test]
 fn esi_dictionary_equals_what_sdo_information_reports_live() {
-    let xml = pam_esi::generate(&pam_esi::Capabilities::default()).expect("ESI");
-    let doc = pam_esi::xml::parse(std::str::from_utf8(&xml).unwrap()).expect("parse");
+    let xml = ecat_esi::generate(&pam_199_p_etc::DEVICE).expect("ESI");
+    let doc = ecat_esi::xml::parse(std::str::from_utf8(&xml).unwrap()).expect("parse");
     let esi = esi_dictionary(&doc);
     smol::block_on(async {
         let bus = VirtualBus::new(1).expect("bus");
@@ -285,8 +285,8 @@ fn esi_dictionary_equals_what_sdo_information_reports_live() {
 
 #[test]
 fn esi_pdo_sets_equal_the_live_mapping_and_assignment_objects() {
-    let xml = pam_esi::generate(&pam_esi::Capabilities::default()).expect("ESI");
-    let doc = pam_esi::xml::parse(std::str::from_utf8(&xml).unwrap()).expect("parse");
+    let xml = ecat_esi::generate(&pam_199_p_etc::DEVICE).expect("ESI");
+    let doc = ecat_esi::xml::parse(std::str::from_utf8(&xml).unwrap()).expect("parse");
     let dev = doc.path("Descriptions/Devices/Device").expect("device");
     smol::block_on(async {
         let bus = VirtualBus::new(1).expect("bus");

@@ -4,20 +4,20 @@
 //! reported at BOOT->INIT, and nothing queued before INIT reaches the next
 //! master session.
 
+use ecat_slave::esc::EscError;
+use ecat_slave::esc::soft::PdiFault;
+use ecat_slave::firmware::{
+    BootState, EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, ImageStore, Slot, StoreError, pack,
+};
+use ecat_slave::host::chain::{IMAGE_SLOT_CAPACITY, provision_factory};
+use ecat_slave::host::image_store::VecStore;
+use ecat_slave::wire::coe::{CoeHeader, CoeService, Emergency, EmergencyRepr};
+use ecat_slave::wire::mailbox::MailboxType;
 use master_test::VirtualBus;
 use master_test::foe::{self, enter_boot};
 use master_test::link::{Chain, Clock, lock};
 use master_test::mailbox::{ClientError, MailboxClient, MailboxGeometry};
-use pam_slave::device::{PRODUCT_CODE, SoftSlave, VENDOR_ID};
-use pam_slave::esc::EscError;
-use pam_slave::esc::soft::PdiFault;
-use pam_slave::firmware::{
-    BootState, EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, ImageStore, Slot, StoreError, pack,
-};
-use pam_slave::host::chain::{IMAGE_SLOT_CAPACITY, provision_factory};
-use pam_slave::host::image_store::VecStore;
-use pam_slave::wire::coe::{CoeHeader, CoeService, Emergency, EmergencyRepr};
-use pam_slave::wire::mailbox::MailboxType;
+use pam_199_p_etc::{PRODUCT_CODE, Pam, VENDOR_ID};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -87,7 +87,6 @@ fn safeop_to_op_is_refused_when_the_watchdog_status_cannot_be_read() {
         group.tx_rx(md).await.expect("outputs");
         // The SM watchdog status register 0x0440 cannot be read over the PDI.
         lock(&bus.chain).slaves_mut()[0]
-            .slave_mut()
             .esc_mut()
             .set_pdi_fault(Some(PdiFault::reads(0x0440, 0x0442)));
         assert_eq!(
@@ -105,7 +104,6 @@ fn safeop_to_op_is_refused_when_the_watchdog_status_cannot_be_read() {
         );
         // Repaired: acknowledge, then OP.
         lock(&bus.chain).slaves_mut()[0]
-            .slave_mut()
             .esc_mut()
             .set_pdi_fault(None);
         assert_eq!(request(md, s, 0x14).await, (0x04, 0));
@@ -123,7 +121,6 @@ fn a_pdi_error_in_the_mailbox_check_is_a_pdi_failure_not_code_0x0016() {
         let s = group.subdevice(md, 0).expect("slave").configured_address();
         assert_eq!(status(md, s).await, (0x02, 0));
         lock(&bus.chain).slaves_mut()[0]
-            .slave_mut()
             .esc_mut()
             .set_pdi_fault(Some(PdiFault::reads(0x0800, 0x0808)));
         settle(md).await;
@@ -132,10 +129,9 @@ fn a_pdi_error_in_the_mailbox_check_is_a_pdi_failure_not_code_0x0016() {
             (0x02 | ERR, 0x0001),
             "the mailbox is not declared misconfigured when it cannot be read"
         );
-        let err = lock(&bus.chain).slaves_mut()[0].poll(bus.clock.now_ns());
+        let err = lock(&bus.chain).slaves_mut()[0].poll_with(bus.clock.now_ns(), None);
         assert_eq!(err, Err(EscError::Interface), "the caller sees the failure");
         lock(&bus.chain).slaves_mut()[0]
-            .slave_mut()
             .esc_mut()
             .set_pdi_fault(None);
         assert_eq!(request(md, s, 0x12).await, (0x02, 0));
@@ -163,32 +159,32 @@ fn a_failing_pdi_in_op_drops_to_safeop_with_outputs_and_current_off() {
         }
         {
             let chain = lock(&bus.chain);
-            let slave = chain.slaves()[0].slave();
-            assert_eq!(slave.store.get(0x7000, 1), Some(1));
+            let slave = chain.slave::<Pam>(0).expect("a PAM").slave();
+            assert_eq!(slave.od().get(0x7000, 1), Some(1));
             assert!(
                 slave
+                    .app()
                     .stage()
-                    .setpoint_ma(pam_slave::app::power_stage::Solenoid::A)
+                    .setpoint_ma(pam_199_p_etc::app::power_stage::Solenoid::A)
                     > 0
             );
         }
         // Every PDI read fails from now on (writes still reach the ESC).
         lock(&bus.chain).slaves_mut()[0]
-            .slave_mut()
             .esc_mut()
             .set_pdi_fault(Some(PdiFault::reads(0, u16::MAX)));
         group.tx_rx(md).await.expect("outputs");
         settle(md).await;
         assert_eq!(status(md, s).await, (0x04 | ERR, 0x0001));
         let chain = lock(&bus.chain);
-        let slave = chain.slaves()[0].slave();
-        assert_eq!(slave.store.get(0x7000, 1), Some(0), "ENABLE off");
-        assert_eq!(slave.store.get(0x7000, 3), Some(0), "command value 0");
+        let slave = chain.slave::<Pam>(0).expect("a PAM").slave();
+        assert_eq!(slave.od().get(0x7000, 1), Some(0), "ENABLE off");
+        assert_eq!(slave.od().get(0x7000, 3), Some(0), "command value 0");
         for sol in [
-            pam_slave::app::power_stage::Solenoid::A,
-            pam_slave::app::power_stage::Solenoid::B,
+            pam_199_p_etc::app::power_stage::Solenoid::A,
+            pam_199_p_etc::app::power_stage::Solenoid::B,
         ] {
-            assert_eq!(slave.stage().setpoint_ma(sol), 0, "{sol:?} off");
+            assert_eq!(slave.app().stage().setpoint_ma(sol), 0, "{sol:?} off");
         }
     });
 }
@@ -239,7 +235,10 @@ fn a_store_that_cannot_commit_the_image_reports_0x0007_at_boot_to_init() {
             inner,
             fail: fail.clone(),
         };
-        let chain = Chain::with_stores(vec![SoftSlave::new()], vec![Box::new(store)]);
+        let chain = Chain::with_stores(
+            vec![Box::new(pam_199_p_etc::soft_slave())],
+            vec![Box::new(store)],
+        );
         let bus = VirtualBus::with_chain(chain, Clock::real(), None).expect("bus");
         let md: &Md = &bus.maindevice;
         let group = bus.init().await.expect("init");
@@ -299,7 +298,7 @@ fn emergencies_queued_before_init_never_reach_the_next_master_session() {
         // 0x001B raises the "error reset" 0x0000 while in INIT.
         assert_eq!(request(md, s, 0x11).await, (0x01, 0));
         assert_eq!(
-            lock(&bus.chain).slaves()[0].slave().emergencies_waiting(),
+            lock(&bus.chain).slaves()[0].emergencies_waiting(),
             0,
             "INIT empties the emergency queue"
         );

@@ -1,12 +1,12 @@
 //! Firmware update over FoE in BOOT (manual 5.10) through ethercrab's
 //! register access and the test master's FoE client.
 
+use ecat_slave::firmware::{EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, pack};
 use master_test::VirtualBus;
 use master_test::foe::{self, enter_boot, request_state};
 use master_test::link::lock;
 use master_test::mailbox::{MailboxClient, MailboxGeometry};
-use pam_slave::device::{PRODUCT_CODE, VENDOR_ID};
-use pam_slave::firmware::{EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, pack};
+use pam_199_p_etc::{PRODUCT_CODE, VENDOR_ID};
 
 /// A `.efw` image of `len` payload bytes with `version` for `product`.
 fn image(len: usize, version: &str, product: u32) -> Vec<u8> {

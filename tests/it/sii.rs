@@ -1,11 +1,11 @@
 //! The SII image: CRC, identity and name through our reader and ethercrab.
 
+use ecat_slave::sii::SiiReader;
 use master_test::VirtualBus;
-use pam_slave::sii::SiiReader;
 
 #[test]
 fn sii_image_passes_crc_and_agrees_with_ethercrab() {
-    let image = pam_slave::device::sii_image();
+    let image = pam_199_p_etc::DEVICE.sii_image();
     let r = SiiReader::new(&image).expect("image parses");
     assert!(r.crc_ok(), "header CRC-8 over bytes 0..14");
     let id = r.identity();
@@ -33,8 +33,8 @@ fn sii_image_passes_crc_and_agrees_with_ethercrab() {
 
 #[test]
 fn ethercrab_configures_the_mailbox_sms_exactly_as_our_reader_decodes_the_sii() {
-    use pam_slave::sii::SmType;
-    let image = pam_slave::device::sii_image();
+    use ecat_slave::sii::SmType;
+    let image = pam_199_p_etc::DEVICE.sii_image();
     let r = SiiReader::new(&image).expect("image parses");
     let sms: Vec<_> = r.sync_managers().expect("SyncM").collect();
     let mbx = r.standard_mailbox();

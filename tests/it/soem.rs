@@ -12,8 +12,8 @@
 //! skipped with a message otherwise, a failure under `CI=true`.
 
 use crate::common::{runner_binary, setup, skip};
-use pam_slave::device::{PRODUCT_CODE, VENDOR_ID};
-use pam_slave::firmware::{EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, pack};
+use ecat_slave::firmware::{EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, pack};
+use pam_199_p_etc::{PRODUCT_CODE, VENDOR_ID};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
@@ -107,14 +107,13 @@ fn keep_log(text: &str) {
         env!("CARGO_MANIFEST_DIR"),
         "/../target/interop-logs"
     ));
-    if std::fs::create_dir_all(&dir).is_ok() {
-        if let Ok(mut f) = std::fs::OpenOptions::new()
+    if std::fs::create_dir_all(&dir).is_ok()
+        && let Ok(mut f) = std::fs::OpenOptions::new()
             .create(true)
             .append(true)
             .open(dir.join("soem.log"))
-        {
-            let _ = f.write_all(text.as_bytes());
-        }
+    {
+        let _ = f.write_all(text.as_bytes());
     }
 }
 
@@ -172,9 +171,13 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
     let dir = TempDir(std::env::temp_dir().join(format!("pam-soem-{}", std::process::id())));
     std::fs::create_dir_all(&dir.0).expect("temp dir");
     let file = |n: &str| dir.0.join(n);
-    let esi = pam_esi::generate(&pam_esi::Capabilities::default()).expect("ESI");
+    let esi = ecat_esi::generate(&pam_199_p_etc::DEVICE).expect("ESI");
     std::fs::write(file("pam.xml"), esi).expect("ESI file");
-    std::fs::write(file("eeprom.bin"), pam_esi::sii_image()).expect("SII file");
+    std::fs::write(
+        file("eeprom.bin"),
+        ecat_esi::sii_image(&pam_199_p_etc::DEVICE),
+    )
+    .expect("SII file");
     let good = efw("11", 40_000);
     let mut bad = good.clone();
     let last = bad.len() - 1;

@@ -2,10 +2,10 @@
 //! by raw register writes (AL control 0x0120, SM registers) on the virtual
 //! link. The public TF-1200 conformance cases are named `tf1200_*`.
 
+use ecat_slave::led::LedPattern;
 use master_test::link::{Clock, lock};
 use master_test::mailbox::{MailboxClient, MailboxGeometry};
 use master_test::{Group, VirtualBus};
-use pam_slave::led::LedPattern;
 use std::time::Duration;
 
 type Md = ethercrab::MainDevice<'static>;
@@ -275,7 +275,7 @@ fn tf1200_mailbox_repeat_returns_the_identical_previous_response() {
         let s = group.subdevice(md, 0).expect("slave").configured_address();
         let mut c = MailboxClient::new(md, s, MailboxGeometry::standard());
         c.send(
-            pam_slave::wire::mailbox::MailboxType::CoE,
+            ecat_slave::wire::mailbox::MailboxType::CoE,
             &[0x00, 0x20, 0x40, 0x18, 0x10, 0x02, 0, 0, 0, 0],
         )
         .await
@@ -309,10 +309,7 @@ fn sm_watchdog_with_defaults_trips_at_100_ms_of_simulated_time() {
         bus.clock.advance(Duration::from_millis(99));
         settle(&bus).await;
         assert_eq!(status(&bus, s).await, (0x08, 0), "still OP at 99 ms");
-        assert_eq!(
-            lock(&bus.chain).slaves()[0].slave().store.get(0x7000, 1),
-            Some(1)
-        );
+        assert_eq!(lock(&bus.chain).slaves()[0].od().get(0x7000, 1), Some(1));
         bus.clock.advance(Duration::from_micros(1_100));
         settle(&bus).await;
         assert_eq!(
@@ -322,7 +319,7 @@ fn sm_watchdog_with_defaults_trips_at_100_ms_of_simulated_time() {
         );
         {
             let chain = lock(&bus.chain);
-            let st = &chain.slaves()[0].slave().store;
+            let st = &chain.slaves()[0].od();
             assert_eq!(st.get(0x7000, 1), Some(0), "outputs in the safe state");
             assert_eq!(st.get(0x7000, 3), Some(0));
             assert_eq!(chain.slaves()[0].led_patterns().1, LedPattern::DoubleFlash);
@@ -471,7 +468,7 @@ fn switching_to_independent_mode_in_preop_exchanges_both_channels() {
         }
         {
             let chain = lock(&bus.chain);
-            let st = &chain.slaves()[0].slave().store;
+            let st = &chain.slaves()[0].od();
             assert_eq!(
                 (st.get(0x7010, 1), st.get(0x7010, 3)),
                 (Some(1), Some(4000))

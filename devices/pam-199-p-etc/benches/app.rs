@@ -2,21 +2,20 @@
 //! monitoring, simulated power stage with its 50 µs sub-steps, process data
 //! written back into the object dictionary), in both modes.
 //!
-//! Run: `cargo bench -p pam-slave --bench app`.
+//! Run: `cargo bench -p pam-199-p-etc --bench app`.
 
 // criterion's group macro generates an undocumented function.
 #![allow(missing_docs)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use pam_slave::app::amplifier::Amplifier;
-use pam_slave::app::power_stage::SimPowerStage;
-use pam_slave::od::store::ObjectStore;
+use pam_199_p_etc::app::amplifier::Amplifier;
+use pam_199_p_etc::app::power_stage::SimPowerStage;
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("app_tick");
     for (name, function) in [("directional", 1i64), ("independent", 2)] {
-        let mut store = ObjectStore::new();
+        let mut store = pam_199_p_etc::store();
         store.set(0xF800, 2, function);
         store.set(0x800A, 1, 1); // curve on: the longer path
         store.set(0x7000, 1, 1);

@@ -409,11 +409,11 @@ impl DeviceDescription {
                                     found = true;
                                     let ok = !t.gap
                                         && t.bit_len == mbits
-                                        && match (t.pdo, want) {
-                                            (PdoMapping::Rx, PdoMapping::Rx) => true,
-                                            (PdoMapping::Tx, PdoMapping::Tx) => true,
-                                            _ => false,
-                                        };
+                                        && matches!(
+                                            (t.pdo, want),
+                                            (PdoMapping::Rx, PdoMapping::Rx)
+                                                | (PdoMapping::Tx, PdoMapping::Tx)
+                                        );
                                     if !ok {
                                         return Err(DescriptionError::BadMapping {
                                             pdo,
@@ -463,7 +463,12 @@ impl DeviceDescription {
     }
 
     /// [`Self::validate`] as a `const` assertion: `const _: () =
-    /// DEVICE.assert_valid();` fails the build with the reason.
+    /// DEVICE.assert_valid();` fails the build with the reason. Meant for
+    /// `const` items only (at run time it would panic).
+    #[allow(
+        clippy::panic,
+        reason = "evaluated in const items: a contradiction becomes a build error"
+    )]
     pub const fn assert_valid(&self) {
         if let Err(e) = self.validate() {
             panic!("{}", e.message());

@@ -58,6 +58,10 @@ pub const fn entry_count(objects: &[Object]) -> usize {
 
 /// Flat position of the first entry of each of the `N` objects (the prefix
 /// sums of their entry counts). `N` must be `objects.len()`.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "const fn: the index is checked against N first"
+)]
 pub const fn entry_bases<const N: usize>(objects: &[Object]) -> [u16; N] {
     let mut out = [0u16; N];
     let mut acc = 0usize;

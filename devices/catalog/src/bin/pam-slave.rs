@@ -1,11 +1,14 @@
-//! `pam-slave`: software PAM-199-P-ETC slaves on a real network interface.
+//! `pam-slave`: software slaves (the PAM-199-P-ETC by default, or any
+//! device of the catalog, or a mixed line) on a real network interface.
 //!
 //! ```text
 //! pam-slave --iface veth-slave --count 2 --pcap capture.pcap
+//! pam-slave --iface veth-slave --device io8 --count 4
+//! pam-slave --iface veth-slave --line pam,io8,pam
 //! ```
 
 use clap::Parser;
-use pam_slave::host::raw::{RunnerConfig, run};
+use ecat_slave::host::raw::{RunnerConfig, run};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -14,25 +17,42 @@ use std::sync::atomic::{AtomicBool, Ordering};
 #[derive(Parser)]
 #[command(
     name = "pam-slave",
-    about = "Answer EtherCAT frames on a network interface as a line of PAM-199-P-ETC slaves"
+    about = "Answer EtherCAT frames on a network interface as a line of software slaves"
 )]
 struct Cli {
     /// Network interface to serve (e.g. eth1, veth-slave).
     #[arg(long)]
     iface: String,
-    /// Number of slaves on the line.
-    #[arg(long, default_value_t = 1)]
-    count: usize,
+    /// Device of every slave (see --list); default the PAM-199-P-ETC.
+    #[arg(long, default_value = "pam", conflicts_with = "line")]
+    device: String,
+    /// Number of slaves on the line (1..=512).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=512), conflicts_with = "line")]
+    count: u16,
+    /// A mixed line, first to last: e.g. pam,io8,pam or pam*3,io8.
+    #[arg(long)]
+    line: Option<String>,
     /// Write every frame, both directions, to this pcap file.
     #[arg(long)]
     pcap: Option<PathBuf>,
-    /// Directory for persistent slave state.
+    /// Directory for persistent slave state (saved parameters, firmware).
     #[arg(long)]
     state_dir: Option<PathBuf>,
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let spec = match &cli.line {
+        Some(l) => l.clone(),
+        None => format!("{}*{}", cli.device, cli.count),
+    };
+    let entries = match device_catalog::parse_line(&spec) {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("pam-slave: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
     if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::Release)) {
@@ -40,15 +60,20 @@ fn main() -> ExitCode {
     }
     let cfg = RunnerConfig {
         iface: cli.iface,
-        count: cli.count,
         pcap: cli.pcap,
         state_dir: cli.state_dir,
     };
+    let names: Vec<&str> = entries
+        .iter()
+        .map(|d| d.description.names.type_name)
+        .collect();
     eprintln!(
-        "pam-slave: {} PAM-199-P-ETC slave(s) on {} (Ctrl-C stops)",
-        cfg.count, cfg.iface
+        "pam-slave: {} slave(s) on {}: {} (Ctrl-C stops)",
+        entries.len(),
+        cfg.iface,
+        summarize(&names)
     );
-    match run(&cfg, &stop) {
+    match run(&cfg, device_catalog::slaves(&entries), &stop) {
         Ok(stats) => {
             eprintln!(
                 "pam-slave: stopped after {} EtherCAT frames ({} other frames ignored)",
@@ -61,4 +86,23 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// `PAM-199-P-ETC x2, IO8` for a line.
+fn summarize(names: &[&str]) -> String {
+    let mut out: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < names.len() {
+        let mut n = 1;
+        while i + n < names.len() && names[i + n] == names[i] {
+            n += 1;
+        }
+        out.push(if n > 1 {
+            format!("{} x{n}", names[i])
+        } else {
+            names[i].to_string()
+        });
+        i += n;
+    }
+    out.join(", ")
 }

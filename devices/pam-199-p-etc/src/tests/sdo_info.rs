@@ -1,7 +1,7 @@
 //! SDO Information (core) describing the PAM's dictionary.
 
 use ecat_slave::coe::sdo_info::*;
-use ecat_slave::od::{Object, PdoMapping};
+use ecat_slave::od::Object;
 
 /// An SDO Info request: header (not fragmented) and service data.
 fn request(opcode: u8, data: &[u8]) -> Vec<u8> {

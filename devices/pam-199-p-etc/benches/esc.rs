@@ -1,11 +1,11 @@
-//! Software ESC throughput: one process-data cycle as ethercrab's `tx_rx`
+//! Software ESC throughput (lines of PAM-199-P-ETC slaves): one process-data cycle as ethercrab's `tx_rx`
 //! sends it (one LRW over the group's image plus FPRD 0x0130 AL status per
 //! slave; with 64 slaves that is 2 frames) through a line of 1 and of 64
 //! configured ESCs, two ways: `serial` (each ESC processes the whole frame
 //! in turn) and `line` (the virtual link's `Chain`, which parses the frame
 //! once and hands each datagram to the slaves it addresses).
 //!
-//! Run: `cargo bench -p pam-slave --bench esc`. Criterion reports the time
+//! Run: `cargo bench -p pam-199-p-etc --bench esc`. Criterion reports the time
 //! per cycle and, as throughput, slaves per second; ns per slave per cycle
 //! = time / slave count.
 
@@ -13,11 +13,10 @@
 #![allow(missing_docs)]
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use pam_slave::device::sii_image;
-use pam_slave::esc::soft::SoftEsc;
-use pam_slave::host::chain::Chain;
-use pam_slave::wire::builder::FrameBuilder;
-use pam_slave::wire::ecat::Command;
+use ecat_slave::esc::soft::SoftEsc;
+use ecat_slave::host::chain::Chain;
+use ecat_slave::wire::builder::FrameBuilder;
+use ecat_slave::wire::ecat::Command;
 use std::hint::black_box;
 
 const OUT: u16 = 5;
@@ -122,12 +121,12 @@ fn cycle_frames(n: usize) -> (Vec<Vec<u8>>, u32) {
 
 /// Sum of the working counters in a processed frame.
 fn wkc_sum(frame: &[u8]) -> u32 {
-    let eth = pam_slave::wire::ethernet::EthernetFrame::new_checked(frame).expect("eth");
-    let ecat = pam_slave::wire::ecat::EcatFrame::new_checked(eth.payload()).expect("ecat");
+    let eth = ecat_slave::wire::ethernet::EthernetFrame::new_checked(frame).expect("eth");
+    let ecat = ecat_slave::wire::ecat::EcatFrame::new_checked(eth.payload()).expect("ecat");
     ecat.datagrams()
         .map(|r| {
             let r = r.expect("datagram");
-            let dg = pam_slave::wire::ecat::Datagram::new_checked(&ecat.payload()[r]).expect("dg");
+            let dg = ecat_slave::wire::ecat::Datagram::new_checked(&ecat.payload()[r]).expect("dg");
             u32::from(dg.wkc())
         })
         .sum()
@@ -141,7 +140,7 @@ fn configure_chain(chain: &mut Chain, n: usize) {
 }
 
 fn bench(c: &mut Criterion) {
-    let sii = sii_image();
+    let sii = pam_199_p_etc::DEVICE.sii_image();
     let mut g = c.benchmark_group("soft_esc_cycle");
     for n in [1usize, 64] {
         let (templates, expected_wkc) = cycle_frames(n);
@@ -167,7 +166,7 @@ fn bench(c: &mut Criterion) {
         });
 
         // The virtual link's line.
-        let mut chain = Chain::new(n);
+        let mut chain = Chain::of(n, pam_199_p_etc::Pam::default);
         configure_chain(&mut chain, n);
         let mut frames = templates.clone();
         let mut wkc = 0;
