@@ -855,6 +855,53 @@ mod tests {
     }
 
     #[test]
+    fn every_catalog_devices_esi_validates_and_agrees_with_its_sii() {
+        let Some(dir) = schema_dir() else {
+            return skip("ESI schema not found (set ESI_SCHEMA_DIR)");
+        };
+        for d in device_catalog::DEVICES {
+            let xml = generate(d.description).unwrap();
+            let sii = crate::sii_image(d.description);
+            let text = std::str::from_utf8(&xml).unwrap();
+            let m = crate::check::check(text, &sii).unwrap();
+            assert!(m.is_empty(), "{}: {m:#?}", d.key);
+            let r = SiiReader::new(&sii).unwrap();
+            assert!(r.crc_ok(), "{}", d.key);
+            assert_eq!(
+                r.strings().unwrap().get(1),
+                Some(d.description.names.type_name),
+                "{}: SII string 1",
+                d.key
+            );
+            let file =
+                std::env::temp_dir().join(format!("ecat-esi-{}-{}.xml", d.key, std::process::id()));
+            std::fs::write(&file, &xml).unwrap();
+            let out = Command::new("xmllint")
+                .arg("--noout")
+                .arg("--schema")
+                .arg(dir.join("EtherCATInfo.xsd"))
+                .arg(&file)
+                .output();
+            let _ = std::fs::remove_file(&file);
+            let Ok(out) = out else {
+                return skip("xmllint not installed");
+            };
+            assert!(
+                out.status.success(),
+                "{}: xmllint: {}",
+                d.key,
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        assert!(device_catalog::DEVICES.len() >= 2);
+    }
+
+    #[test]
+    fn io8_esi_matches_its_golden_file() {
+        golden("IO8.xml", &generate(&io8_example::DEVICE).unwrap());
+    }
+
+    #[test]
     fn generated_esi_matches_the_golden_file() {
         golden("PAM-199-P-ETC.xml", &generated());
     }

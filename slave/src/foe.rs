@@ -444,8 +444,8 @@ mod tests {
     };
 
     const DEVICE: DeviceIdentity = DeviceIdentity {
-        vendor_id: 0x0000_05AE,
-        product_code: 0x00C7_03F3,
+        vendor_id: 0x0000_0ABC,
+        product_code: 0x0012_3456,
         revision: 7,
     };
     /// Mailbox data area of 1024 bytes: 1018 bytes of FoE data per packet.
@@ -549,7 +549,7 @@ mod tests {
 
         /// A whole download as a master does it; returns the last reply.
         fn download(&mut self, file: &[u8]) -> Reply {
-            let reply = self.wrq("pam199.efw", 0);
+            let reply = self.wrq("dev1.efw", 0);
             if reply != Reply::Ack(0) {
                 return reply;
             }
@@ -690,7 +690,7 @@ mod tests {
             panic!()
         };
         assert_eq!(code, FoeErrorCode::InvalidFirmware);
-        assert_eq!(text, "image product 0xbad, device product 0xc703f3");
+        assert_eq!(text, "image product 0xbad, device product 0x123456");
         drop(b);
         assert_eq!(running_version(&mut store), "1.0.0");
     }
@@ -904,7 +904,7 @@ mod tests {
         };
         assert_eq!(
             String::from_utf8(data).unwrap(),
-            "vendor_id=0x000005AE\nproduct_code=0x00C703F3\nrevision=0x00000007\nversion=1.0.0\n"
+            "vendor_id=0x00000ABC\nproduct_code=0x00123456\nrevision=0x00000007\nversion=1.0.0\n"
         );
         assert_eq!(b.send(FoeRepr::Ack { packet: 1 }), Reply::None);
         assert_eq!(b.server.state(), &FoeState::Idle);

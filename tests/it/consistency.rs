@@ -173,22 +173,33 @@ fn access_bits(esi: &str) -> Option<u16> {
     }
 }
 
-#[test]
-fn esi_dictionary_equals_what_sdo_information_reports_live() {
-    let xml = ecat_esi::generate(&pam_199_p_etc::DEVICE).expect("ESI");
+/// What the comparison of one device's ESI with its live slave covered.
+struct Compared {
+    entries: usize,
+    gaps: usize,
+    ranges: usize,
+}
+
+/// The generated ESI of catalog device `key` against what a live slave of
+/// it reports over SDO Information: object list, names, max subindex, every
+/// entry's name, bit size, type, access and default, and every range.
+fn esi_equals_sdo_information(key: &str) -> Compared {
+    let entry = device_catalog::find(key).expect("catalog device");
+    let dev = entry.description;
+    let xml = ecat_esi::generate(dev).expect("ESI");
     let doc = ecat_esi::xml::parse(std::str::from_utf8(&xml).unwrap()).expect("parse");
     let esi = esi_dictionary(&doc);
     smol::block_on(async {
-        let bus = VirtualBus::new(1).expect("bus");
+        let bus = VirtualBus::line(key, master_test::link::Clock::real()).expect("bus");
         let md = &*bus.maindevice;
         let group = bus.init().await.expect("init");
         let station = group.subdevice(md, 0).expect("slave").configured_address();
-        let mut c = MailboxClient::new(md, station, MailboxGeometry::standard());
+        let mut c = MailboxClient::new(md, station, MailboxGeometry::of(&dev.layout()));
         let live: Vec<u16> = od_list(&mut c, 1).await.expect("OD list");
         let esi_indices: Vec<u16> = esi.keys().copied().collect();
-        assert_eq!(live, esi_indices, "object lists");
-        let model_indices: Vec<u16> = model::OBJECTS.iter().map(|o| o.index).collect();
-        assert_eq!(live, model_indices);
+        assert_eq!(live, esi_indices, "{key}: object lists");
+        let model_indices: Vec<u16> = dev.dictionary.objects().iter().map(|o| o.index).collect();
+        assert_eq!(live, model_indices, "{key}");
         let mut checked = 0;
         let mut gaps = 0;
         for (index, (name, entries)) in &esi {
@@ -247,13 +258,10 @@ fn esi_dictionary_equals_what_sdo_information_reports_live() {
                 checked += 1;
             }
         }
-        assert!(checked > 280, "only {checked} entries compared");
-        assert_eq!(gaps, 18, "the 18 padding gaps of MANUAL-NOTES note 20");
-
         // Ranges: every entry with a min/max in the model reports exactly
         // those through SDO Information (value info: minimum | maximum).
         let mut ranges = 0;
-        for obj in model::OBJECTS {
+        for obj in dev.dictionary.objects() {
             for e in obj.entries {
                 let (Some(min), Some(max)) = (e.min, e.max) else {
                     continue;
@@ -279,8 +287,42 @@ fn esi_dictionary_equals_what_sdo_information_reports_live() {
                 ranges += 1;
             }
         }
-        assert!(ranges > 100, "{ranges} ranges compared");
-    });
+        Compared {
+            entries: checked,
+            gaps,
+            ranges,
+        }
+    })
+}
+
+#[test]
+fn esi_dictionary_equals_what_sdo_information_reports_live() {
+    let c = esi_equals_sdo_information("pam");
+    assert!(c.entries > 280, "only {} entries compared", c.entries);
+    assert_eq!(c.gaps, 18, "the 18 padding gaps of MANUAL-NOTES note 20");
+    assert!(c.ranges > 100, "{} ranges compared", c.ranges);
+    let _ = model::OBJECTS;
+}
+
+#[test]
+fn every_catalog_device_reports_over_sdo_information_what_its_esi_says() {
+    for d in device_catalog::DEVICES {
+        let c = esi_equals_sdo_information(d.key);
+        let dict = d.description.dictionary;
+        assert_eq!(
+            c.entries,
+            dict.entry_count(),
+            "{}: every entry compared",
+            d.key
+        );
+        let want_gaps = dict.entries().filter(|(_, _, e)| e.gap).count();
+        assert_eq!(c.gaps, want_gaps, "{}", d.key);
+        let want_ranges = dict
+            .entries()
+            .filter(|(_, _, e)| e.min.is_some() && e.max.is_some())
+            .count();
+        assert_eq!(c.ranges, want_ranges, "{}", d.key);
+    }
 }
 
 #[test]

@@ -10,6 +10,8 @@ mod common;
 mod consistency;
 mod failsafe;
 mod foe;
+mod generic_core;
+mod mixed_line;
 mod sdo;
 mod sii;
 mod soem;

@@ -307,7 +307,7 @@ mod tests {
     type Store = MemStore<8192>;
     const DEVICE: DeviceIdentity = DeviceIdentity {
         vendor_id: 0x5AE,
-        product_code: 0xC7_03F3,
+        product_code: 0x12_3456,
         revision: 1,
     };
 

@@ -6,7 +6,7 @@ use super::{Crc32, DeviceIdentity, FirmwareVersion, ImageInfo, VERSION_LEN, crc3
 use crate::wire::foe::FoeErrorCode;
 
 /// Magic bytes, the last one being the format version.
-pub const EFW_MAGIC: [u8; 8] = *b"PAMEFW\0\x01";
+pub const EFW_MAGIC: [u8; 8] = *b"ECATFW\0\x01";
 
 /// Format version carried in the last magic byte.
 pub const EFW_FORMAT_VERSION: u8 = 1;
@@ -22,7 +22,7 @@ type Field = core::ops::Range<usize>;
 mod field {
     use super::Field;
 
-    /// `b"PAMEFW\0"`, without the version byte.
+    /// `b"ECATFW\0"`, without the version byte.
     pub const MAGIC_PREFIX: Field = 0..7;
     /// Format version (last magic byte).
     pub const FORMAT: usize = 7;
@@ -72,7 +72,7 @@ fn set_bytes(buf: &mut [u8], f: Field, value: &[u8]) {
 /// into the FoE error text.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, thiserror::Error)]
 pub enum EfwError {
-    /// The file does not start with `PAMEFW\0`.
+    /// The file does not start with `ECATFW\0`.
     #[error("not an .efw image (bad magic)")]
     BadMagic,
     /// The format version byte is not [`EFW_FORMAT_VERSION`].
@@ -223,7 +223,7 @@ impl<T: AsRef<[u8]>> EfwHeader<T> {
         Ok(())
     }
 
-    /// The magic prefix is `PAMEFW\0`.
+    /// The magic prefix is `ECATFW\0`.
     pub fn magic_ok(&self) -> bool {
         self.buffer.as_ref().get(field::MAGIC_PREFIX) == EFW_MAGIC.get(field::MAGIC_PREFIX)
     }
@@ -689,8 +689,8 @@ mod tests {
     use super::*;
 
     const DEVICE: DeviceIdentity = DeviceIdentity {
-        vendor_id: 0x0000_05AE,
-        product_code: 0x00C7_03F3,
+        vendor_id: 0x0000_0ABC,
+        product_code: 0x0012_3456,
         revision: 7,
     };
 
@@ -732,11 +732,11 @@ mod tests {
     fn packs_byte_exact_header() {
         let img = image(&header("1.2.3"), b"abc");
         let mut expected = Vec::new();
-        expected.extend_from_slice(b"PAMEFW\0\x01");
+        expected.extend_from_slice(b"ECATFW\0\x01");
         expected.extend_from_slice(&56u16.to_le_bytes());
         expected.extend_from_slice(&0u16.to_le_bytes());
-        expected.extend_from_slice(&0x05AEu32.to_le_bytes());
-        expected.extend_from_slice(&0x00C7_03F3u32.to_le_bytes());
+        expected.extend_from_slice(&0x0ABCu32.to_le_bytes());
+        expected.extend_from_slice(&0x0012_3456u32.to_le_bytes());
         expected.extend_from_slice(&1u32.to_le_bytes());
         expected.extend_from_slice(&9u32.to_le_bytes());
         expected.extend_from_slice(b"1.2.3\0\0\0\0\0\0\0\0\0\0\0");

@@ -157,7 +157,7 @@ mod tests {
 
     fn temp_dir(name: &str) -> PathBuf {
         let dir =
-            std::env::temp_dir().join(format!("pam-file-store-{name}-{}", std::process::id()));
+            std::env::temp_dir().join(format!("ecat-file-store-{name}-{}", std::process::id()));
         let _ = fs::remove_dir_all(&dir);
         dir
     }

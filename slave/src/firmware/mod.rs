@@ -37,7 +37,7 @@
 //!
 //! | offset | size | field           | meaning                                                   |
 //! |-------:|-----:|-----------------|-----------------------------------------------------------|
-//! | 0      | 8    | `magic`         | `b"PAMEFW\0"` + format version byte `0x01`                 |
+//! | 0      | 8    | `magic`         | `b"ECATFW\0"` + format version byte `0x01`                 |
 //! | 8      | 2    | `header_len`    | header length incl. `header_crc32`; 56 for v1, ≤ 512       |
 //! | 10     | 2    | `flags`         | reserved, written 0, ignored                              |
 //! | 12     | 4    | `vendor_id`     | must equal the device's vendor ID (0x1018:01)             |

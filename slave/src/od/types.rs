@@ -1,8 +1,8 @@
 //! Types of the static object-dictionary description (layer 2, `od`).
 //!
 //! These types describe objects; they hold no live values and know nothing
-//! of EtherCAT frames. The one description of the PAM-199 dictionary built
-//! from them lives in [`super::model`].
+//! of EtherCAT frames. A device builds its one description from them
+//! (see [`super::dictionary`] and [`super::build`]).
 
 /// CoE base data types used by the dictionary (ETG.1000.6 table 63 codes).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

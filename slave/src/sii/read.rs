@@ -959,7 +959,7 @@ pub(crate) mod tests {
         },
     ];
 
-    fn pam_config() -> SiiConfig<'static> {
+    fn sample_config() -> SiiConfig<'static> {
         SiiConfig {
             pdi_control: 0x0C08,
             pdi_config: 0x66E8,
@@ -967,8 +967,8 @@ pub(crate) mod tests {
             pdi_config2: 0x0000,
             station_alias: 0x0000,
             identity: SiiIdentity {
-                vendor_id: 0x0000_05AE,
-                product_code: 0x00C7_03F3,
+                vendor_id: 0x0000_0ABC,
+                product_code: 0x0012_3456,
                 revision: 7,
                 serial: 0,
             },
@@ -987,10 +987,10 @@ pub(crate) mod tests {
             mailbox_protocols: protocols::COE | protocols::FOE,
             eeprom_kbit: 4,
             general: SiiGeneral {
-                group: "PAM",
+                group: "DEMO",
                 image: "",
-                order: "PAM-199-P-ETC",
-                name: "PAM-199-P-ETC",
+                order: "XY-123-Z-DEMO",
+                name: "XY-123-Z-DEMO",
                 coe_details: 0x23,
                 foe_details: 1,
                 eoe_details: 0,
@@ -1006,8 +1006,8 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn pam_image_round_trips_every_field() {
-        let cfg = pam_config();
+    fn sample_image_round_trips_every_field() {
+        let cfg = sample_config();
         let mut image = [0u8; 512];
         let used = encode(&cfg, &mut image).unwrap();
         let r = SiiReader::new(&image).unwrap();
@@ -1027,7 +1027,7 @@ pub(crate) mod tests {
         assert_eq!(
             &image[0x10..0x20],
             &[
-                0xAE, 0x05, 0, 0, 0xF3, 0x03, 0xC7, 0x00, 7, 0, 0, 0, 0, 0, 0, 0
+                0xBC, 0x0A, 0, 0, 0x56, 0x34, 0x12, 0x00, 7, 0, 0, 0, 0, 0, 0, 0
             ]
         );
         assert_eq!(r.bootstrap_mailbox(), cfg.bootstrap_mailbox);
@@ -1065,8 +1065,8 @@ pub(crate) mod tests {
         assert_eq!(
             all,
             [
-                "PAM-199-P-ETC",
-                "PAM",
+                "XY-123-Z-DEMO",
+                "DEMO",
                 "Inputs",
                 "Status word",
                 "Fault",
@@ -1076,7 +1076,7 @@ pub(crate) mod tests {
             ]
         );
         assert_eq!(strings.count(), 8);
-        let needle = b"PAM-199-P-ETC";
+        let needle = b"XY-123-Z-DEMO";
         let hits = image.windows(needle.len()).filter(|w| w == needle).count();
         assert_eq!(hits, 1);
 
@@ -1149,8 +1149,8 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn pam_image_fits_2_kibit_without_pdo_names() {
-        let mut cfg = pam_config();
+    fn sample_image_fits_2_kibit_without_pdo_names() {
+        let mut cfg = sample_config();
         cfg.eeprom_kbit = 2;
         let mut image = [0u8; 256];
         // With all PDO names the image needs more than 256 bytes.
@@ -1387,16 +1387,16 @@ pub(crate) mod tests {
     #[test]
     fn corrupted_crc_is_reported_but_reading_continues() {
         let mut image = [0u8; 512];
-        encode(&pam_config(), &mut image).unwrap();
+        encode(&sample_config(), &mut image).unwrap();
         image[14] ^= 0x5A;
         let r = SiiReader::new(&image).unwrap();
         assert!(!r.crc_ok());
         assert_ne!(r.stored_crc(), r.computed_crc());
-        assert_eq!(r.identity().vendor_id, 0x05AE);
+        assert_eq!(r.identity().vendor_id, 0x0ABC);
         let strings = r.strings().unwrap();
         assert_eq!(
             r.general().unwrap().unwrap().resolve(&strings).name,
-            "PAM-199-P-ETC"
+            "XY-123-Z-DEMO"
         );
     }
 
@@ -1541,7 +1541,7 @@ pub(crate) mod tests {
     #[test]
     fn reader_never_panics_on_bit_flipped_images() {
         let mut image = [0u8; 512];
-        encode(&pam_config(), &mut image).unwrap();
+        encode(&sample_config(), &mut image).unwrap();
         // Flip every byte of the category area to a few values and walk
         // every decoder.
         for at in 0x80..image.len() {

@@ -1471,10 +1471,10 @@ mod tests {
     static DOWNLOAD_ACK_BYTES: [u8; 10] =
         [0x00, 0x30, 0x60, 0x40, 0x60, 0x00, 0x00, 0x00, 0x00, 0x00];
 
-    /// Normal upload response for 0x1008:00 = "PAM-199-P" (9 bytes).
+    /// Normal upload response for 0x1008:00 = "TD-1-NAME" (9 bytes).
     static NORMAL_UPLOAD_RESPONSE_BYTES: [u8; 19] = [
-        0x00, 0x30, 0x41, 0x08, 0x10, 0x00, 0x09, 0x00, 0x00, 0x00, b'P', b'A', b'M', b'-', b'1',
-        b'9', b'9', b'-', b'P',
+        0x00, 0x30, 0x41, 0x08, 0x10, 0x00, 0x09, 0x00, 0x00, 0x00, b'T', b'D', b'-', b'1', b'-',
+        b'N', b'A', b'M', b'E',
     ];
 
     /// Normal download request with complete access for 0x1C12 (complete
@@ -1720,7 +1720,7 @@ mod tests {
             sub: 0,
             complete_access: false,
             complete_size: 9,
-            data: b"PAM-199-P",
+            data: b"TD-1-NAME",
         };
         assert_eq!(resp, expected);
         assert_eq!(expected.buffer_len(), 17);
@@ -1885,7 +1885,7 @@ mod tests {
             sub: 0,
             complete_access: false,
             complete_size: 9,
-            data: b"PAM-199-P",
+            data: b"TD-1-NAME",
         };
         let mut out = [0xEEu8; 16];
         assert_eq!(resp.emit(&mut out), Err(WireError::BufferTooSmall));

@@ -501,11 +501,11 @@ impl<'a> FoeRepr<'a> {
 mod tests {
     use super::*;
 
-    /// Write request, password 0, file "pam.efw".
+    /// Write request, password 0, file "dev.efw".
     static WRQ_BYTES: [u8; 13] = [
         0x02, 0x00, // WRQ, reserved
         0x00, 0x00, 0x00, 0x00, // password 0
-        b'p', b'a', b'm', b'.', b'e', b'f', b'w',
+        b'd', b'e', b'v', b'.', b'e', b'f', b'w',
     ];
 
     /// Data packet 2 with 3 data bytes.
@@ -523,7 +523,7 @@ mod tests {
         assert_eq!(foe.opcode(), FoeOpcode::WriteRequest);
         assert_eq!(foe.reserved(), 0);
         assert_eq!(foe.password(), 0);
-        assert_eq!(foe.tail(), b"pam.efw");
+        assert_eq!(foe.tail(), b"dev.efw");
     }
 
     #[test]
@@ -532,7 +532,7 @@ mod tests {
             FoeRepr::parse(&WRQ_BYTES).unwrap(),
             FoeRepr::WriteRequest {
                 password: 0,
-                name: b"pam.efw"
+                name: b"dev.efw"
             }
         );
         assert_eq!(
