@@ -101,11 +101,25 @@ impl VirtualBus {
     /// The line `spec` of catalog devices (`pam,io8,pam`, `io8*4`) on
     /// `clock`.
     pub fn line(spec: &str, clock: Clock) -> Result<Self, BusError> {
+        Self::line_with(spec, clock, None)
+    }
+
+    /// [`VirtualBus::line`] capturing every frame to the pcap file `pcap`.
+    pub fn line_with(
+        spec: &str,
+        clock: Clock,
+        pcap: Option<&std::path::Path>,
+    ) -> Result<Self, BusError> {
         let entries = device_catalog::parse_line(spec).map_err(BusError::Line)?;
+        if entries.len() > MAX_SUBDEVICES {
+            return Err(BusError::Line(device_catalog::CatalogError::BadLine(
+                format!("{spec}: the virtual bus holds at most {MAX_SUBDEVICES} slaves"),
+            )));
+        }
         Self::with_chain(
             Chain::with_slaves(device_catalog::slaves(&entries)),
             clock,
-            None,
+            pcap,
         )
     }
 

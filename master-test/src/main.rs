@@ -53,6 +53,11 @@ enum Cmd {
         /// this pcap file (open it with Wireshark or `tshark -r FILE -Y ecat`).
         #[arg(long)]
         pcap: Option<std::path::PathBuf>,
+        /// A mixed line instead of --slaves PAMs, e.g. pam,io8,pam: the
+        /// PAMs are parameterised and driven as above, every other device
+        /// gets a walking bit on its outputs.
+        #[arg(long, conflicts_with = "slaves")]
+        line: Option<String>,
     },
     /// Read or write one object entry over CoE SDO (one slave in PRE-OP).
     ///
@@ -181,6 +186,7 @@ fn main() -> ExitCode {
         command: 5000,
         cycles: 250,
         pcap: None,
+        line: None,
     });
     let result = match cmd {
         Cmd::Demo {
@@ -189,7 +195,11 @@ fn main() -> ExitCode {
             command,
             cycles,
             pcap,
-        } => smol::block_on(demo(slaves, current, command, cycles, pcap.as_deref())),
+            line,
+        } => {
+            let spec = line.unwrap_or_else(|| format!("pam*{slaves}"));
+            smol::block_on(demo(&spec, current, command, cycles, pcap.as_deref()))
+        }
         Cmd::Sdo {
             op: SdoCmd::Read { address, raw },
         } => smol::block_on(sdo_read(dev, &address, raw)),
@@ -231,27 +241,21 @@ fn main() -> ExitCode {
 }
 
 async fn demo(
-    slaves: usize,
+    spec: &str,
     current: u16,
     command: i32,
     cycles: u32,
     pcap: Option<&std::path::Path>,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    if slaves == 0 || slaves > master_test::MAX_SUBDEVICES {
-        return Err(format!(
-            "--slaves must be between 1 and {}",
-            master_test::MAX_SUBDEVICES
-        )
-        .into());
-    }
-    println!("== PAM-199-P-ETC demo on the virtual EtherCAT link ({slaves} slave(s)) ==");
     let bus =
-        VirtualBus::with_options(slaves, master_test::link::Clock::real(), pcap).map_err(|e| {
-            match pcap {
+        VirtualBus::line_with(spec, master_test::link::Clock::real(), pcap).map_err(
+            |e| match pcap {
                 Some(p) => format!("{e} (pcap file {})", p.display()),
                 None => e.to_string(),
-            }
-        })?;
+            },
+        )?;
+    let slaves = lock(&bus.chain).slaves().len();
+    println!("== PAM-199-P-ETC demo on the virtual EtherCAT link ({slaves} slave(s): {spec}) ==");
     let md = &*bus.maindevice;
     let group = bus.init().await?;
     for sd in group.iter(md) {
@@ -266,7 +270,11 @@ async fn demo(
         );
     }
     println!("state: PRE-OP   LEDs {}", leds(&bus));
-    for sd in group.iter(md) {
+    let pams: Vec<bool> = group
+        .iter(md)
+        .map(|sd| sd.identity().product_id == pam_199_p_etc::PRODUCT_CODE)
+        .collect();
+    for (sd, _) in group.iter(md).zip(&pams).filter(|(_, pam)| **pam) {
         sd.sdo_write(0x800D, 2, current).await?;
         let back: u16 = sd.sdo_read(0x800D, 2).await?;
         println!(
@@ -297,18 +305,22 @@ async fn demo(
     let start = std::time::Instant::now();
     let mut next_print = 0u128;
     for cycle in 0..cycles {
-        for sd in group.iter(md) {
+        for (sd, pam) in group.iter(md).zip(&pams) {
             let mut out = sd.outputs_raw_mut();
-            if out.len() >= 5 {
+            if *pam && out.len() >= 5 {
                 out[0] = 0x01; // ENABLE
                 out[1..5].copy_from_slice(&command.to_le_bytes()); // COMMAND VALUE
+            } else if let Some(b) = out.first_mut() {
+                // Any other device: a bit walking once per 100 ms.
+                *b = 1 << ((cycle / 100) % 8);
             }
         }
         let resp = group.tx_rx(md).await?;
         let t = start.elapsed().as_millis();
         if t >= next_print || cycle + 1 == cycles {
             next_print = t + 20;
-            if let Some(sd) = group.iter(md).next() {
+            let first_pam = group.iter(md).zip(&pams).find(|(_, p)| **p);
+            if let Some((sd, _)) = first_pam {
                 let inp = sd.inputs_raw();
                 println!(
                     "{:>6}  {}   wkc {}",
@@ -324,13 +336,30 @@ async fn demo(
         let chain = lock(&bus.chain);
         for (i, s) in chain.slaves().iter().enumerate() {
             let st = s.od();
-            println!(
-                "slave {i}: 0x7000:01 ENABLE = {}, 0x7000:03 COMMAND VALUE = {}, IA = {} mA, AL {}",
-                st.get(0x7000, 1).unwrap_or(0),
-                st.get(0x7000, 3).unwrap_or(0),
-                st.get(0x6000, 6).unwrap_or(0),
-                s.al_status().state
-            );
+            let name = s.description().names.type_name;
+            if s.description().identity.product_code == pam_199_p_etc::PRODUCT_CODE {
+                println!(
+                    "slave {i} {name}: 0x7000:01 ENABLE = {}, 0x7000:03 COMMAND VALUE = {}, IA = {} mA, AL {}",
+                    st.get(0x7000, 1).unwrap_or(0),
+                    st.get(0x7000, 3).unwrap_or(0),
+                    st.get(0x6000, 6).unwrap_or(0),
+                    s.al_status().state
+                );
+            } else {
+                let bits: String = (1..=8u8)
+                    .map(|c| {
+                        if st.get(0x7000, c) == Some(1) {
+                            '1'
+                        } else {
+                            '0'
+                        }
+                    })
+                    .collect();
+                println!(
+                    "slave {i} {name}: outputs 0x7000:01..08 = {bits}, AL {}",
+                    s.al_status().state
+                );
+            }
         }
     }
     let group = group.into_safe_op(md).await?;

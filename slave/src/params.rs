@@ -16,7 +16,7 @@
 //! | 0 | 4 | magic `PRM1` (0x314D5250) |
 //! | 4 | 4 | sequence number |
 //! | 8 | 2 | payload length |
-//! | 10 | 2 | layout version (1) |
+//! | 10 | 2 | layout version (2) |
 //! | 12 | 4 | CRC-32 over bytes 4..12 and the payload |
 //! | 16 | n | payload |
 

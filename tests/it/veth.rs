@@ -1,5 +1,6 @@
 //! The raw-socket runner on a veth pair: ethercrab's standard raw-socket
-//! `tx_rx_task` brings a slave served by `pam-slave` to OP.
+//! `tx_rx_task` brings a mixed line served by `pam-slave --line pam,io8`
+//! to OP.
 //!
 //! Needs root and `ip` (iproute2); skipped with a message otherwise. The
 //! namespace (and with it the veth pair) is removed even when the test
@@ -30,7 +31,7 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
     let child = Command::new("ip")
         .args(["netns", "exec", &guard.name])
         .arg(&bin)
-        .args(["--iface", &slave_if, "--count", "2"])
+        .args(["--iface", &slave_if, "--line", "pam,io8"])
         .stdout(Stdio::null())
         .stderr(Stdio::inherit())
         .spawn()
@@ -46,7 +47,8 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
             .await
             .expect("ethercrab finds the slaves over the veth pair");
         assert_eq!(group.len(), 2);
-        let sd = group.subdevice(md, 1).expect("second slave");
+        assert_eq!(group.subdevice(md, 1).expect("second slave").name(), "IO8");
+        let sd = group.subdevice(md, 0).expect("first slave");
         assert_eq!(sd.name(), "PAM-199-P-ETC");
         sd.sdo_write(0x800D, 2, 2500u16)
             .await
@@ -61,13 +63,22 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
             .await
             .expect("SM watchdog off");
         let group = group.into_op(md).await.expect("OP over raw Ethernet");
-        for sd in group.iter(md) {
-            let mut out = sd.outputs_raw_mut();
+        {
+            let pam = group.subdevice(md, 0).expect("PAM");
+            let mut out = pam.outputs_raw_mut();
             out[0] = 1;
             out[1..5].copy_from_slice(&7000i32.to_le_bytes());
         }
+        group.subdevice(md, 1).expect("IO8").outputs_raw_mut()[0] = 0x81;
         let resp = group.tx_rx(md).await.expect("process data");
-        assert_eq!(resp.working_counter, 6);
+        assert_eq!(resp.working_counter, 6, "3 per slave");
+        let io8_out1: bool = group
+            .subdevice(md, 1)
+            .expect("IO8")
+            .sdo_read(0x7000, 1)
+            .await
+            .expect("IO8 output 1");
+        assert!(io8_out1, "IO8 output byte arrived");
         let v: i32 = group
             .subdevice(md, 0)
             .expect("slave 0")

@@ -100,7 +100,25 @@ pub struct Tick<'a> {
     pub(crate) emergencies: &'a mut Emergencies,
 }
 
-impl Tick<'_> {
+impl<'a> Tick<'a> {
+    /// A tick context (for unit tests of an application's `tick`; the core
+    /// builds one per poll).
+    pub fn new(
+        od: &'a mut Od,
+        now_ns: u64,
+        outputs_valid: bool,
+        state: AlState,
+        emergencies: &'a mut Emergencies,
+    ) -> Self {
+        Tick {
+            od,
+            now_ns,
+            outputs_valid,
+            state,
+            emergencies,
+        }
+    }
+
     /// Sets the application's error-register bits (0x1001, see
     /// [`crate::coe::emergency::register`]); the core adds the
     /// communication and generic bits.

@@ -10,6 +10,38 @@
 //!    write hooks with abort codes, the periodic tick with injected time,
 //!    safe outputs, power-on and storage).
 //!
+//! Contradictions do not compile: a description that `validate` refuses
+//! fails the `const` assertion, and so does value storage of the wrong
+//! size:
+//!
+//! ```compile_fail
+//! use ecat_slave::device::*;
+//! use ecat_slave::od::build::{constant, sub0, var};
+//! use ecat_slave::od::{DataType, Object, ObjectCode, PdoMapping};
+//! const OBJECTS: &[Object] = &[
+//!     Object { index: 0x1000, name: "Device type", code: ObjectCode::Var,
+//!         entries: &[var("Device type", DataType::UInt32, PdoMapping::None, 0)] },
+//!     Object { index: 0x1018, name: "Identity", code: ObjectCode::Record, entries: &[
+//!         sub0(1), constant(1, "Vendor ID", DataType::UInt32, 1)] },
+//! ];
+//! ecat_slave::dictionary!(DICT, ENTRIES = OBJECTS, &[]);
+//! const DEV: DeviceDescription = DeviceDescription {
+//!     identity: Identity { vendor_id: 1, product_code: 1, revision: 1, serial: 0 },
+//!     names: DeviceNames { vendor: "V", type_name: "T", name: "T", group_type: "G",
+//!         group_name: "G" },
+//!     dictionary: &DICT,
+//!     process_data: ProcessData { sets: &[] },
+//!     mailbox: MailboxConfig::STANDARD,
+//!     esc: EscConfig::DEFAULT,
+//! };
+//! struct Bad;
+//! impl Application for Bad {
+//!     const DESCRIPTION: &'static DeviceDescription = &DEV;
+//!     type Values = [i64; 2]; // the dictionary has 3 entries
+//! }
+//! let _ = SoftSlave::new(Bad);
+//! ```
+//!
 //! The core does the rest: [`Slave`] is the firmware loop on any ESC
 //! reached through the [`Esc`](crate::esc::Esc) PDI trait, [`SoftSlave`] the
 //! same on the software ESC. The ESI, the SII ([`DeviceDescription::sii_image`]),

@@ -203,7 +203,16 @@ impl<E: Esc, A: Application> Slave<E, A> {
     pub const DESCRIPTION: &'static DeviceDescription = A::DESCRIPTION;
 
     /// The firmware in its power-on state on `esc`, running `app`.
+    ///
+    /// A device whose `Values` storage does not hold exactly its
+    /// dictionary's entry count does not compile.
     pub fn new(esc: E, mut app: A) -> Self {
+        const {
+            assert!(
+                <A::Values as ValueStorage>::LEN == A::DESCRIPTION.dictionary.entry_count(),
+                "Application::Values must be [i64; N] with N the dictionary's entry count"
+            );
+        }
         let mut store = ObjectStore::<A::Values>::new(A::DESCRIPTION.dictionary);
         app.power_on(A::Values::view_mut(&mut store));
         Slave {

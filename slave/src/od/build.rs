@@ -123,6 +123,16 @@ pub const fn map(sub: u8, name: &'static str, mapping: u32) -> Entry {
     )
 }
 
+/// A PDO mapping entry that maps `index:subindex` of `bits` bits (the
+/// mapping value packed for you).
+pub const fn map_to(sub: u8, name: &'static str, index: u16, subindex: u8, bits: u8) -> Entry {
+    map(
+        sub,
+        name,
+        (index as u32) << 16 | (subindex as u32) << 8 | bits as u32,
+    )
+}
+
 /// A padding mapping `0x000000nn` (index 0) in a PDO mapping object.
 pub const fn pad(sub: u8, bits: u8) -> Entry {
     map(sub, sub_name(sub), bits as u32)

@@ -40,6 +40,8 @@ pub type Od = ObjectStore<[i64]>;
 
 /// Storage for a dictionary's values: `[i64; N]` for any `N`.
 pub trait ValueStorage: Sized + Send + 'static {
+    /// Number of values held.
+    const LEN: usize;
     /// All zeros.
     fn zeroed() -> Self;
     /// The store as the unsized view.
@@ -49,6 +51,7 @@ pub trait ValueStorage: Sized + Send + 'static {
 }
 
 impl<const N: usize> ValueStorage for [i64; N] {
+    const LEN: usize = N;
     fn zeroed() -> Self {
         [0; N]
     }
