@@ -1,0 +1,179 @@
+//! # A `no_std` firmware of one device on the `ecat-slave` core
+//!
+//! What a real microcontroller firmware would link: the core, one device
+//! (`--features io8` or `--features pam`) and board support that reaches
+//! the hardware through C functions (the ESC over SPI, GPIO / the power
+//! stage, EEPROM, image flash). The firmware object lives in a `static`, so
+//! its RAM shows up in `.bss`/`.data` of the linked program like on a
+//! microcontroller. The C harness (`harness.c`) provides the board
+//! functions and `main`; `scripts/footprint.sh` links the two and measures
+//! the result. Without a device feature the crate is the empty baseline
+//! (the same entry points, doing nothing).
+//!
+//! Entry points (C ABI):
+//!
+//! * `int32_t fw_init(void)`: power-on; 0 on success.
+//! * `int32_t fw_poll(uint64_t now_ns)`: one pass of the firmware loop
+//!   (`Slave::poll_with`, FoE into the image flash); 0 on success, -1 when
+//!   the PDI failed, -2 before `fw_init`, -3 on re-entry.
+//! * `fw_layout_t fw_layout(void)`: the device's ESC memory layout, for the
+//!   harness's simulated master (a few bytes of code; a real firmware
+//!   would not export it).
+//!
+//! `unsafe` is used only for the FFI (see the comments at each use); the
+//! workspace crates stay `forbid(unsafe_code)`.
+#![no_std]
+#![deny(unsafe_op_in_unsafe_fn, missing_docs)]
+
+#[cfg(all(feature = "io8", feature = "pam"))]
+compile_error!("select one device: --features io8 or --features pam, not both");
+
+#[cfg(any(feature = "io8", feature = "pam"))]
+mod board;
+#[cfg(any(feature = "io8", feature = "pam"))]
+mod cell;
+mod ffi;
+
+#[cfg(any(feature = "io8", feature = "pam"))]
+use cell::FwCell;
+
+/// The memory layout of the device in ESC memory (start, length pairs),
+/// as `fw_layout` returns it to C.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FwLayout {
+    /// Standard mailbox out (SM0): start.
+    pub mbx_out_start: u16,
+    /// Standard mailbox out (SM0): length.
+    pub mbx_out_len: u16,
+    /// Standard mailbox in (SM1): start.
+    pub mbx_in_start: u16,
+    /// Standard mailbox in (SM1): length.
+    pub mbx_in_len: u16,
+    /// Bootstrap mailbox out: start.
+    pub boot_out_start: u16,
+    /// Bootstrap mailbox out: length (0: no BOOT).
+    pub boot_out_len: u16,
+    /// Bootstrap mailbox in: start.
+    pub boot_in_start: u16,
+    /// Bootstrap mailbox in: length.
+    pub boot_in_len: u16,
+    /// Output process data (SM2) start.
+    pub pd_out: u16,
+    /// Input process data (SM3) start.
+    pub pd_in: u16,
+}
+
+#[cfg(any(feature = "io8", feature = "pam"))]
+mod device {
+    use ecat_slave::device::{Application, MemoryLayout, Slave};
+
+    use crate::FwLayout;
+    use crate::board::SpiEsc;
+
+    #[cfg(feature = "io8")]
+    pub use crate::board::io8::App;
+    #[cfg(feature = "pam")]
+    pub use crate::board::pam::App;
+
+    /// The whole firmware state: ESC handle, application, dictionary,
+    /// mailbox servers, process images.
+    pub type Firmware = Slave<SpiEsc, App>;
+
+    const LAYOUT: MemoryLayout = <App as Application>::DESCRIPTION.layout();
+
+    pub const FW_LAYOUT: FwLayout = FwLayout {
+        mbx_out_start: LAYOUT.mbx_out.0,
+        mbx_out_len: LAYOUT.mbx_out.1,
+        mbx_in_start: LAYOUT.mbx_in.0,
+        mbx_in_len: LAYOUT.mbx_in.1,
+        boot_out_start: LAYOUT.boot_out.0,
+        boot_out_len: LAYOUT.boot_out.1,
+        boot_in_start: LAYOUT.boot_in.0,
+        boot_in_len: LAYOUT.boot_in.1,
+        pd_out: LAYOUT.pd_out,
+        pd_in: LAYOUT.pd_in,
+    };
+
+    pub fn new() -> Firmware {
+        Slave::new(SpiEsc, crate::board::new_app())
+    }
+}
+
+/// The firmware object. `None` until `fw_init`; the cell hands out `&mut`
+/// to one caller at a time (no interrupt or second thread may poll).
+#[cfg(any(feature = "io8", feature = "pam"))]
+static FIRMWARE: FwCell<device::Firmware> = FwCell::new();
+
+/// Power-on: builds the firmware (dictionary at its defaults, saved
+/// parameters loaded from the EEPROM) into its static. Returns 0, or -3 if
+/// called while `fw_poll` runs.
+// SAFETY (`no_mangle`): the C harness links against this exact symbol name;
+// no other item in the program is called `fw_init`.
+#[unsafe(no_mangle)]
+pub extern "C" fn fw_init() -> i32 {
+    #[cfg(any(feature = "io8", feature = "pam"))]
+    {
+        FIRMWARE
+            .with(|slot| {
+                *slot = Some(device::new());
+                0
+            })
+            .unwrap_or(-3)
+    }
+    #[cfg(not(any(feature = "io8", feature = "pam")))]
+    {
+        0
+    }
+}
+
+/// One pass of the firmware loop at `now_ns` (monotonic): AL control,
+/// mailbox (CoE, FoE into the image flash), process data, the application.
+// SAFETY (`no_mangle`): the C harness links against this exact symbol name;
+// no other item in the program is called `fw_poll`.
+#[unsafe(no_mangle)]
+pub extern "C" fn fw_poll(now_ns: u64) -> i32 {
+    #[cfg(any(feature = "io8", feature = "pam"))]
+    {
+        FIRMWARE
+            .with(|slot| match slot {
+                Some(fw) => {
+                    let mut flash = board::FlashStore;
+                    match fw.poll_with(now_ns, Some(&mut flash)) {
+                        Ok(()) => 0,
+                        Err(_) => -1,
+                    }
+                }
+                None => -2,
+            })
+            .unwrap_or(-3)
+    }
+    #[cfg(not(any(feature = "io8", feature = "pam")))]
+    {
+        let _ = now_ns;
+        0
+    }
+}
+
+/// The device's memory layout in ESC memory (all zero in the baseline).
+// SAFETY (`no_mangle`): the C harness links against this exact symbol name;
+// no other item in the program is called `fw_layout`.
+#[unsafe(no_mangle)]
+pub extern "C" fn fw_layout() -> FwLayout {
+    #[cfg(any(feature = "io8", feature = "pam"))]
+    {
+        device::FW_LAYOUT
+    }
+    #[cfg(not(any(feature = "io8", feature = "pam")))]
+    {
+        FwLayout::default()
+    }
+}
+
+/// A panic stops the firmware: the C side decides what that means (the
+/// harness aborts so that a test run fails loudly; a real board would
+/// switch its outputs off and reset through the watchdog).
+#[panic_handler]
+fn panic(_info: &core::panic::PanicInfo<'_>) -> ! {
+    ffi::halt()
+}
