@@ -8,36 +8,15 @@
 #![allow(missing_docs)]
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use ecat_slave::firmware::{EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, pack};
 use master_test::VirtualBus;
 use master_test::foe::{self, enter_boot};
 use master_test::mailbox::{MailboxClient, MailboxGeometry};
-use pam_199_p_etc::{PRODUCT_CODE, VENDOR_ID};
 use std::time::{Duration, Instant};
 
 const LEN: usize = 1024 * 1024;
 
-fn image() -> Vec<u8> {
-    let payload: Vec<u8> = (0..LEN).map(|i| (i * 13) as u8).collect();
-    let header = EfwHeaderRepr {
-        header_len: EFW_HEADER_LEN as u16,
-        flags: 0,
-        vendor_id: VENDOR_ID,
-        product_code: PRODUCT_CODE,
-        revision_min: 0,
-        revision_max: u32::MAX,
-        version: FirmwareVersion::new("11").expect("version"),
-        payload_len: 0,
-        payload_crc: 0,
-    };
-    let mut out = vec![0u8; LEN + 512];
-    let n = pack(&header, &payload, &mut out).expect("pack");
-    out.truncate(n);
-    out
-}
-
 fn bench(c: &mut Criterion) {
-    let img = image();
+    let img = foe::pam_image("11", LEN);
     let bus = VirtualBus::new(1).expect("bus");
     let md = &*bus.maindevice;
     let station = smol::block_on(async {

@@ -204,3 +204,35 @@ pub async fn enter_boot_with(
     }
     request_state(md, station, 0x03).await
 }
+
+/// A `.efw` image of `payload` with firmware `version` for the device with
+/// `vendor_id`/`product_code`, any revision.
+pub fn efw_image(vendor_id: u32, product_code: u32, version: &str, payload: &[u8]) -> Vec<u8> {
+    use ecat_slave::firmware::{EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, pack};
+    let header = EfwHeaderRepr {
+        header_len: EFW_HEADER_LEN as u16,
+        flags: 0,
+        vendor_id,
+        product_code,
+        revision_min: 0,
+        revision_max: u32::MAX,
+        version: FirmwareVersion::new(version).unwrap_or_default(),
+        payload_len: 0,
+        payload_crc: 0,
+    };
+    let mut out = vec![0u8; payload.len() + 1024];
+    let n = pack(&header, payload, &mut out).unwrap_or(0);
+    out.truncate(n);
+    out
+}
+
+/// [`efw_image`] for the PAM-199-P-ETC with `len` bytes of test payload.
+pub fn pam_image(version: &str, len: usize) -> Vec<u8> {
+    let payload: Vec<u8> = (0..len).map(|i| (i * 7 + i / 251) as u8).collect();
+    efw_image(
+        pam_199_p_etc::VENDOR_ID,
+        pam_199_p_etc::PRODUCT_CODE,
+        version,
+        &payload,
+    )
+}

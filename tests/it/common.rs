@@ -102,3 +102,40 @@ pub fn setup(tag: &str) -> Result<(Netns, String, String), String> {
     ip(&["-n", &ns, "link", "set", "lo", "up"])?;
     Ok((guard, host_if, slave_if))
 }
+
+/// The master type of the tests.
+pub type Md = ethercrab::MainDevice<'static>;
+
+/// AL status (0x0130) and AL status code (0x0134) of `station`.
+pub async fn status(md: &Md, station: u16) -> (u16, u16) {
+    let st: u16 = ethercrab::Command::fprd(station, 0x0130)
+        .receive(md)
+        .await
+        .expect("AL status");
+    let code: u16 = ethercrab::Command::fprd(station, 0x0134)
+        .receive(md)
+        .await
+        .expect("AL status code");
+    (st, code)
+}
+
+/// A few frames, so the link thread polls the firmware after each.
+pub async fn settle(md: &Md) {
+    for _ in 0..3 {
+        let _: u8 = ethercrab::Command::brd(0x0000)
+            .receive(md)
+            .await
+            .expect("poll");
+    }
+}
+
+/// Writes AL control and returns (AL status, AL status code) once the
+/// firmware has run.
+pub async fn request(md: &Md, station: u16, control: u16) -> (u16, u16) {
+    ethercrab::Command::fpwr(station, 0x0120)
+        .send(md, control)
+        .await
+        .expect("AL control");
+    settle(md).await;
+    status(md, station).await
+}

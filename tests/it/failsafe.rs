@@ -4,11 +4,10 @@
 //! reported at BOOT->INIT, and nothing queued before INIT reaches the next
 //! master session.
 
+use crate::common::{request, settle, status};
 use ecat_slave::esc::EscError;
 use ecat_slave::esc::soft::PdiFault;
-use ecat_slave::firmware::{
-    BootState, EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, ImageStore, Slot, StoreError, pack,
-};
+use ecat_slave::firmware::{BootState, ImageStore, Slot, StoreError};
 use ecat_slave::host::chain::{IMAGE_SLOT_CAPACITY, provision_factory};
 use ecat_slave::host::image_store::VecStore;
 use ecat_slave::wire::coe::{CoeHeader, CoeService, Emergency, EmergencyRepr};
@@ -17,7 +16,7 @@ use master_test::VirtualBus;
 use master_test::foe::{self, enter_boot};
 use master_test::link::{Chain, Clock, lock};
 use master_test::mailbox::{ClientError, MailboxClient, MailboxGeometry};
-use pam_199_p_etc::{PRODUCT_CODE, Pam, VENDOR_ID};
+use pam_199_p_etc::Pam;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -25,37 +24,6 @@ use std::time::Duration;
 type Md = ethercrab::MainDevice<'static>;
 
 const ERR: u16 = 0x10;
-
-async fn status(md: &Md, station: u16) -> (u16, u16) {
-    let st: u16 = ethercrab::Command::fprd(station, 0x0130)
-        .receive(md)
-        .await
-        .expect("AL status");
-    let code: u16 = ethercrab::Command::fprd(station, 0x0134)
-        .receive(md)
-        .await
-        .expect("AL status code");
-    (st, code)
-}
-
-/// A few frames, so the link thread polls the firmware after each.
-async fn settle(md: &Md) {
-    for _ in 0..3 {
-        let _: u8 = ethercrab::Command::brd(0x0000)
-            .receive(md)
-            .await
-            .expect("poll");
-    }
-}
-
-async fn request(md: &Md, station: u16, control: u16) -> (u16, u16) {
-    ethercrab::Command::fpwr(station, 0x0120)
-        .send(md, control)
-        .await
-        .expect("AL control");
-    settle(md).await;
-    status(md, station).await
-}
 
 /// The next emergency in the mailbox, if one arrives within 200 ms.
 async fn next_emergency(c: &mut MailboxClient<'_>) -> Option<EmergencyRepr> {
@@ -245,21 +213,7 @@ fn a_store_that_cannot_commit_the_image_reports_0x0007_at_boot_to_init() {
         let s = group.subdevice(md, 0).expect("slave").configured_address();
         enter_boot(md, s).await.expect("BOOT");
         let mut c = MailboxClient::new(md, s, MailboxGeometry::bootstrap());
-        let payload: Vec<u8> = (0..3000).map(|i| i as u8).collect();
-        let header = EfwHeaderRepr {
-            header_len: EFW_HEADER_LEN as u16,
-            flags: 0,
-            vendor_id: VENDOR_ID,
-            product_code: PRODUCT_CODE,
-            revision_min: 0,
-            revision_max: u32::MAX,
-            version: FirmwareVersion::new("11").expect("version"),
-            payload_len: 0,
-            payload_crc: 0,
-        };
-        let mut img = vec![0u8; 4000];
-        let n = pack(&header, &payload, &mut img).expect("pack");
-        img.truncate(n);
+        let img = foe::pam_image("11", 3000);
         foe::write(&mut c, "pam-199-p-etc.efw", 0, &img, |_, _| {})
             .await
             .expect("download");

@@ -1,7 +1,6 @@
 //! Firmware update over FoE in BOOT (manual 5.10) through ethercrab's
 //! register access and the test master's FoE client.
 
-use ecat_slave::firmware::{EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, pack};
 use master_test::VirtualBus;
 use master_test::foe::{self, enter_boot, request_state};
 use master_test::link::lock;
@@ -11,21 +10,7 @@ use pam_199_p_etc::{PRODUCT_CODE, VENDOR_ID};
 /// A `.efw` image of `len` payload bytes with `version` for `product`.
 fn image(len: usize, version: &str, product: u32) -> Vec<u8> {
     let payload: Vec<u8> = (0..len).map(|i| (i * 7 + i / 251) as u8).collect();
-    let header = EfwHeaderRepr {
-        header_len: EFW_HEADER_LEN as u16,
-        flags: 0,
-        vendor_id: VENDOR_ID,
-        product_code: product,
-        revision_min: 0,
-        revision_max: u32::MAX,
-        version: FirmwareVersion::new(version).expect("version"),
-        payload_len: 0,
-        payload_crc: 0,
-    };
-    let mut out = vec![0u8; len + 512];
-    let n = pack(&header, &payload, &mut out).expect("pack");
-    out.truncate(n);
-    out
+    foe::efw_image(VENDOR_ID, product, version, &payload)
 }
 
 /// Software version after a power cycle, read over SDO by a fresh master.

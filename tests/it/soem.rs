@@ -12,8 +12,6 @@
 //! skipped with a message otherwise, a failure under `CI=true`.
 
 use crate::common::{runner_binary, setup, skip};
-use ecat_slave::firmware::{EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, pack};
-use pam_199_p_etc::{PRODUCT_CODE, VENDOR_ID};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
@@ -78,25 +76,6 @@ fn run_python(py: &str, args: &[&str]) -> (bool, String) {
         String::from_utf8_lossy(&out.stderr)
     );
     (out.status.success(), text)
-}
-
-fn efw(version: &str, len: usize) -> Vec<u8> {
-    let payload: Vec<u8> = (0..len).map(|i| (i * 13 + i / 7) as u8).collect();
-    let header = EfwHeaderRepr {
-        header_len: EFW_HEADER_LEN as u16,
-        flags: 0,
-        vendor_id: VENDOR_ID,
-        product_code: PRODUCT_CODE,
-        revision_min: 0,
-        revision_max: u32::MAX,
-        version: FirmwareVersion::new(version).expect("version"),
-        payload_len: 0,
-        payload_crc: 0,
-    };
-    let mut out = vec![0u8; len + 512];
-    let n = pack(&header, &payload, &mut out).expect("pack");
-    out.truncate(n);
-    out
 }
 
 /// Appends to `target/interop-logs/soem.log` (which `.ci/run` prints after
@@ -178,7 +157,7 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
         ecat_esi::sii_image(&pam_199_p_etc::DEVICE),
     )
     .expect("SII file");
-    let good = efw("11", 40_000);
+    let good = master_test::foe::pam_image("11", 40_000);
     let mut bad = good.clone();
     let last = bad.len() - 1;
     bad[last] ^= 0xFF;

@@ -13,37 +13,16 @@ type Md = ethercrab::MainDevice<'static>;
 /// Writes AL control and returns (AL status, AL status code) once the
 /// firmware has run.
 async fn request(bus: &VirtualBus, station: u16, control: u16) -> (u16, u16) {
-    let md: &Md = &bus.maindevice;
-    ethercrab::Command::fpwr(station, 0x0120)
-        .send(md, control)
-        .await
-        .expect("AL control");
-    settle(bus).await;
-    status(bus, station).await
+    crate::common::request(&bus.maindevice, station, control).await
 }
 
 async fn status(bus: &VirtualBus, station: u16) -> (u16, u16) {
-    let md: &Md = &bus.maindevice;
-    let st: u16 = ethercrab::Command::fprd(station, 0x0130)
-        .receive(md)
-        .await
-        .expect("AL status");
-    let code: u16 = ethercrab::Command::fprd(station, 0x0134)
-        .receive(md)
-        .await
-        .expect("code");
-    (st, code)
+    crate::common::status(&bus.maindevice, station).await
 }
 
 /// Lets the link thread poll the firmware a few times.
 async fn settle(bus: &VirtualBus) {
-    for _ in 0..3 {
-        let md: &Md = &bus.maindevice;
-        let _: u8 = ethercrab::Command::brd(0x0000)
-            .receive(md)
-            .await
-            .expect("poll");
-    }
+    crate::common::settle(&bus.maindevice).await;
 }
 
 async fn write_sm(bus: &VirtualBus, station: u16, sm: u16, start: u16, len: u16, control: u8) {

@@ -3,52 +3,98 @@
 //!
 //! `core` has no mutex, and a `static` must be `Sync`, so a plain `static`
 //! of the (non-`Sync`, mutable) firmware needs a small wrapper: an atomic
-//! "busy" flag guards an `UnsafeCell`. A second caller while one holds it
-//! (an interrupt calling `fw_poll` inside `fw_poll`) gets `None` instead of
-//! a second `&mut`. On a core without compare-and-swap (Cortex-M0) the
-//! same guard would be a critical section.
+//! state guards an `UnsafeCell`. A second caller while one holds it (an
+//! interrupt calling `fw_poll` inside `fw_poll`) gets `None` instead of a
+//! second `&mut`. On a core without compare-and-swap (Cortex-M0) the same
+//! guard would be a critical section.
+//!
+//! The value is a `MaybeUninit` rather than an `Option`: an `Option` of the
+//! firmware is `None` through a niche somewhere inside it, so its initial
+//! image is not all zeros and the whole object (kilobytes) would land in
+//! `.data`, costing its size twice on a microcontroller (flash for the
+//! initial image, RAM for the copy). Uninitialised, it lands in `.bss`.
 
 use core::cell::UnsafeCell;
-use core::sync::atomic::{AtomicBool, Ordering};
+use core::mem::MaybeUninit;
+use core::sync::atomic::{AtomicU8, Ordering};
 
-/// A value in a `static`, reached by one caller at a time.
+/// No value yet.
+const EMPTY: u8 = 0;
+/// A value, not in use.
+const READY: u8 = 1;
+/// In use by a caller (initialised or not, see `with`).
+const BUSY: u8 = 2;
+
+/// A value in a `static`, built at run time, reached by one caller at a
+/// time.
 pub struct FwCell<T> {
-    busy: AtomicBool,
-    value: UnsafeCell<Option<T>>,
+    state: AtomicU8,
+    value: UnsafeCell<MaybeUninit<T>>,
 }
 
-// SAFETY (`unsafe impl Sync`): the value is only reached through `with`,
-// which gives out a `&mut` to one caller at a time (the `busy` flag, taken
-// with an atomic compare-exchange and released after the call). Handing the
-// value to whichever thread holds the flag needs `T: Send`.
+// SAFETY (`unsafe impl Sync`): the value is only reached through `init` and
+// `with`, which take the state to BUSY with an atomic compare-exchange
+// first, so at most one caller has a reference at any time. Handing the
+// value to whichever thread holds it needs `T: Send`.
 unsafe impl<T: Send> Sync for FwCell<T> {}
 
 impl<T> FwCell<T> {
-    /// An empty cell (`None`), usable as a `static` initialiser.
+    /// An empty cell, usable as a `static` initialiser (all `.bss`).
     pub const fn new() -> Self {
         FwCell {
-            busy: AtomicBool::new(false),
-            value: UnsafeCell::new(None),
+            state: AtomicU8::new(EMPTY),
+            value: UnsafeCell::new(MaybeUninit::uninit()),
         }
     }
 
-    /// Runs `f` on the value; `None` if the value is in use (re-entry).
-    pub fn with<R>(&self, f: impl FnOnce(&mut Option<T>) -> R) -> Option<R> {
-        if self
-            .busy
-            .compare_exchange(false, true, Ordering::Acquire, Ordering::Relaxed)
-            .is_err()
-        {
-            return None;
+    /// Stores `make()` (dropping a value stored before); `false` if the
+    /// value is in use (re-entry).
+    pub fn init(&self, make: impl FnOnce() -> T) -> bool {
+        let Ok(before) = self.take(&[EMPTY, READY]) else {
+            return false;
+        };
+        // SAFETY (access through the `UnsafeCell` pointer): `take` moved
+        // the state to BUSY, so no other reference to the value exists
+        // until the state is released below. The old value is dropped only
+        // if the state said it was initialised (READY).
+        let slot = unsafe { &mut *self.value.get() };
+        if before == READY {
+            // SAFETY (`assume_init_drop`): READY means `slot` holds a
+            // value written by an earlier `init`.
+            unsafe { slot.assume_init_drop() };
         }
-        // SAFETY (dereferencing the `UnsafeCell` pointer): the flag was
-        // clear and is now ours, so no other reference to the value exists
-        // until we clear it below; the reference does not outlive `f`. A
-        // panic aborts (panic = "abort"), so no unwinding path can leave
-        // the flag set while a reference escapes.
-        let value = unsafe { &mut *self.value.get() };
+        slot.write(make());
+        self.state.store(READY, Ordering::Release);
+        true
+    }
+
+    /// Runs `f` on the value: `None` before `init` or while the value is
+    /// in use (re-entry).
+    pub fn with<R>(&self, f: impl FnOnce(&mut T) -> R) -> Option<R> {
+        self.take(&[READY]).ok()?;
+        // SAFETY (access through the `UnsafeCell` pointer and
+        // `assume_init_mut`): the state was READY, so the value is
+        // initialised, and `take` moved it to BUSY, so no other reference
+        // exists until the state is released below; the reference does not
+        // outlive `f`. A panic aborts (panic = "abort"), so no unwinding
+        // path can leave a reference behind.
+        let value = unsafe { (*self.value.get()).assume_init_mut() };
         let r = f(value);
-        self.busy.store(false, Ordering::Release);
+        self.state.store(READY, Ordering::Release);
         Some(r)
+    }
+
+    /// Moves the state from one of `from` to BUSY; returns the old state.
+    fn take(&self, from: &[u8]) -> Result<u8, ()> {
+        for &s in from {
+            if self
+                .state
+                .compare_exchange(s, BUSY, Ordering::Acquire, Ordering::Relaxed)
+                .is_ok()
+            {
+                return Ok(s);
+            }
+        }
+        Err(())
     }
 }

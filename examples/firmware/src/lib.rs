@@ -15,7 +15,7 @@
 //! * `int32_t fw_init(void)`: power-on; 0 on success.
 //! * `int32_t fw_poll(uint64_t now_ns)`: one pass of the firmware loop
 //!   (`Slave::poll_with`, FoE into the image flash); 0 on success, -1 when
-//!   the PDI failed, -2 before `fw_init`, -3 on re-entry.
+//!   the PDI failed, -2 before `fw_init` or on re-entry.
 //! * `fw_layout_t fw_layout(void)`: the device's ESC memory layout, for the
 //!   harness's simulated master (a few bytes of code; a real firmware
 //!   would not export it).
@@ -100,26 +100,22 @@ mod device {
     }
 }
 
-/// The firmware object. `None` until `fw_init`; the cell hands out `&mut`
-/// to one caller at a time (no interrupt or second thread may poll).
+/// The firmware object: empty until `fw_init`; the cell hands out `&mut`
+/// to one caller at a time (a nested call gets an error, not a second
+/// `&mut`).
 #[cfg(any(feature = "io8", feature = "pam"))]
 static FIRMWARE: FwCell<device::Firmware> = FwCell::new();
 
 /// Power-on: builds the firmware (dictionary at its defaults, saved
 /// parameters loaded from the EEPROM) into its static. Returns 0, or -3 if
-/// called while `fw_poll` runs.
+/// called from inside `fw_poll`.
 // SAFETY (`no_mangle`): the C harness links against this exact symbol name;
 // no other item in the program is called `fw_init`.
 #[unsafe(no_mangle)]
 pub extern "C" fn fw_init() -> i32 {
     #[cfg(any(feature = "io8", feature = "pam"))]
     {
-        FIRMWARE
-            .with(|slot| {
-                *slot = Some(device::new());
-                0
-            })
-            .unwrap_or(-3)
+        if FIRMWARE.init(device::new) { 0 } else { -3 }
     }
     #[cfg(not(any(feature = "io8", feature = "pam")))]
     {
@@ -136,17 +132,14 @@ pub extern "C" fn fw_poll(now_ns: u64) -> i32 {
     #[cfg(any(feature = "io8", feature = "pam"))]
     {
         FIRMWARE
-            .with(|slot| match slot {
-                Some(fw) => {
-                    let mut flash = board::FlashStore;
-                    match fw.poll_with(now_ns, Some(&mut flash)) {
-                        Ok(()) => 0,
-                        Err(_) => -1,
-                    }
+            .with(|fw| {
+                let mut flash = board::FlashStore;
+                match fw.poll_with(now_ns, Some(&mut flash)) {
+                    Ok(()) => 0,
+                    Err(_) => -1,
                 }
-                None => -2,
             })
-            .unwrap_or(-3)
+            .unwrap_or(-2)
     }
     #[cfg(not(any(feature = "io8", feature = "pam")))]
     {

@@ -343,13 +343,5 @@ mod tests {
         assert!(err.to_string().contains("no-such-if0"), "{err}");
         let err = run(&cfg, Vec::new(), &AtomicBool::new(false)).unwrap_err();
         assert!(err.to_string().contains("1 to 512"), "{err}");
-        let cfg = RunnerConfig {
-            iface: "no-such-if0".into(),
-            pcap: None,
-            state_dir: None,
-        };
-        let one: Vec<Box<dyn LineSlave>> = vec![Box::new(crate::testing::slave())];
-        let err = run(&cfg, one, &AtomicBool::new(false)).unwrap_err();
-        assert!(err.to_string().contains("no-such-if0"), "{err}");
     }
 }
