@@ -135,6 +135,9 @@ pub struct SoftEsc {
     wd_restart: bool,
     /// Injected PDI failure (tests of the firmware's fail-safe paths).
     pdi_fault: Option<PdiFault>,
+    /// Counts changes of the station address or alias (lets a line keep
+    /// its address index current).
+    addr_gen: u32,
 }
 
 /// A PDI failure injected into the software ESC: PDI accesses that touch
@@ -207,6 +210,7 @@ impl SoftEsc {
             wd_pdi_at: None,
             wd_restart: false,
             pdi_fault: None,
+            addr_gen: 0,
         };
         let n = sii.len().min(SII_SIZE);
         if let (Some(dst), Some(src)) = (esc.sii.get_mut(..n), sii.get(..n)) {
@@ -245,8 +249,7 @@ impl SoftEsc {
         self.set_u16(reg::FEATURES, 0x0000);
         let alias = self.sii_word(4);
         self.set_u16(reg::STATION_ALIAS, alias);
-        self.station = 0;
-        self.alias = alias;
+        self.refresh_address();
         let pdi = self.sii_word(0);
         self.set_u8(reg::PDI_CONTROL, (pdi & 0xFF) as u8);
         self.set_u8(reg::ESC_CONFIG, (pdi >> 8) as u8);
@@ -265,6 +268,24 @@ impl SoftEsc {
     /// The configured station address (0x0010).
     pub fn station_address(&self) -> u16 {
         self.station
+    }
+
+    /// A number that changes whenever the station address or alias does
+    /// (a line rebuilds its address index when it sees a new one).
+    pub fn address_generation(&self) -> u32 {
+        self.addr_gen
+    }
+
+    /// Takes the station address and alias registers into the cache that
+    /// configured addressing uses, counting a change.
+    fn refresh_address(&mut self) {
+        let station = self.mem_u16(reg::STATION_ADDRESS);
+        let alias = self.mem_u16(reg::STATION_ALIAS);
+        if (station, alias) != (self.station, self.alias) {
+            self.station = station;
+            self.alias = alias;
+            self.addr_gen = self.addr_gen.wrapping_add(1);
+        }
     }
 
     /// The configured station alias (0x0012).
@@ -620,14 +641,18 @@ impl SoftEsc {
         if b > 0x1_0000 {
             return false;
         }
-        // SyncManager checks.
+        // SyncManager checks, on the part in process RAM only: as on
+        // silicon, SyncManagers map process RAM, and one a master
+        // configured over the registers must not hide them (the master
+        // could no longer read AL status to repair it).
+        let ram = a.max(u32::from(reg::PROCESS_RAM));
         let mut complete = 0u8;
-        let mut bits = self.sm_active;
+        let mut bits = if ram < b { self.sm_active } else { 0 };
         while bits != 0 {
             let n = bits.trailing_zeros() as usize;
             bits &= bits - 1;
             let Some(sm) = self.sms.get(n) else { continue };
-            if !sm.overlaps(a, b) {
+            if !sm.overlaps(ram, b) {
                 continue;
             }
             if sm.is_mailbox() {
@@ -638,7 +663,7 @@ impl SoftEsc {
                 // Reading back a buffered output area is allowed (memory).
                 continue;
             }
-            if sm.covers_last(a, b) {
+            if sm.covers_last(ram, b) {
                 complete |= 1 << n;
             }
         }
@@ -800,8 +825,6 @@ impl SoftEsc {
         if al_control {
             self.raise_al_event(reg::AL_EVENT_AL_CONTROL);
         }
-        self.station = self.mem_u16(reg::STATION_ADDRESS);
-        self.alias = self.mem_u16(reg::STATION_ALIAS);
         if touched_fmmu != 0 {
             self.reload_fmmus();
         }
@@ -815,6 +838,9 @@ impl SoftEsc {
         if sii_command {
             self.sii_execute();
         }
+        // After the SII command: an EEPROM reload changes the alias, and
+        // addressing must follow it at once.
+        self.refresh_address();
     }
 
     fn reload_fmmus(&mut self) {
@@ -1117,7 +1143,7 @@ impl Esc for SoftEsc {
                     self.set_u8(r, v);
                 }
             }
-            self.alias = self.mem_u16(reg::STATION_ALIAS);
+            self.refresh_address();
             return Ok(());
         }
         let (complete, _touched) = self.pdi_sm_checks(a, b, true)?;
@@ -1298,6 +1324,70 @@ mod tests {
         let (mut f, _) = frame(&[(Command::Apwr, phys(0, reg::SII_CONTROL), &[0x00, 0x01])]);
         e.process_frame(&mut f);
         assert_eq!(e.mem_u16(reg::SII_CONTROL) & 0x7800, 0);
+    }
+
+    #[test]
+    fn a_mailbox_sm_over_the_registers_does_not_hide_them() {
+        let mut e = esc();
+        // SM1 (mailbox in, ECAT reads) wrongly placed over 0x0000..0x0200.
+        let sm1 = [0x00, 0x00, 0x00, 0x02, 0x22, 0x00, 0x01, 0x00];
+        let (mut f, _) = frame(&[(Command::Apwr, phys(0, 0x0808), &sm1)]);
+        e.process_frame(&mut f);
+        let (mut f, r) = frame(&[
+            (Command::Brd, phys(0, 0x0000), &[0]),
+            (Command::Aprd, phys(0, reg::STATION_ADDRESS), &[0, 0]),
+            (Command::Aprd, phys(0, reg::AL_STATUS), &[0, 0]),
+        ]);
+        e.process_frame(&mut f);
+        assert_eq!(
+            (wkc(&f, &r[0]), wkc(&f, &r[1]), wkc(&f, &r[2])),
+            (1, 1, 1),
+            "registers stay readable"
+        );
+        assert_eq!(&f[r[2].clone()], &[0x01, 0x00], "AL status INIT");
+    }
+
+    #[test]
+    fn an_eeprom_reload_moves_alias_addressing_at_once() {
+        let mut e = esc();
+        // Write alias 0x1234 into SII word 4 (write access on), then reload.
+        let (mut f, _) = frame(&[
+            (Command::Apwr, phys(0, reg::SII_CONTROL), &[0x01, 0x00]),
+            (Command::Apwr, phys(0, reg::SII_DATA), &[0x34, 0x12]),
+            (
+                Command::Apwr,
+                phys(0, reg::SII_CONTROL),
+                &[0x01, 0x02, 0x04, 0x00, 0x00, 0x00],
+            ),
+            (
+                Command::Apwr,
+                phys(0, reg::SII_CONTROL),
+                &[0x00, 0x04, 0x00, 0x00, 0x00, 0x00],
+            ),
+            (Command::Fprd, phys(0x1234, reg::AL_STATUS), &[0, 0]),
+        ]);
+        let generation = e.address_generation();
+        e.process_frame(&mut f);
+        let r = frame(&[
+            (Command::Apwr, phys(0, reg::SII_CONTROL), &[0x01, 0x00]),
+            (Command::Apwr, phys(0, reg::SII_DATA), &[0x34, 0x12]),
+            (
+                Command::Apwr,
+                phys(0, reg::SII_CONTROL),
+                &[0x01, 0x02, 0x04, 0x00, 0x00, 0x00],
+            ),
+            (
+                Command::Apwr,
+                phys(0, reg::SII_CONTROL),
+                &[0x00, 0x04, 0x00, 0x00, 0x00, 0x00],
+            ),
+            (Command::Fprd, phys(0x1234, reg::AL_STATUS), &[0, 0]),
+        ])
+        .1;
+        assert_eq!(e.mem_u16(reg::STATION_ALIAS), 0x1234, "register reloaded");
+        assert_eq!(e.station_alias(), 0x1234, "addressing follows");
+        assert_ne!(e.address_generation(), generation);
+        assert_eq!(wkc(&f, &r[4]), 1, "FPRD by the new alias in the same frame");
     }
 
     fn configure_mailbox(e: &mut SoftEsc) {

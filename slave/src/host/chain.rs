@@ -182,6 +182,8 @@ pub struct Chain {
     pdi_failures: u64,
     /// (station address or alias, slave position), sorted.
     addresses: Vec<(u16, usize)>,
+    /// Each slave's address generation when `addresses` was built.
+    addr_gens: Vec<u32>,
 }
 
 impl core::fmt::Debug for Chain {
@@ -237,6 +239,7 @@ impl Chain {
             frames: 0,
             pdi_failures: 0,
             addresses: Vec::new(),
+            addr_gens: Vec::new(),
         };
         chain.reindex();
         chain
@@ -244,8 +247,10 @@ impl Chain {
 
     fn reindex(&mut self) {
         self.addresses.clear();
+        self.addr_gens.clear();
         for (i, s) in self.slaves.iter().enumerate() {
             let esc = s.esc();
+            self.addr_gens.push(esc.address_generation());
             self.addresses.push((esc.station_address(), i));
             let alias = esc.station_alias();
             if alias != 0 && alias != esc.station_address() {
@@ -312,6 +317,23 @@ impl Chain {
         FrameOutcome::Processed { datagrams: count }
     }
 
+    /// Whether slave `i`'s station address or alias changed since the
+    /// index was built.
+    fn moved(&self, i: usize) -> bool {
+        match (self.slaves.get(i), self.addr_gens.get(i)) {
+            (Some(s), Some(g)) => s.esc().address_generation() != *g,
+            _ => false,
+        }
+    }
+
+    /// Rebuilds the address index if any slave's address or alias changed
+    /// (a register write, an EEPROM reload, the firmware through its PDI).
+    fn refresh_index(&mut self) {
+        if (0..self.slaves.len()).any(|i| self.moved(i)) {
+            self.reindex();
+        }
+    }
+
     fn dispatch(&mut self, dg: &mut Datagram<&mut [u8]>, n: usize) {
         let cmd = dg.command();
         match cmd.addressing() {
@@ -320,6 +342,7 @@ impl Chain {
                 // Every slave answering to this address, in line order.
                 let first = self.addresses.partition_point(|(a, _)| *a < adp);
                 let mut k = first;
+                let mut moved = false;
                 while let Some(&(a, i)) = self.addresses.get(k) {
                     if a != adp {
                         break;
@@ -327,9 +350,10 @@ impl Chain {
                     if let Some(s) = self.slaves.get_mut(i) {
                         s.esc_mut().process_datagram(dg);
                     }
+                    moved |= cmd.is_write() && self.moved(i);
                     k += 1;
                 }
-                if cmd.is_write() && dg.ado() < 0x0014 {
+                if moved {
                     self.reindex();
                 }
             }
@@ -342,7 +366,7 @@ impl Chain {
                     s.esc_mut().process_datagram(dg);
                 }
                 dg.set_adp(adp0.wrapping_add(n as u16));
-                if cmd.is_write() && dg.ado() < 0x0014 {
+                if cmd.is_write() && self.moved(pos) {
                     self.reindex();
                 }
             }
@@ -353,7 +377,7 @@ impl Chain {
                     s.esc_mut().process_datagram(dg);
                 }
                 if cmd.is_write() {
-                    self.reindex();
+                    self.refresh_index();
                 }
             }
         }
@@ -375,6 +399,8 @@ impl Chain {
                 first.get_or_insert((i, e));
             }
         }
+        // The firmware may have changed an alias through its PDI.
+        self.refresh_index();
         first.map_or(Ok(()), Err)
     }
 
@@ -453,6 +479,25 @@ mod tests {
     fn random_frame(seed: &mut u64) -> Vec<u8> {
         let mut buf = vec![0u8; 1600];
         let mut b = FrameBuilder::new(&mut buf, [0x10; 6]).unwrap();
+        // Now and then an EEPROM alias program + reload for one slave (by
+        // position, station or broadcast): alias addressing must follow.
+        if rng(seed) % 4 == 0 {
+            let alias = 0x2000 + (rng(seed) % 8) as u16;
+            let (cmd, adp) = match rng(seed) % 3 {
+                0 => (Command::Apwr, 0u16.wrapping_sub((rng(seed) % 6) as u16)),
+                1 => (Command::Fpwr, 0x1000 + (rng(seed) % 6) as u16),
+                _ => (Command::Bwr, 0),
+            };
+            let at = |ado: u16| u32::from(adp) | (u32::from(ado) << 16);
+            for (ado, data) in [
+                (0x0502u16, &[0x01u8, 0x00][..]),
+                (0x0508, &alias.to_le_bytes()[..]),
+                (0x0502, &[0x01, 0x02, 0x04, 0x00, 0x00, 0x00][..]),
+                (0x0502, &[0x00, 0x04, 0x00, 0x00, 0x00, 0x00][..]),
+            ] {
+                b.push(cmd, at(ado), data).unwrap();
+            }
+        }
         let count = 1 + rng(seed) % 8;
         for _ in 0..count {
             let cmd = Command::from((rng(seed) % 16) as u8);
@@ -461,12 +506,15 @@ mod tests {
                 1 => 0x0120,
                 2 => 0x0130,
                 3 => 0x0600 + (rng(seed) % 32) as u16,
+                // SyncManagers, reconfigured anywhere (also over the
+                // registers, where they must not hide them).
                 4 => 0x0800 + (rng(seed) % 32) as u16,
                 _ => 0x1000 + (rng(seed) % 0x300) as u16,
             };
-            let adp = match rng(seed) % 3 {
+            let adp = match rng(seed) % 4 {
                 0 => 0u16.wrapping_sub((rng(seed) % 8) as u16),
                 1 => 0x1000 + (rng(seed) % 8) as u16,
+                2 => 0x2000 + (rng(seed) % 8) as u16,
                 _ => rng(seed) as u16,
             };
             let address = if matches!(cmd.addressing(), Addressing::Logical) {
@@ -514,6 +562,29 @@ mod tests {
             b.process_frame(&mut f2);
         }
         (a, b)
+    }
+
+    #[test]
+    fn an_alias_from_an_eeprom_reload_is_addressable_on_the_line() {
+        let mut line = crate::testing::line(3);
+        let mut buf = vec![0u8; 200];
+        let mut fb = FrameBuilder::new(&mut buf, [0x10; 6]).unwrap();
+        // Slave 1 (position -1): alias 0x2001 into SII word 4, reload.
+        let at = |ado: u16| u32::from(0u16.wrapping_sub(1)) | (u32::from(ado) << 16);
+        fb.push(Command::Apwr, at(0x0502), &[0x01, 0x00]).unwrap();
+        fb.push(Command::Apwr, at(0x0508), &[0x01, 0x20]).unwrap();
+        fb.push(Command::Apwr, at(0x0502), &[0x01, 0x02, 4, 0, 0, 0])
+            .unwrap();
+        fb.push(Command::Apwr, at(0x0502), &[0x00, 0x04, 0, 0, 0, 0])
+            .unwrap();
+        let read = fb
+            .push(Command::Fprd, 0x2001 | (0x0130 << 16), &[0, 0])
+            .unwrap();
+        let len = fb.finish();
+        let f = &mut buf[..len];
+        line.process_frame(f);
+        let wkc = u16::from_le_bytes([f[read.end], f[read.end + 1]]);
+        assert_eq!(wkc, 1, "FPRD by the reloaded alias answered on the line");
     }
 
     #[test]
