@@ -9,7 +9,8 @@
  *
  *   INIT idle -> PRE-OP -> SDO uploads / downloads of every entry, complete
  *   access of every object, SDO Information (OD list, every object and
- *   entry description), the device's "save" command -> SAFE-OP -> OP with
+ *   entry description), the devices' save / default / load commands
+ *   -> SAFE-OP -> OP with
  *   cyclic process data (and SDO traffic in OP, power-stage faults with
  *   emergencies on the PAM) -> SM watchdog expiry -> PDI failure -> INIT
  *   -> BOOT with an FoE firmware download (.efw) and an FoE read of
@@ -720,6 +721,8 @@ int main(void)
             uint8_t save[4] = {'s', 'a', 'v', 'e'}, one[4] = {1, 0, 0, 0};
             sdo_download(0x1010, 1, 0, save, 4); /* IO8: store parameters */
             sdo_download(0xF801, 2, 0, one, 4);   /* PAM: SAVE */
+            sdo_download(0xF801, 3, 0, one, 4);   /* PAM: DEFAULT */
+            sdo_download(0xF801, 4, 0, one, 4);   /* PAM: LOADBACK */
         }
         drain(5);
         unsigned out_bytes = pd_bytes(0x1C12), in_bytes = pd_bytes(0x1C13);

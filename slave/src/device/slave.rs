@@ -700,7 +700,6 @@ impl<E: Esc, A: Application> Slave<E, A> {
         let mut response = [0u8; MAX_MAILBOX];
         let max = usize::from(inp.1).min(MAX_MAILBOX);
         let state = self.al.state;
-        let mut mailbox = core::mem::take(&mut self.mailbox);
         let version = self.firmware_version();
         let id = &A::DESCRIPTION.identity;
         let foe_offered = A::DESCRIPTION.mailbox.foe;
@@ -717,7 +716,8 @@ impl<E: Esc, A: Application> Slave<E, A> {
         });
         let now_ns = self.now_ns;
         let produced = match response.get_mut(..max) {
-            Some(resp) => mailbox.handle(
+            // Disjoint field borrows: no copy of the mailbox server.
+            Some(resp) => self.mailbox.handle(
                 req,
                 resp,
                 &mut OdAccess {
@@ -730,7 +730,6 @@ impl<E: Esc, A: Application> Slave<E, A> {
             ),
             None => None,
         };
-        self.mailbox = mailbox;
         if let Some(len) = produced {
             self.pending = Some((len, response));
             self.deliver_pending()?;

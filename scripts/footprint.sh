@@ -1,0 +1,217 @@
+#!/usr/bin/env bash
+# Firmware footprint of the ecat-slave core with the IO8 example device and
+# with the PAM-199-P-ETC, measured on a real link of a no_std firmware.
+#
+#   bash scripts/footprint.sh
+#
+# For each device (and an empty baseline) it builds the no_std staticlib of
+# examples/firmware (opt-level "s", LTO, panic=abort, codegen-units=1; see
+# its Cargo.toml), links it with the C harness (gcc -Os, --gc-sections,
+# -no-pie), runs the harness (a simulated master drives the firmware through
+# INIT, PRE-OP with SDO / SDO Information / complete access, SAFE-OP, OP,
+# watchdog, PDI failure, BOOT with an FoE download) and prints:
+#
+#   * text, rodata, .data.rel.ro (constant tables holding pointers), data,
+#     bss of the firmware: the device's binary minus the baseline (the same
+#     harness linked against the empty firmware);
+#   * the biggest firmware symbols (nm --size-sort);
+#   * the stack of one fw_poll: measured by stack painting over the
+#     harness's traffic, and a static estimate from the call graph of the
+#     disassembly;
+#   * core::mem::size_of of the firmware object's parts and what the object
+#     dictionary tables are made of (a small host program).
+#
+# Needs the Rust toolchain, gcc and binutils (nm, size, objdump). Figures
+# are printed, not asserted: the script fails only when a build fails.
+# A harness run that does not reach every state prints a WARNING.
+#
+# Environment: FOOTPRINT_DIR (default target/footprint) for every output,
+# used as CARGO_TARGET_DIR too, so the workspace's target/ is not touched.
+set -euo pipefail
+
+cd "$(dirname "$0")/.."
+ROOT=$(pwd)
+OUT=${FOOTPRINT_DIR:-$ROOT/target/footprint}
+case "$OUT" in /*) ;; *) OUT=$ROOT/$OUT ;; esac
+mkdir -p "$OUT"
+export CARGO_TARGET_DIR=$OUT
+
+FW=examples/firmware
+MANIFEST=$FW/Cargo.toml
+HARNESS=$FW/harness.c
+CC=${CC:-gcc}
+CFLAGS=(-Os -std=c11 -no-pie -Wl,--gc-sections)
+DEVICES=(base io8 pam)
+
+run() {
+    printf '+ %s\n' "$*"
+    "$@"
+}
+
+fail() {
+    echo "footprint: $*" >&2
+    exit 1
+}
+
+for tool in cargo rustc "$CC" nm size objdump; do
+    command -v "$tool" >/dev/null || fail "$tool not found"
+done
+HOST=$(rustc -vV | sed -n 's/^host: //p')
+
+echo "== Build (host target $HOST; profile.release of $MANIFEST: opt-level \"s\", lto, panic = \"abort\", codegen-units = 1)"
+for dev in "${DEVICES[@]}"; do
+    features=()
+    [ "$dev" = base ] || features=(--features "$dev")
+    run cargo build --release --manifest-path "$MANIFEST" "${features[@]}" ||
+        fail "cargo build of the $dev firmware failed"
+    run cp "$OUT/release/libecat_firmware.a" "$OUT/libfw-$dev.a"
+    run "$CC" "${CFLAGS[@]}" -o "$OUT/fw-$dev" "$HARNESS" "$OUT/libfw-$dev.a" ||
+        fail "linking the $dev firmware failed"
+done
+
+STACK_TOOL=$OUT/stack_estimate
+if [ ! -x "$STACK_TOOL" ] || [ "$FW/tools/stack_estimate.rs" -nt "$STACK_TOOL" ]; then
+    run rustc --edition 2024 -O -o "$STACK_TOOL" "$FW/tools/stack_estimate.rs" ||
+        fail "building the stack estimator failed"
+fi
+run cargo build --release --manifest-path "$FW/sizes/Cargo.toml" ||
+    fail "building the size_of report failed"
+
+echo
+echo "== Run the harness (simulated master, stack painting of every fw_poll)"
+declare -A RC
+for dev in "${DEVICES[@]}"; do
+    echo "+ $OUT/fw-$dev > $OUT/fw-$dev.log"
+    set +e
+    "$OUT/fw-$dev" >"$OUT/fw-$dev.log" 2>&1
+    RC[$dev]=$?
+    set -e
+    sed 's/^/    /' "$OUT/fw-$dev.log"
+    if [ "${RC[$dev]}" -ne 0 ]; then
+        echo "    WARNING: the $dev harness exited with ${RC[$dev]} (figures below may miss paths)"
+    fi
+done
+
+# Size of an output section (0 if absent).
+sec() {
+    size -A -d "$1" | awk -v s="$2" '$1 == s { n = $2 } END { print n + 0 }'
+}
+
+echo
+echo "== Sizes (bytes): firmware = device binary - baseline (harness + empty no_std staticlib)"
+echo "+ size -A -d $OUT/fw-{base,io8,pam}"
+printf '    %-22s %8s %8s %13s %6s %7s %12s %12s %10s\n' \
+    "" text rodata .data.rel.ro data bss "flash total" "static RAM" "eh_frame"
+declare -A TEXT RO RELRO DATA BSS EH
+for dev in "${DEVICES[@]}"; do
+    bin=$OUT/fw-$dev
+    TEXT[$dev]=$(($(sec "$bin" .text) + $(sec "$bin" .init) + $(sec "$bin" .fini) + $(sec "$bin" .plt)))
+    RO[$dev]=$(sec "$bin" .rodata)
+    RELRO[$dev]=$(sec "$bin" .data.rel.ro)
+    DATA[$dev]=$(sec "$bin" .data)
+    BSS[$dev]=$(sec "$bin" .bss)
+    EH[$dev]=$(($(sec "$bin" .eh_frame) + $(sec "$bin" .eh_frame_hdr)))
+done
+row() { # label text ro relro data bss eh
+    printf '    %-22s %8d %8d %13d %6d %7d %12d %12d %10d\n' \
+        "$1" "$2" "$3" "$4" "$5" "$6" $(($2 + $3 + $4 + $5)) $(($5 + $6)) "$7"
+}
+row "harness alone (base)" "${TEXT[base]}" "${RO[base]}" "${RELRO[base]}" "${DATA[base]}" "${BSS[base]}" "${EH[base]}"
+for dev in io8 pam; do
+    row "$dev firmware" \
+        $((TEXT[$dev] - TEXT[base])) $((RO[$dev] - RO[base])) $((RELRO[$dev] - RELRO[base])) \
+        $((DATA[$dev] - DATA[base])) $((BSS[$dev] - BSS[base])) $((EH[$dev] - EH[base]))
+done
+cat <<'EOF'
+    text: machine code (.text .init .fini .plt). rodata: constants without
+    pointers (strings, jump tables, panic locations). .data.rel.ro: constant
+    tables that hold pointers (the object dictionary's Object/Entry tables,
+    vtables); a microcontroller keeps them in flash like rodata. data/bss:
+    initialised / zeroed static RAM (the firmware object is in bss).
+    flash total = text + rodata + .data.rel.ro + data; static RAM = data + bss
+    (the stack comes on top, below). eh_frame: unwind tables the x86-64
+    target always emits, absent from a Cortex-M build, not counted.
+    libc's memcpy/memset are called, not linked (shared library).
+    Reference (issue): SOES core on x86-64, gcc -Os: ~14.8 KB text, ~1.25 KB bss.
+EOF
+
+echo
+echo "== Biggest firmware symbols (harness and C runtime symbols left out; LTO inlines most code into the entry points)"
+nm -C --radix=d "$OUT/fw-base" | cut -d' ' -f3- | grep -v '^fw_' | sort -u >"$OUT/base.names"
+for dev in io8 pam; do
+    echo "+ nm -C --size-sort -S -r --radix=d $OUT/fw-$dev | head  # $dev, top 10"
+    nm -C --size-sort -S -r --radix=d "$OUT/fw-$dev" |
+        awk -v names="$OUT/base.names" '
+            BEGIN { while ((getline l < names) > 0) skip[l] = 1 }
+            {
+                n = $0; sub(/^[^ ]+ [^ ]+ [^ ]+ /, "", n)
+                if (n in skip) next
+                if (length(n) > 110) n = "..." substr(n, length(n) - 106)
+                if (++k <= 10) printf "    %7d %s  %s\n", $2 + 0, $3, n
+            }'
+done
+
+echo
+echo "== Firmware text by module (sum of nm symbol sizes; code LTO inlined into fw_poll / fw_init counts there)"
+for dev in io8 pam; do
+    echo "  $dev:"
+    nm -C -S --radix=d "$OUT/fw-$dev" |
+        awk -v names="$OUT/base.names" '
+            BEGIN { while ((getline l < names) > 0) skip[l] = 1 }
+            $3 ~ /^[tTW]$/ {
+                n = $0; sub(/^[^ ]+ [^ ]+ [^ ]+ /, "", n)
+                if (n in skip) next
+                m = n
+                if (m ~ /^</ && index(m, " as ") > 0) {
+                    # <Type as Trait>::f: the type path, or the trait for a
+                    # generic / primitive type (<&T as core::fmt::Display>).
+                    t = substr(m, 2, index(m, " as ") - 2)
+                    m = (t ~ /::/) ? t : substr(m, index(m, " as ") + 4)
+                }
+                sub(/^</, "", m)
+                sub(/^&?(mut )?/, "", m)
+                split(m, p, "::")
+                k = p[1]; if (p[2] != "") k = k "::" p[2]
+                sub(/<.*/, "", k)
+                s[k] += $2; total += $2
+            }
+            END {
+                for (k in s) printf "%7d  %s\n", s[k], k
+                printf "%7d  (total)\n", total
+            }' | sort -rn | awk 'NR <= 16 { print "    " $0 }'
+done
+
+echo
+echo "== Stack of one fw_poll"
+for dev in io8 pam; do
+    log=$OUT/fw-$dev.log
+    echo "  $dev, measured by stack painting (fw_poll runs on a painted stack; bytes it overwrote,"
+    echo "  incl. frames reserved by stack probes; over the harness traffic of every phase):"
+    grep '^STACK ' "$log" | sed 's/^STACK /      /' || true
+    awk '/^STACK_MAX/ { m = $2 } /^STACK_INIT/ { i = $2 }
+         END { printf "      => max %s bytes per fw_poll (fw_init: %s bytes)\n", m, i }' "$log"
+    if [ "${HOST%%-*}" = x86_64 ]; then
+        echo "  $dev, static estimate (call graph of the x86-64 disassembly: frames from push / sub %rsp,"
+        echo "  direct calls, tail calls and C calls through the GOT; indirect calls listed):"
+        run "$STACK_TOOL" "$OUT/fw-$dev" fw_poll fw_init
+    else
+        echo "  (static estimate skipped: it reads x86-64 disassembly, host is $HOST)"
+    fi
+done
+
+echo
+echo "== What the RAM and the tables are made of"
+run cargo run --quiet --release --manifest-path "$FW/sizes/Cargo.toml"
+
+echo
+echo "== Summary (bytes; firmware minus baseline; x86-64)"
+for dev in io8 pam; do
+    max=$(awk '/^STACK_MAX/ { print $2 }' "$OUT/fw-$dev.log")
+    printf '    %-4s text %6d  rodata %5d  .data.rel.ro %6d  data %4d  bss %5d  measured poll stack %6s\n' \
+        "$dev" $((TEXT[$dev] - TEXT[base])) $((RO[$dev] - RO[base])) $((RELRO[$dev] - RELRO[base])) \
+        $((DATA[$dev] - DATA[base])) $((BSS[$dev] - BSS[base])) "${max:-?}"
+done
+for dev in io8 pam; do
+    [ "${RC[$dev]}" -eq 0 ] || echo "    WARNING: the $dev harness run did not complete (exit ${RC[$dev]})"
+done
+exit 0
