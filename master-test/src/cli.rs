@@ -1,7 +1,7 @@
 //! Helpers of the `sdo` and `od` subcommands: the `INDEX:SUB` parser, CoE
 //! value parsing and formatting typed by a data-type code and bit length
-//! (as SDO Information reports them), type, access and unit names, and a
-//! tiny JSON string escaper.
+//! (as SDO Information reports them), type, access and unit names, and
+//! values as JSON (serde_json).
 //!
 //! Everything here is pure (no bus); the subcommands of the `master-test`
 //! binary and [`crate::od`] do the talking.
@@ -28,8 +28,10 @@ fn enums() -> &'static [&'static EnumDesc] {
 
 /// Parses an object address `INDEX:SUB`.
 ///
-/// The index is hexadecimal with or without `0x` (`0x800D`, `800d`); the
-/// subindex is decimal, or hexadecimal with `0x` (`02`, `2`, `0x2A`).
+/// Index and subindex are both hexadecimal, with or without `0x`
+/// (`0x800D:02`, `800d:2`, `0x8006:2A`, `8006:0x2a`): exactly what the
+/// tools print (`0x8006:2A`), so a printed address pastes back. `8006:10`
+/// is subindex 0x10 = 16.
 pub fn parse_address(s: &str) -> Result<(u16, u8), String> {
     let s = s.trim();
     let Some((index, sub)) = s.split_once(':') else {
@@ -46,19 +48,17 @@ pub fn parse_address(s: &str) -> Result<(u16, u8), String> {
     }
     let index = u16::from_str_radix(digits, 16)
         .map_err(|e| format!("bad address '{s}': index '{index}': {e}"))?;
-    let parsed = match strip_hex_prefix(sub) {
-        Some(hex) if !hex.is_empty() && hex.chars().all(|c| c.is_ascii_hexdigit()) => {
-            u8::from_str_radix(hex, 16).ok()
-        }
-        Some(_) => None,
-        None if !sub.is_empty() && sub.chars().all(|c| c.is_ascii_digit()) => sub.parse().ok(),
-        None => None,
+    let sub_digits = strip_hex_prefix(sub).unwrap_or(sub);
+    let parsed = if !sub_digits.is_empty()
+        && sub_digits.len() <= 2
+        && sub_digits.chars().all(|c| c.is_ascii_hexdigit())
+    {
+        u8::from_str_radix(sub_digits, 16).ok()
+    } else {
+        None
     };
     let sub = parsed.ok_or_else(|| {
-        format!(
-            "bad address '{s}': subindex '{sub}' is not a number 0..=255 \
-             (decimal, or hex with 0x)"
-        )
+        format!("bad address '{s}': subindex '{sub}' is not a hex number 00..=FF (0x optional)")
     })?;
     Ok((index, sub))
 }
@@ -216,16 +216,16 @@ impl fmt::Display for Value {
 }
 
 impl Value {
-    /// The value as a JSON literal: numbers, `true`/`false`, strings; an
+    /// The value as JSON: numbers, `true`/`false`, strings; an
     /// enumeration is its number, bytes a string of hex pairs.
-    pub fn to_json(&self) -> String {
+    pub fn to_json(&self) -> serde_json::Value {
         match self {
-            Value::Bool(b) => b.to_string(),
-            Value::Int(v) => v.to_string(),
-            Value::UInt(v) => v.to_string(),
-            Value::Enum { value, .. } => value.to_string(),
-            Value::Text(s) => json_str(s),
-            Value::Bytes(b) => json_str(&hex(b)),
+            Value::Bool(b) => serde_json::Value::Bool(*b),
+            Value::Int(v) => (*v).into(),
+            Value::UInt(v) => (*v).into(),
+            Value::Enum { value, .. } => (*value).into(),
+            Value::Text(s) => s.as_str().into(),
+            Value::Bytes(b) => hex(b).into(),
         }
     }
 }
@@ -369,25 +369,6 @@ pub fn parse_value(code: u16, bit_len: u16, text: &str) -> Result<Vec<u8>, Strin
     }
 }
 
-/// `s` as a JSON string literal.
-pub fn json_str(s: &str) -> String {
-    let mut out = String::with_capacity(s.len() + 2);
-    out.push('"');
-    for c in s.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            '\n' => out.push_str("\\n"),
-            '\r' => out.push_str("\\r"),
-            '\t' => out.push_str("\\t"),
-            c if u32::from(c) < 0x20 => out.push_str(&format!("\\u{:04x}", u32::from(c))),
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -399,9 +380,11 @@ mod tests {
         assert_eq!(parse_address("800d:0x2A"), Ok((0x800D, 0x2A)));
         assert_eq!(parse_address("0X1018:0X04"), Ok((0x1018, 4)));
         assert_eq!(parse_address(" 1000:0 "), Ok((0x1000, 0)));
-        assert_eq!(parse_address("0x8006:255"), Ok((0x8006, 255)));
-        // "10" is decimal ten, not 0x10.
-        assert_eq!(parse_address("8006:10"), Ok((0x8006, 10)));
+        assert_eq!(parse_address("0x8006:FF"), Ok((0x8006, 255)));
+        // What the tools print pastes back: subindices are hex.
+        assert_eq!(parse_address("0x8006:2A"), Ok((0x8006, 0x2A)));
+        assert_eq!(parse_address("8006:10"), Ok((0x8006, 0x10)));
+        assert_eq!(parse_address("0x800d:63"), Ok((0x800D, 0x63)));
     }
 
     #[test]
@@ -417,7 +400,7 @@ mod tests {
             ("800D:", "subindex ''"),
             ("800D:256", "subindex '256'"),
             ("800D:0x100", "subindex '0x100'"),
-            ("800D:2A", "subindex '2A'"),
+            ("800D:2G", "subindex '2G'"),
             ("800D:-1", "subindex '-1'"),
             ("800D:0x", "subindex '0x'"),
             ("800D:1:2", "subindex '1:2'"),
@@ -577,10 +560,10 @@ mod tests {
         assert_eq!(unit_text(Some(0xFD04_0000)), "mA");
         assert_eq!(unit_text(Some(0)), "");
         assert_eq!(unit_text(None), "");
-        assert_eq!(json_str("a\"b\\c\n\u{1}"), r#""a\"b\\c\n\u0001""#);
-        assert_eq!(decode(0x0802, 3, &[1]).to_json(), "1");
-        assert_eq!(decode(9, 16, b"ab").to_json(), "\"ab\"");
-        assert_eq!(decode(1, 1, &[1]).to_json(), "true");
-        assert_eq!(decode(6, 16, &[1]).to_json(), "\"01\"");
+        assert_eq!(decode(0x0802, 3, &[1]).to_json().to_string(), "1");
+        assert_eq!(decode(9, 16, b"ab").to_json().to_string(), "\"ab\"");
+        assert_eq!(decode(1, 1, &[1]).to_json().to_string(), "true");
+        assert_eq!(decode(6, 16, &[1]).to_json().to_string(), "\"01\"");
+        assert_eq!(decode(3, 16, &[0xFF, 0xFF]).to_json().to_string(), "-1");
     }
 }

@@ -48,7 +48,9 @@ pub async fn write(
     data: &[u8],
     mut progress: impl FnMut(usize, usize),
 ) -> Result<(), ClientError> {
-    write_partial(client, name, password, data, data.len(), &mut progress).await
+    write_inner(client, name, password, data, &mut progress, &mut |_| false)
+        .await
+        .map(|_| ())
 }
 
 /// Like [`write`] but stops after `stop_after` bytes without ending the
@@ -61,6 +63,49 @@ pub async fn write_partial(
     stop_after: usize,
     progress: &mut impl FnMut(usize, usize),
 ) -> Result<(), ClientError> {
+    let mut stop = |sent: usize| sent >= stop_after && stop_after < data.len();
+    write_inner(client, name, password, data, progress, &mut stop)
+        .await
+        .map(|_| ())
+}
+
+/// Like [`write`], but checks `cancel` before each DATA packet: when it
+/// says stop, the transfer is ended with a FoE error request ("aborted by
+/// the master"; ETG.1000.6 lets either side end a transfer so) and
+/// `Ok(false)` returned; the slave discards the partial file. `Ok(true)`:
+/// the whole file was written.
+pub async fn write_cancellable(
+    client: &mut MailboxClient<'_>,
+    name: &str,
+    password: u32,
+    data: &[u8],
+    progress: &mut impl FnMut(usize, usize),
+    cancel: impl Fn() -> bool,
+) -> Result<bool, ClientError> {
+    let done = write_inner(client, name, password, data, progress, &mut |_| cancel()).await?;
+    if !done {
+        let abort = FoeRepr::Error {
+            code: ecat_slave::wire::foe::FoeErrorCode::NotDefined,
+            text: b"aborted by the master",
+        };
+        let mut buf = vec![0u8; abort.buffer_len()];
+        abort
+            .emit(&mut buf)
+            .map_err(|e| ClientError::Protocol(e.to_string()))?;
+        client.send(MailboxType::FoE, &buf).await?;
+    }
+    Ok(done)
+}
+
+/// The write loop: `Ok(false)` when `stop(bytes sent)` ended it early.
+async fn write_inner(
+    client: &mut MailboxClient<'_>,
+    name: &str,
+    password: u32,
+    data: &[u8],
+    progress: &mut impl FnMut(usize, usize),
+    stop: &mut dyn FnMut(usize) -> bool,
+) -> Result<bool, ClientError> {
     let seg = client.max_payload().saturating_sub(HEADER_LEN).max(1);
     let wrq = FoeRepr::WriteRequest {
         password,
@@ -80,8 +125,8 @@ pub async fn write_partial(
     let mut packet = 1u32;
     loop {
         let end = (sent + seg).min(data.len());
-        if sent >= stop_after && stop_after < data.len() {
-            return Ok(());
+        if stop(sent) {
+            return Ok(false);
         }
         let chunk = &data[sent..end];
         let r = exchange(
@@ -111,7 +156,7 @@ pub async fn write_partial(
         // A packet shorter than the maximum ends the file (an empty one
         // when the length is a multiple of the packet size).
         if chunk.len() < seg {
-            return Ok(());
+            return Ok(true);
         }
     }
 }
@@ -169,9 +214,7 @@ pub async fn request_state(
         }
         if st & 0x10 != 0 {
             let code: u16 = Command::fprd(station, 0x0134).receive(md).await?;
-            return Err(ClientError::Protocol(format!(
-                "AL status {st:#06x}, code {code:#06x}"
-            )));
+            return Err(ClientError::StateRefused { status: st, code });
         }
         if start.elapsed() > Duration::from_secs(5) {
             return Err(ClientError::Timeout(Duration::from_secs(5)));
@@ -193,8 +236,18 @@ pub async fn enter_boot_with(
     station: u16,
     l: &ecat_slave::device::MemoryLayout,
 ) -> Result<(), ClientError> {
+    enter_boot_geometry(md, station, crate::mailbox::MailboxGeometry::bootstrap_of(l)).await
+}
+
+/// INIT, SM0/SM1 set to the bootstrap mailbox `boot` (from the slave's SII
+/// words 0x14-0x17, see [`crate::eeprom::mailboxes`]), then BOOT.
+pub async fn enter_boot_geometry(
+    md: &MainDevice<'_>,
+    station: u16,
+    boot: crate::mailbox::MailboxGeometry,
+) -> Result<(), ClientError> {
     request_state(md, station, 0x11).await?;
-    for (n, (start, len), control) in [(0u16, l.boot_out, 0x26u8), (1, l.boot_in, 0x22)] {
+    for (n, (start, len), control) in [(0u16, boot.out, 0x26u8), (1, boot.inp, 0x22)] {
         let mut b = [0u8; 8];
         b[0..2].copy_from_slice(&start.to_le_bytes());
         b[2..4].copy_from_slice(&len.to_le_bytes());

@@ -5,7 +5,9 @@
 //! (PAM-199-P-ETC by default): real EtherCAT frames, no sockets, no root.
 //! Integration tests and the demo CLI use it.
 
+pub mod bus;
 pub mod cli;
+pub mod eeprom;
 pub mod foe;
 pub mod link;
 pub mod mailbox;

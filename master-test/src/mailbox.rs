@@ -56,6 +56,29 @@ pub enum ClientError {
         /// The slave's error text.
         text: String,
     },
+    /// The slave refused a requested AL state.
+    #[error("state change refused: AL status {status:#06x}, AL status code {code:#06x} ({})", ecat_slave::al::AlStatusCode::from_code(*code).text())]
+    StateRefused {
+        /// AL status (0x0130).
+        status: u16,
+        /// AL status code (0x0134).
+        code: u16,
+    },
+}
+
+impl ClientError {
+    /// Whether the slave itself said no (an SDO abort, a mailbox error
+    /// reply, a FoE error, a refused state change), as opposed to a
+    /// communication or usage problem.
+    pub fn refused_by_device(&self) -> bool {
+        matches!(
+            self,
+            ClientError::Abort { .. }
+                | ClientError::Mailbox(_)
+                | ClientError::Foe { .. }
+                | ClientError::StateRefused { .. }
+        )
+    }
 }
 
 impl ClientError {

@@ -128,6 +128,32 @@ impl AlStatusCode {
         }
     }
 
+    /// The ETG.1000.6 description of the code.
+    pub const fn text(self) -> &'static str {
+        match self {
+            AlStatusCode::NoError => "no error",
+            AlStatusCode::Unspecified => "unspecified error",
+            AlStatusCode::FirmwareUpdateFailed => {
+                "firmware update not successful, old firmware still running"
+            }
+            AlStatusCode::InvalidStateChange => "invalid requested state change",
+            AlStatusCode::UnknownState => "unknown requested state",
+            AlStatusCode::BootNotSupported => "bootstrap not supported",
+            AlStatusCode::NoValidFirmware => "no valid firmware",
+            AlStatusCode::InvalidMailboxBoot => "invalid mailbox configuration (BOOT)",
+            AlStatusCode::InvalidMailboxPreOp => "invalid mailbox configuration (PRE-OP)",
+            AlStatusCode::InvalidSmConfig => "invalid SyncManager configuration",
+            AlStatusCode::SyncError => "synchronization error",
+            AlStatusCode::SmWatchdog => "SyncManager watchdog",
+            AlStatusCode::InvalidOutputConfig => "invalid output configuration",
+            AlStatusCode::InvalidInputConfig => "invalid input configuration",
+            AlStatusCode::WaitingForInit => "waiting for INIT",
+            AlStatusCode::InvalidInputMapping => "invalid input mapping",
+            AlStatusCode::InvalidOutputMapping => "invalid output mapping",
+            AlStatusCode::Other(_) => "other AL status code",
+        }
+    }
+
     /// Decodes a register value.
     pub const fn from_code(code: u16) -> Self {
         match code {

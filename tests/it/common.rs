@@ -65,21 +65,24 @@ pub fn ip(args: &[&str]) -> Result<(), String> {
 /// The `pam-slave` binary next to this test binary, built on demand
 /// (`cargo test` builds other packages' binaries only as test harnesses).
 pub fn runner_binary() -> Option<PathBuf> {
+    binary("device-catalog", "pam-slave")
+}
+
+/// Binary `bin` of workspace package `package`, (re)built next to this
+/// test binary: cargo does nothing when it is up to date, and a stale
+/// binary from an older checkout must not be tested.
+pub fn binary(package: &str, bin: &str) -> Option<PathBuf> {
     let exe = std::env::current_exe().ok()?;
     let dir = exe.parent()?.parent()?;
-    let bin = dir.join("pam-slave");
-    // Always (re)build: cargo does nothing when it is up to date, and a
-    // stale runner from an older checkout must not be tested.
-    {
-        let profile_release = dir.file_name().is_some_and(|n| n == "release");
-        let mut cmd = Command::new(env!("CARGO"));
-        cmd.args(["build", "-p", "device-catalog", "--bin", "pam-slave"]);
-        if profile_release {
-            cmd.arg("--release");
-        }
-        let _ = cmd.status();
+    let path = dir.join(bin);
+    let profile_release = dir.file_name().is_some_and(|n| n == "release");
+    let mut cmd = Command::new(env!("CARGO"));
+    cmd.args(["build", "-q", "-p", package, "--bin", bin]);
+    if profile_release {
+        cmd.arg("--release");
     }
-    bin.exists().then_some(bin)
+    let _ = cmd.status();
+    path.exists().then_some(path)
 }
 
 /// Creates namespace + veth, or explains why the test cannot run here.

@@ -5,6 +5,7 @@
 mod amplifier;
 mod bring_up;
 mod capture;
+mod cli;
 mod coe;
 mod common;
 mod consistency;

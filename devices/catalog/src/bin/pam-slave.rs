@@ -17,7 +17,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 #[derive(Parser)]
 #[command(
     name = "pam-slave",
-    about = "Answer EtherCAT frames on a network interface as a line of software slaves"
+    version,
+    about = "Answer EtherCAT frames on a network interface as a line of software slaves",
+    after_help = "Exit status:\n  0    stopped by Ctrl-C (or SIGTERM) after serving\n  \
+                  2    usage or input error (bad argument, unknown device, line too long)\n  \
+                  3    the interface cannot be opened or fails (needs root or CAP_NET_RAW)"
 )]
 struct Cli {
     /// Network interface to serve (e.g. eth1, veth-slave).
@@ -29,7 +33,8 @@ struct Cli {
     /// Number of slaves on the line (1..=512).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=512), conflicts_with = "line")]
     count: u16,
-    /// A mixed line, first to last: e.g. pam,io8,pam or pam*3,io8.
+    /// A mixed line, first to last: e.g. pam,io8,pam or pam*3,io8 (at
+    /// most 512 slaves).
     #[arg(long)]
     line: Option<String>,
     /// Write every frame, both directions, to this pcap file.
@@ -50,7 +55,7 @@ fn main() -> ExitCode {
         Ok(e) => e,
         Err(e) => {
             eprintln!("pam-slave: {e}");
-            return ExitCode::FAILURE;
+            return ExitCode::from(2);
         }
     };
     let stop = Arc::new(AtomicBool::new(false));
@@ -83,7 +88,7 @@ fn main() -> ExitCode {
         }
         Err(e) => {
             eprintln!("pam-slave: error: {e}");
-            ExitCode::FAILURE
+            ExitCode::from(3)
         }
     }
 }

@@ -1,0 +1,471 @@
+//! `sdo read/write` and `od dump`.
+
+use crate::failure::{Failure, input};
+use crate::output::{outln, stop_requested};
+use crate::target::{Session, Where};
+use master_test::cli::{self, Value};
+use master_test::mailbox::{ClientError, MailboxClient};
+use master_test::od::EntryValue;
+use master_test::sdo_info::{self, EntryInfo, value_info};
+use serde::Serialize;
+
+/// `sdo` subcommands.
+#[derive(clap::Subcommand)]
+pub enum SdoCmd {
+    /// Upload INDEX:SUB and print its value with name, unit and type.
+    ///
+    /// Integers print in decimal (signed where the type is), enumerations
+    /// as `TEXT (value)`, BOOL as true/false, strings as text.
+    Read {
+        /// Object address INDEX:SUB, both hexadecimal with or without 0x,
+        /// as the tools print them: 0x800D:02, 800d:2, 0x8006:2A.
+        address: String,
+        /// Print the uploaded bytes in hex instead of the typed value.
+        #[arg(long, conflicts_with = "json")]
+        raw: bool,
+        /// JSON: {"address", "name", "type", "bit_len", "access", "unit",
+        /// "value", "value_text"}.
+        #[arg(long)]
+        json: bool,
+        /// The data type, for slaves without SDO Information (UINT, DINT,
+        /// BOOL, STRING, ...).
+        #[arg(long = "type", value_name = "TYPE")]
+        data_type: Option<String>,
+    },
+    /// Parse VALUE for the entry's type, check it against the range SDO
+    /// Information gives, download it, read it back.
+    ///
+    /// Integers in decimal or 0x-hex (negative for signed types),
+    /// enumerations by text or number, BOOL as true/false/1/0, strings as
+    /// text. The value is encoded in the entry's byte size and downloaded
+    /// expedited (up to 4 bytes) or normal. A value outside the entry's
+    /// minimum..maximum is refused before anything is sent (exit 2).
+    Write {
+        /// Object address, as for `sdo read`.
+        address: String,
+        /// The value to write.
+        #[arg(allow_hyphen_values = true)]
+        value: String,
+        /// Send the value even if it is outside the range SDO Information
+        /// gives (let the device judge it).
+        #[arg(long)]
+        no_check: bool,
+        /// The data type, for slaves without SDO Information (as for `sdo
+        /// read`).
+        #[arg(long = "type", value_name = "TYPE")]
+        data_type: Option<String>,
+    },
+}
+
+/// `od` subcommands.
+#[derive(clap::Subcommand)]
+pub enum OdCmd {
+    /// Every object of the OD list (all objects) with every subindex:
+    /// name, type, access, unit and the current value.
+    Dump {
+        /// A JSON array of objects with their entries, including default,
+        /// minimum and maximum (schema in the README).
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+/// Data types by name for `--type` (code, bits).
+const TYPES: &[(&str, u16, u16)] = &[
+    ("BOOL", 0x0001, 1),
+    ("SINT", 0x0002, 8),
+    ("INT", 0x0003, 16),
+    ("DINT", 0x0004, 32),
+    ("USINT", 0x0005, 8),
+    ("UINT", 0x0006, 16),
+    ("UDINT", 0x0007, 32),
+    ("LINT", 0x0015, 64),
+    ("ULINT", 0x001B, 64),
+];
+
+/// An entry description made from `--type` (`STRING` takes the length
+/// the slave gives).
+fn typed_entry(index: u16, sub: u8, t: &str, string_len: usize) -> Result<EntryInfo, Failure> {
+    let upper = t.to_ascii_uppercase();
+    let (code, bits) = if upper == "STRING" {
+        (0x0009, u16::try_from(string_len * 8).unwrap_or(u16::MAX))
+    } else {
+        let (_, code, bits) = TYPES.iter().find(|(n, _, _)| *n == upper).ok_or_else(|| {
+            let names: Vec<&str> = TYPES.iter().map(|(n, _, _)| *n).collect();
+            input(format!(
+                "--type {t}: unknown data type (one of {}, STRING)",
+                names.join(", ")
+            ))
+        })?;
+        (*code, *bits)
+    };
+    Ok(EntryInfo {
+        index,
+        sub,
+        data_type: code,
+        bit_len: bits,
+        access: 0x3F,
+        unit: None,
+        default: None,
+        min: None,
+        max: None,
+        name: "(no SDO Information)".into(),
+    })
+}
+
+/// The entry's description from SDO Information, or from `--type`.
+async fn describe_entry(
+    c: &mut MailboxClient<'_>,
+    index: u16,
+    sub: u8,
+    data_type: Option<&str>,
+    string_len: usize,
+) -> Result<EntryInfo, Failure> {
+    if let Some(t) = data_type {
+        return typed_entry(index, sub, t, string_len);
+    }
+    match sdo_info::entry_description(c, index, sub, value_info::ALL).await {
+        Ok(e) => Ok(e),
+        Err(e @ ClientError::Abort { .. }) => Err(e.into()),
+        Err(e) => Err(Failure::from(e).context(format!(
+            "no SDO Information for 0x{index:04X}:{sub:02X} (give the data type with --type)"
+        ))),
+    }
+}
+
+/// `0x800D:02 CURRENT = 1000 mA  (UINT, RW)`.
+/// Without `unit` (raw bytes) the unit is left out.
+fn describe(e: &EntryInfo, value: &str, unit: bool) -> String {
+    let unit = if unit { cli::unit_text(e.unit) } else { "" };
+    let unit = if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    };
+    format!(
+        "0x{:04X}:{:02X} {} = {value}{unit}  ({}, {})",
+        e.index,
+        e.sub,
+        e.name,
+        cli::type_name(e.data_type),
+        cli::access_text(e.access)
+    )
+}
+
+/// Runs an `sdo` command.
+pub async fn sdo(w: &Where, op: SdoCmd) -> Result<(), Failure> {
+    let address = match &op {
+        SdoCmd::Read { address, .. } | SdoCmd::Write { address, .. } => address.clone(),
+    };
+    let (index, sub) = cli::parse_address(&address).map_err(input)?;
+    let s = Session::open(w).await?;
+    let sel = s.select(w).await?;
+    let mut c = s.client(&sel)?;
+    match op {
+        SdoCmd::Read {
+            raw,
+            json,
+            data_type,
+            ..
+        } => {
+            let bytes = c.sdo_upload(index, sub, false).await?;
+            let e = describe_entry(&mut c, index, sub, data_type.as_deref(), bytes.len()).await?;
+            let value = cli::decode(e.data_type, e.bit_len, &bytes);
+            if json {
+                let text = match &value {
+                    Value::Enum { text, .. } => text.map(str::to_string),
+                    _ => None,
+                };
+                let j = serde_json::json!({
+                    "address": format!("0x{index:04X}:{sub:02X}"),
+                    "name": e.name,
+                    "type": cli::type_name(e.data_type),
+                    "bit_len": e.bit_len,
+                    "access": cli::access_text(e.access),
+                    "unit": cli::unit_text(e.unit),
+                    "value": value.to_json(),
+                    "value_text": text,
+                });
+                outln!("{j}");
+            } else {
+                let shown = if raw {
+                    cli::hex(&bytes)
+                } else {
+                    cli::show(&value, e.bit_len)
+                };
+                outln!("{}", describe(&e, &shown, !raw));
+            }
+            Ok(())
+        }
+        SdoCmd::Write {
+            value,
+            no_check,
+            data_type,
+            ..
+        } => {
+            let e = describe_entry(&mut c, index, sub, data_type.as_deref(), value.len()).await?;
+            let bytes = cli::parse_value(e.data_type, e.bit_len, &value).map_err(|m| {
+                input(format!(
+                    "bad value for 0x{index:04X}:{sub:02X} {} ({}): {m}",
+                    e.name,
+                    cli::type_name(e.data_type)
+                ))
+            })?;
+            if !no_check {
+                check_range(&e, &bytes)?;
+            }
+            let how = if bytes.len() <= 4 {
+                "expedited"
+            } else {
+                "normal"
+            };
+            outln!(
+                "0x{index:04X}:{sub:02X} {} := {} ({}, {how} download)",
+                e.name,
+                cli::format_value(e.data_type, e.bit_len, &bytes),
+                cli::hex(&bytes)
+            );
+            c.sdo_download(index, sub, false, &bytes).await?;
+            match c.sdo_upload(index, sub, false).await {
+                Ok(back) => {
+                    let shown = cli::show(&cli::decode(e.data_type, e.bit_len, &back), e.bit_len);
+                    outln!("{}", describe(&e, &shown, true));
+                }
+                // Write-only entries (commands) cannot be read back.
+                Err(ClientError::Abort { code, .. }) if u32::from(code) == 0x0601_0001 => {
+                    outln!("0x{index:04X}:{sub:02X} {} written (write-only)", e.name);
+                }
+                Err(err) => return Err(err.into()),
+            }
+            Ok(())
+        }
+    }
+}
+
+/// A number of an integer-like value, for range checks.
+fn number(v: &Value) -> Option<i128> {
+    match v {
+        Value::Int(i) => Some(i128::from(*i)),
+        Value::UInt(u) => Some(i128::from(*u)),
+        Value::Enum { value, .. } => Some(i128::from(*value)),
+        Value::Bool(b) => Some(i128::from(*b)),
+        _ => None,
+    }
+}
+
+/// Refuses `bytes` outside the minimum..maximum SDO Information gives.
+fn check_range(e: &EntryInfo, bytes: &[u8]) -> Result<(), Failure> {
+    let decode = |b: &Option<Vec<u8>>| {
+        b.as_deref()
+            .and_then(|b| number(&cli::decode(e.data_type, e.bit_len, b)))
+    };
+    let (Some(v), min, max) = (
+        number(&cli::decode(e.data_type, e.bit_len, bytes)),
+        decode(&e.min),
+        decode(&e.max),
+    ) else {
+        return Ok(());
+    };
+    let below = min.is_some_and(|m| v < m);
+    let above = max.is_some_and(|m| v > m);
+    if below || above {
+        let unit = match cli::unit_text(e.unit) {
+            "" => String::new(),
+            u => format!(" {u}"),
+        };
+        let bound = |b: Option<i128>| b.map_or_else(String::new, |b| b.to_string());
+        return Err(input(format!(
+            "{v}{unit} is outside the range of 0x{:04X}:{:02X} {}: {}..={}{unit} \
+             (SDO Information); nothing was sent (--no-check sends it anyway)",
+            e.index,
+            e.sub,
+            e.name,
+            bound(min),
+            bound(max)
+        )));
+    }
+    Ok(())
+}
+
+/// One entry of `od dump --json` (the schema the README documents).
+#[derive(Serialize)]
+struct JsonEntry {
+    sub: u8,
+    address: String,
+    name: String,
+    #[serde(rename = "type")]
+    type_name: String,
+    type_code: u16,
+    bit_len: u16,
+    access: &'static str,
+    unit: &'static str,
+    default: Option<serde_json::Value>,
+    min: Option<serde_json::Value>,
+    max: Option<serde_json::Value>,
+    value: Option<serde_json::Value>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    value_text: Option<&'static str>,
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    padding: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    error: Option<String>,
+}
+
+/// One object of `od dump --json`.
+#[derive(Serialize)]
+struct JsonObject {
+    index: u16,
+    name: String,
+    object_code: u8,
+    entries: Vec<JsonEntry>,
+}
+
+fn json_entry(d: &master_test::od::DumpEntry) -> JsonEntry {
+    let e = &d.info;
+    let opt = |v: &Option<Vec<u8>>| {
+        v.as_deref()
+            .map(|b| cli::decode(e.data_type, e.bit_len, b).to_json())
+    };
+    let mut j = JsonEntry {
+        sub: e.sub,
+        address: format!("0x{:04X}:{:02X}", e.index, e.sub),
+        name: e.name.clone(),
+        type_name: cli::type_name(e.data_type),
+        type_code: e.data_type,
+        bit_len: e.bit_len,
+        access: cli::access_text(e.access),
+        unit: cli::unit_text(e.unit),
+        default: opt(&e.default),
+        min: opt(&e.min),
+        max: opt(&e.max),
+        value: None,
+        value_text: None,
+        padding: false,
+        error: None,
+    };
+    match &d.value {
+        EntryValue::Value(v) => {
+            j.value = Some(v.to_json());
+            if let Value::Enum { text, .. } = v {
+                j.value_text = *text;
+            }
+        }
+        EntryValue::WriteOnly => {}
+        EntryValue::Padding => j.padding = true,
+        EntryValue::Error(s) => j.error = Some(s.clone()),
+    }
+    j
+}
+
+/// Runs an `od` command.
+pub async fn od(w: &Where, op: OdCmd) -> Result<(), Failure> {
+    let OdCmd::Dump { json } = op;
+    let s = Session::open(w).await?;
+    let sel = s.select(w).await?;
+    let mut c = s.client(&sel)?;
+    let objects = sdo_info::od_list(&mut c, sdo_info::list_type::ALL).await?;
+    let mut all = Vec::new();
+    if !json {
+        outln!(
+            "{:<9}  {:<28} {:<11} {:<3} {:<4} Value",
+            "Index",
+            "Name",
+            "Type",
+            "Acc",
+            "Unit"
+        );
+    }
+    for index in objects {
+        if stop_requested() {
+            return Err(Failure::Interrupted("the dump is incomplete".into()));
+        }
+        let o = master_test::od::read_object(&mut c, index).await?;
+        if json {
+            all.push(JsonObject {
+                index: o.info.index,
+                name: o.info.name.clone(),
+                object_code: o.info.object_code,
+                entries: o.entries.iter().map(json_entry).collect(),
+            });
+            continue;
+        }
+        outln!(
+            "{:04X}       {:<28} [{}]",
+            o.info.index,
+            o.info.name,
+            cli::object_code_text(o.info.object_code)
+        );
+        for d in &o.entries {
+            let e = &d.info;
+            outln!(
+                "  {:04X}:{:02X}  {:<28} {:<11} {:<3} {:<4} {}",
+                e.index,
+                e.sub,
+                e.name,
+                cli::type_name(e.data_type),
+                cli::access_text(e.access),
+                cli::unit_text(e.unit),
+                d.value.text(e.bit_len)
+            );
+        }
+    }
+    if json {
+        let text = serde_json::to_string_pretty(&all)
+            .map_err(|e| Failure::Comm(format!("cannot encode JSON: {e}")))?;
+        outln!("{text}");
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn current() -> EntryInfo {
+        EntryInfo {
+            index: 0x800D,
+            sub: 2,
+            data_type: 6,
+            bit_len: 16,
+            access: 0x3F,
+            unit: Some(0xFD04_0000),
+            default: Some(1000u16.to_le_bytes().to_vec()),
+            min: Some(500u16.to_le_bytes().to_vec()),
+            max: Some(3000u16.to_le_bytes().to_vec()),
+            name: "CURRENT".into(),
+        }
+    }
+
+    #[test]
+    fn values_outside_the_sdo_information_range_are_refused_with_it() {
+        let e = current();
+        assert!(check_range(&e, &1000u16.to_le_bytes()).is_ok());
+        assert!(check_range(&e, &500u16.to_le_bytes()).is_ok());
+        assert!(check_range(&e, &3000u16.to_le_bytes()).is_ok());
+        let Err(Failure::Input(m)) = check_range(&e, &5000u16.to_le_bytes()) else {
+            panic!("5000 accepted");
+        };
+        assert!(m.contains("5000 mA is outside"), "{m}");
+        assert!(m.contains("500..=3000 mA"), "{m}");
+        assert!(check_range(&e, &499u16.to_le_bytes()).is_err());
+        // No range given: anything goes.
+        let free = EntryInfo {
+            min: None,
+            max: None,
+            ..current()
+        };
+        assert!(check_range(&free, &5000u16.to_le_bytes()).is_ok());
+    }
+
+    #[test]
+    fn types_by_name_for_slaves_without_sdo_information() {
+        let e = typed_entry(0x6000, 1, "dint", 4).unwrap();
+        assert_eq!((e.data_type, e.bit_len), (4, 32));
+        let s = typed_entry(0x1008, 0, "STRING", 13).unwrap();
+        assert_eq!((s.data_type, s.bit_len), (9, 104));
+        let Err(Failure::Input(m)) = typed_entry(0x1000, 0, "FLOAT", 4) else {
+            panic!("FLOAT accepted");
+        };
+        assert!(m.contains("unknown data type"), "{m}");
+    }
+}

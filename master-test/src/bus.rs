@@ -1,0 +1,105 @@
+//! Where the tools find their slaves: the built-in virtual bus (a line of
+//! software slaves in this process) or a network interface (ethercrab's
+//! raw socket) with the raw-socket runner or real devices on it.
+
+use crate::link::{Clock, lock};
+use crate::{BusError, Group, MAX_FRAMES, MAX_PDU_DATA, MAX_SUBDEVICES, PDI_LEN, VirtualBus};
+use ethercrab::{MainDevice, MainDeviceConfig, PduStorage, RetryBehaviour};
+
+/// The EtherCAT segment a command talks to.
+pub enum Bus {
+    /// Software slaves on the virtual link.
+    Virtual(VirtualBus),
+    /// A network interface.
+    Raw {
+        /// The interface name.
+        iface: String,
+        /// The master on it.
+        maindevice: &'static MainDevice<'static>,
+    },
+}
+
+impl Bus {
+    /// The virtual line `spec` (`pam`, `pam,io8,pam`, ...) with an optional
+    /// capture.
+    pub fn virtual_line(spec: &str, pcap: Option<&std::path::Path>) -> Result<Self, BusError> {
+        Ok(Bus::Virtual(VirtualBus::line_with(spec, Clock::real(), pcap)?))
+    }
+
+    /// The segment on network interface `iface` (needs root or
+    /// CAP_NET_RAW).
+    pub fn raw(iface: &str) -> Result<Self, BusError> {
+        // One master per process and interface: the storage lives for the
+        // rest of the process.
+        let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
+            Box::leak(Box::new(PduStorage::new()));
+        let (tx, rx, pdu_loop) = storage.try_split().map_err(|()| BusError::Storage)?;
+        let maindevice: &'static MainDevice<'static> = Box::leak(Box::new(MainDevice::new(
+            pdu_loop,
+            crate::timeouts(),
+            MainDeviceConfig {
+                dc_static_sync_iterations: 0,
+                retry_behaviour: RetryBehaviour::None,
+            },
+        )));
+        let task = ethercrab::std::tx_rx_task(iface, tx, rx).map_err(|e| {
+            BusError::Thread(std::io::Error::other(format!(
+                "cannot open a raw socket on '{iface}': {e} (needs root or CAP_NET_RAW)"
+            )))
+        })?;
+        std::thread::Builder::new()
+            .name(format!("ethercat-{iface}"))
+            .spawn(move || {
+                let _ = smol::block_on(task);
+            })?;
+        Ok(Bus::Raw {
+            iface: iface.to_string(),
+            maindevice,
+        })
+    }
+
+    /// The master.
+    pub fn maindevice(&self) -> &MainDevice<'static> {
+        match self {
+            Bus::Virtual(v) => &v.maindevice,
+            Bus::Raw { maindevice, .. } => maindevice,
+        }
+    }
+
+    /// What the bus is, for messages.
+    pub fn describe(&self) -> String {
+        match self {
+            Bus::Virtual(_) => "the virtual bus".to_string(),
+            Bus::Raw { iface, .. } => format!("interface {iface}"),
+        }
+    }
+
+    /// Discovers the slaves and brings them to PRE-OP.
+    pub async fn init(&self) -> Result<Group<ethercrab::subdevice_group::PreOp>, BusError> {
+        Ok(self
+            .maindevice()
+            .init_single_group::<MAX_SUBDEVICES, PDI_LEN>(ethercrab::std::ethercat_now)
+            .await?)
+    }
+
+    /// A power cycle of slave `i` (virtual bus only): the version that then
+    /// runs (0x100A), `None` on a real segment.
+    pub fn power_cycle(&self, i: usize) -> Option<String> {
+        match self {
+            Bus::Virtual(v) => lock(&v.chain).power_cycle(i),
+            Bus::Raw { .. } => None,
+        }
+    }
+
+    /// RUN / ERR LED patterns of the first slave (virtual bus only).
+    pub fn leds(&self) -> Option<String> {
+        match self {
+            Bus::Virtual(v) => {
+                let chain = lock(&v.chain);
+                let (run, err) = chain.slaves().first()?.led_patterns();
+                Some(format!("RUN {}, ERR {}", run.name(), err.name()))
+            }
+            Bus::Raw { .. } => None,
+        }
+    }
+}

@@ -1,0 +1,407 @@
+//! The command-line tools as a user (or a script) runs them: `master-test`,
+//! `esi` and `pam-slave` as processes, their output, their exit status
+//! (0 ok, 1 refused by the device or mismatch, 2 usage or input error,
+//! 3 communication, 130 Ctrl-C), closed pipes, Ctrl-C, and `master-test
+//! --iface` against the raw runner over a veth pair.
+
+use crate::common::{binary, runner_binary, setup, skip};
+use assert_cmd::Command;
+use std::io::{BufRead as _, BufReader, Read as _};
+use std::path::PathBuf;
+use std::process::{Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn master_test() -> PathBuf {
+    binary("master-test", "master-test").expect("master-test builds")
+}
+
+fn esi() -> PathBuf {
+    binary("ecat-esi", "esi").expect("esi builds")
+}
+
+fn run(bin: &PathBuf, args: &[&str]) -> Output {
+    Command::new(bin)
+        .args(args)
+        .timeout(Duration::from_secs(120))
+        .output()
+        .expect("the tool runs")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// Runs and checks the exit status; returns (stdout, stderr).
+fn expect(bin: &PathBuf, args: &[&str], code: i32) -> (String, String) {
+    let out = run(bin, args);
+    let (o, e) = (text(&out.stdout), text(&out.stderr));
+    assert_eq!(
+        out.status.code(),
+        Some(code),
+        "{} {args:?}\nstdout:\n{o}\nstderr:\n{e}",
+        bin.display()
+    );
+    assert!(!e.contains("panicked"), "{args:?} panicked:\n{e}");
+    (o, e)
+}
+
+/// Starts `bin args`, reads `lines` lines of its output, then closes the
+/// pipe (as `| head -N` does) and returns its exit status and stderr.
+fn close_after(bin: &PathBuf, args: &[&str], lines: usize) -> (Option<i32>, String) {
+    let mut child = std::process::Command::new(bin)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start");
+    let stdout = child.stdout.take().expect("stdout");
+    let mut reader = BufReader::new(stdout);
+    for _ in 0..lines {
+        let mut line = String::new();
+        if reader.read_line(&mut line).unwrap_or(0) == 0 {
+            break;
+        }
+    }
+    drop(reader);
+    let mut err = String::new();
+    let mut stderr = child.stderr.take().expect("stderr");
+    let status = wait(&mut child, Duration::from_secs(120));
+    let _ = stderr.read_to_string(&mut err);
+    (status, err)
+}
+
+fn wait(child: &mut std::process::Child, limit: Duration) -> Option<i32> {
+    let start = Instant::now();
+    loop {
+        if let Ok(Some(st)) = child.try_wait() {
+            return st.code();
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            panic!("the tool did not end within {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn broken_pipes_end_quietly_with_status_0() {
+    let mt = master_test();
+    // `master-test demo | head -1`
+    let (code, err) = close_after(&mt, &["demo", "--cycles", "2000"], 1);
+    assert_eq!(code, Some(0), "demo | head -1: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    // `sdo read ... | head -0`
+    let (code, err) = close_after(&mt, &["sdo", "read", "0x800D:02"], 0);
+    assert_eq!(code, Some(0), "sdo read | head -0: {err}");
+    // `foe read info.txt | true`
+    let (code, err) = close_after(&mt, &["foe", "read", "info.txt"], 0);
+    assert_eq!(code, Some(0), "foe read | true: {err}");
+    // `od dump | head -3`
+    let (code, err) = close_after(&mt, &["od", "dump"], 3);
+    assert_eq!(code, Some(0), "od dump | head -3: {err}");
+    // `esi generate | head`
+    let (code, err) = close_after(&esi(), &["generate"], 10);
+    assert_eq!(code, Some(0), "esi generate | head: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn subindices_paste_back_exactly_as_printed() {
+    let mt = master_test();
+    // Printed as 0x8006:2A: it must read back as 0x2A, not fail.
+    let (o, _) = expect(&mt, &["sdo", "read", "0x8006:2A"], 0);
+    assert!(o.starts_with("0x8006:2A "), "{o}");
+    // "10" is 0x10 as printed, not decimal ten (0x0A).
+    let (o, _) = expect(&mt, &["sdo", "read", "0x8006:10"], 0);
+    assert!(o.starts_with("0x8006:10 "), "{o}");
+    let (o, _) = expect(&mt, &["sdo", "read", "8006:0x2a"], 0);
+    assert!(o.starts_with("0x8006:2A "), "{o}");
+    // Every address `od dump` prints pastes into `sdo read` and names the
+    // same entry.
+    let (dump, _) = expect(&mt, &["od", "dump"], 0);
+    let line = dump
+        .lines()
+        .find(|l| l.trim_start().starts_with("8006:2A"))
+        .expect("od dump lists 8006:2A");
+    let address = line.split_whitespace().next().expect("address column");
+    let name = line.split_whitespace().nth(1).expect("name column");
+    let (o, _) = expect(&mt, &["sdo", "read", address], 0);
+    assert!(o.contains(name), "{address}: {o} (od dump: {line})");
+    let (_, e) = expect(&mt, &["sdo", "read", "0x8006:2G"], 2);
+    assert!(e.contains("not a hex number"), "{e}");
+}
+
+#[test]
+fn exit_status_says_refused_input_or_communication() {
+    let mt = master_test();
+    // Out of the range SDO Information gives: refused before sending.
+    let (_, e) = expect(&mt, &["sdo", "write", "0x800D:02", "5000"], 2);
+    assert!(e.contains("500..=3000 mA"), "{e}");
+    assert!(e.contains("nothing was sent"), "{e}");
+    // The same value sent anyway: the device refuses it (abort 0x06090031).
+    let (_, e) = expect(
+        &mt,
+        &["sdo", "write", "0x800D:02", "5000", "--no-check"],
+        1,
+    );
+    assert!(e.contains("0x06090031"), "{e}");
+    // A read-only entry: the device refuses.
+    let (_, e) = expect(&mt, &["sdo", "write", "0x1018:01", "5"], 1);
+    assert!(e.contains("0x06010002"), "{e}");
+    // An object that does not exist: the device says so.
+    let (_, e) = expect(&mt, &["sdo", "read", "0x1234:00"], 1);
+    assert!(e.contains("0x06020000"), "{e}");
+    // Usage errors.
+    expect(&mt, &["sdo", "read", "0x800D"], 2);
+    expect(&mt, &["--slave", "3", "sdo", "read", "0x1000:00"], 2);
+    expect(&mt, &["--line", "pam,io8", "sdo", "read", "0x1000:00"], 2);
+    expect(&mt, &["--line", "pam,nope", "scan"], 2);
+    expect(&mt, &["no-such-command"], 2);
+    // An interface that does not exist: communication.
+    let (_, e) = expect(&mt, &["--iface", "nosuchif0", "scan"], 3);
+    assert!(e.contains("nosuchif0"), "{e}");
+    // The help documents the scheme.
+    let (o, _) = expect(&mt, &["--help"], 0);
+    for needle in ["Exit status:", "1    the device refused", "2    usage", "130"] {
+        assert!(o.contains(needle), "--help lacks '{needle}':\n{o}");
+    }
+}
+
+#[test]
+fn cli_limits_are_refused_before_anything_runs() {
+    let mt = master_test();
+    for (args, needle) in [
+        (&["demo", "--current", "5000"][..], "500..=3000"),
+        (&["demo", "--current", "-1"][..], "500..=3000"),
+        (&["demo", "--command", "20000"][..], "-10000..=10000"),
+        (&["demo", "--cycles", "4000000000"][..], "3600000"),
+        (&["demo", "--slaves", "0"][..], "1..=64"),
+        (&["demo", "--slaves", "65"][..], "1..=64"),
+    ] {
+        let (o, e) = expect(&mt, args, 2);
+        assert!(e.contains(needle), "{args:?}: {e}");
+        assert!(o.is_empty(), "{args:?} ran: {o}");
+    }
+    // The help names ranges and units.
+    let (o, _) = expect(&mt, &["demo", "--help"], 0);
+    assert!(o.contains("500..=3000 mA"), "{o}");
+    assert!(o.contains("-10000..=10000"), "{o}");
+    let runner = runner_binary().expect("pam-slave builds");
+    let (o, e) = expect(&runner, &["--iface", "lo", "--count", "0"], 2);
+    assert!(e.contains("1..=512"), "{e}");
+    assert!(!o.contains("slave") && !e.contains("Ctrl-C stops"), "{o}{e}");
+}
+
+#[test]
+fn demo_summary_shows_both_solenoids() {
+    let mt = master_test();
+    let (o, _) = expect(&mt, &["demo", "--command", "-2500", "--cycles", "400"], 0);
+    let summary = o
+        .lines()
+        .find(|l| l.starts_with("slave 0 "))
+        .expect("summary line");
+    let current = |name: &str| -> u32 {
+        let at = summary
+            .find(&format!("{name} = "))
+            .unwrap_or_else(|| panic!("{name} missing: {summary}"));
+        summary[at + name.len() + 3..]
+            .split(' ')
+            .next()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or_else(|| panic!("{name} value: {summary}"))
+    };
+    // A negative command drives solenoid B; A stays off.
+    assert_eq!(current("IA"), 0, "{summary}");
+    assert!(current("IB") > 0, "{summary}");
+}
+
+#[test]
+fn firmware_images_are_checked_and_downgrades_need_confirmation() {
+    let mt = master_test();
+    let dir = std::env::temp_dir().join(format!("mt-fw-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let p = |n: &str| dir.join(n).to_string_lossy().into_owned();
+    std::fs::write(p("empty.bin"), b"").expect("write");
+    std::fs::write(p("app.bin"), vec![0x5Au8; 3000]).expect("write");
+    let (_, e) = expect(
+        &mt,
+        &["firmware", "pack", &p("empty.bin"), "--version", "11", "-o", &p("e.efw")],
+        2,
+    );
+    assert!(e.contains("empty"), "{e}");
+    assert!(!dir.join("e.efw").exists());
+    let (_, e) = expect(
+        &mt,
+        &[
+            "firmware", "pack", &p("app.bin"), "--version", "11", "-o", &p("x.efw"),
+            "--revision-min", "9", "--revision-max", "2",
+        ],
+        2,
+    );
+    assert!(e.contains("--revision-min 9 is above --revision-max 2"), "{e}");
+    expect(
+        &mt,
+        &["firmware", "pack", &p("app.bin"), "--version", "9", "-o", &p("old.efw")],
+        0,
+    );
+    let (_, e) = expect(
+        &mt,
+        &["foe", "write", &p("old.efw"), "--password", "123456789"],
+        2,
+    );
+    assert!(e.contains("1 to 8 hex digits"), "{e}");
+    // The slave runs 10: version 9 is a downgrade.
+    let (o, e) = expect(&mt, &["foe", "write", &p("old.efw")], 2);
+    assert!(e.contains("--allow-downgrade"), "{e}");
+    assert!(!o.contains("downloaded"), "{o}");
+    let (o, e) = expect(&mt, &["foe", "write", &p("old.efw"), "--allow-downgrade"], 0);
+    assert!(e.contains("warning: downgrading"), "{e}");
+    assert!(o.contains("0x100A SOFTWARE VERSION = 9"), "{o}");
+    // An image without payload (packed by another tool) is refused too.
+    let empty = master_test::foe::efw_image(
+        pam_199_p_etc::VENDOR_ID,
+        pam_199_p_etc::PRODUCT_CODE,
+        "12",
+        &[],
+    );
+    std::fs::write(p("empty.efw"), empty).expect("write");
+    let (_, e) = expect(&mt, &["foe", "write", &p("empty.efw")], 2);
+    assert!(e.contains("empty payload"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn ctrl_c_stops_the_demo_in_order_and_says_where_it_left_the_slaves() {
+    let mt = master_test();
+    let mut child = std::process::Command::new(&mt)
+        .args(["demo", "--cycles", "3600000"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start");
+    let stdout = child.stdout.take().expect("stdout");
+    let (tx, rx) = std::sync::mpsc::channel();
+    let reader = std::thread::spawn(move || {
+        let mut all = String::new();
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if line.starts_with("driving") {
+                let _ = tx.send(());
+            }
+            all.push_str(&line);
+            all.push('\n');
+        }
+        all
+    });
+    rx.recv_timeout(Duration::from_secs(60))
+        .expect("the demo reaches OP");
+    std::thread::sleep(Duration::from_millis(200));
+    let killed = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(killed.success());
+    let code = wait(&mut child, Duration::from_secs(60));
+    let out = reader.join().expect("reader");
+    let mut err = String::new();
+    let _ = child.stderr.take().expect("stderr").read_to_string(&mut err);
+    assert_eq!(code, Some(130), "stdout:\n{out}\nstderr:\n{err}");
+    assert!(err.contains("left in INIT"), "{err}");
+    assert!(out.contains("state: INIT (done)"), "{out}");
+}
+
+#[test]
+fn esi_tool_exit_codes_and_pipes() {
+    let esi = esi();
+    let dir = std::env::temp_dir().join(format!("esi-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let garbage = dir.join("garbage.bin");
+    std::fs::write(&garbage, vec![0xA5u8; 300]).expect("write");
+    // Problems found: exit 1, not 0.
+    let (o, _) = expect(&esi, &["inspect", &garbage.to_string_lossy()], 1);
+    assert!(!o.is_empty());
+    let xml = dir.join("pam.xml");
+    expect(&esi, &["generate", "-o", &xml.to_string_lossy()], 0);
+    let (_, e) = expect(&esi, &["inspect", &xml.to_string_lossy()], 2);
+    assert!(e.contains("ESI") || e.contains("XML"), "{e}");
+    // Our own image: no problems.
+    let sii = dir.join("pam.bin");
+    expect(&esi, &["sii", "-o", &sii.to_string_lossy()], 0);
+    expect(&esi, &["inspect", &sii.to_string_lossy()], 0);
+    let (o, _) = expect(&esi, &["--help"], 0);
+    assert!(o.contains("Exit status:"), "{o}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn master_test_iface_drives_the_raw_runner_over_veth() {
+    let Some(runner) = runner_binary() else {
+        return skip("pam-slave binary not built");
+    };
+    let mt = master_test();
+    let _serial = crate::common::NET_TESTS
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
+    let (mut guard, host_if, slave_if) = match setup("c") {
+        Ok(x) => x,
+        Err(e) => {
+            return skip(&format!(
+                "cannot create a network namespace and veth pair here ({e}); needs root and iproute2"
+            ));
+        }
+    };
+    let child = std::process::Command::new("ip")
+        .args(["netns", "exec", &guard.name])
+        .arg(&runner)
+        .args(["--iface", &slave_if, "--line", "pam,io8"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start pam-slave in the namespace");
+    guard.runner = Some(child);
+    std::thread::sleep(Duration::from_millis(300));
+    let on = |args: &[&str], code: i32| {
+        let mut all = vec!["--iface", host_if.as_str()];
+        all.extend_from_slice(args);
+        expect(&mt, &all, code)
+    };
+    let (o, _) = on(&["scan"], 0);
+    assert!(o.contains("PAM-199-P-ETC") && o.contains("IO8"), "{o}");
+    assert!(o.contains("0x1001"), "{o}");
+    // Two slaves: the tool asks which one.
+    let (_, e) = on(&["sdo", "read", "0x1008:00"], 2);
+    assert!(e.contains("--slave"), "{e}");
+    // The runner keeps its state between commands (unlike the virtual bus).
+    on(&["--slave", "0", "sdo", "write", "0x800D:02", "2500"], 0);
+    let (o, _) = on(&["--slave", "0", "sdo", "read", "0x800D:02"], 0);
+    assert!(o.contains("CURRENT = 2500 mA"), "{o}");
+    let (_, e) = on(&["--slave", "0", "sdo", "write", "0x800D:02", "5000"], 2);
+    assert!(e.contains("500..=3000 mA"), "{e}");
+    let (o, _) = on(&["--station", "0x1001", "sdo", "read", "0x1008:00"], 0);
+    assert!(o.contains("= IO8"), "{o}");
+    let (o, _) = on(&["--station", "0x1001", "esi", "check"], 0);
+    assert!(o.contains("agrees"), "{o}");
+    let (o, _) = on(&["--slave", "0", "esi", "check"], 0);
+    assert!(o.contains("agrees"), "{o}");
+    let (o, _) = on(&["--slave", "1", "watch", "--cycles", "50", "--interval", "10"], 0);
+    assert!(o.contains("Input 1=false"), "{o}");
+    let (o, _) = on(&["state"], 0);
+    assert!(o.contains("PRE-OP"), "{o}");
+    let (o, _) = on(&["--slave", "0", "od", "dump", "--json"], 0);
+    let v: serde_json::Value = serde_json::from_str(&o).expect("od dump --json is JSON");
+    assert!(v.as_array().is_some_and(|a| a.len() > 20), "{o}");
+    let sii = std::env::temp_dir().join(format!("mt-sii-{}.bin", std::process::id()));
+    on(&["--slave", "0", "eeprom", "read", "-o", &sii.to_string_lossy()], 0);
+    let image = std::fs::read(&sii).expect("SII written");
+    // Everything up to the end marker; the generated image only pads
+    // (0xFF) after it.
+    let full = ecat_esi::sii_image(&pam_199_p_etc::DEVICE);
+    assert_eq!(image, full[..image.len()]);
+    assert!(full[image.len()..].iter().all(|&b| b == 0xFF));
+    let _ = std::fs::remove_file(&sii);
+    let fw = std::env::temp_dir().join(format!("mt-fw-{}.efw", std::process::id()));
+    std::fs::write(&fw, master_test::foe::pam_image("11", 4000)).expect("write");
+    let (o, _) = on(&["--slave", "0", "foe", "write", &fw.to_string_lossy()], 0);
+    assert!(o.contains("downloaded 4056 bytes"), "{o}");
+    let _ = std::fs::remove_file(&fw);
+}
