@@ -23,7 +23,11 @@ impl Bus {
     /// The virtual line `spec` (`pam`, `pam,io8,pam`, ...) with an optional
     /// capture.
     pub fn virtual_line(spec: &str, pcap: Option<&std::path::Path>) -> Result<Self, BusError> {
-        Ok(Bus::Virtual(VirtualBus::line_with(spec, Clock::real(), pcap)?))
+        Ok(Bus::Virtual(VirtualBus::line_with(
+            spec,
+            Clock::real(),
+            pcap,
+        )?))
     }
 
     /// The segment on network interface `iface` (needs root or

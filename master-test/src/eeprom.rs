@@ -48,7 +48,10 @@ pub enum EepromError {
 impl EepromError {
     /// Whether the device said no (as opposed to a communication failure).
     pub fn refused_by_device(&self) -> bool {
-        matches!(self, EepromError::Refused { .. } | EepromError::Verify { .. })
+        matches!(
+            self,
+            EepromError::Refused { .. } | EepromError::Verify { .. }
+        )
     }
 }
 
@@ -161,7 +164,7 @@ pub async fn write(md: &MainDevice<'_>, station: u16, image: &[u8]) -> Result<()
     write_with(md, station, image, |_, _| {}).await
 }
 
-/// [`write`] reporting (words written, total words) after each word.
+/// [`write()`] reporting (words written, total words) after each word.
 pub async fn write_with(
     md: &MainDevice<'_>,
     station: u16,

@@ -53,7 +53,7 @@ pub async fn write(
         .map(|_| ())
 }
 
-/// Like [`write`] but stops after `stop_after` bytes without ending the
+/// Like [`write()`] but stops after `stop_after` bytes without ending the
 /// file (a master that gives up midway; for tests).
 pub async fn write_partial(
     client: &mut MailboxClient<'_>,
@@ -69,7 +69,7 @@ pub async fn write_partial(
         .map(|_| ())
 }
 
-/// Like [`write`], but checks `cancel` before each DATA packet: when it
+/// Like [`write()`], but checks `cancel` before each DATA packet: when it
 /// says stop, the transfer is ended with a FoE error request ("aborted by
 /// the master"; ETG.1000.6 lets either side end a transfer so) and
 /// `Ok(false)` returned; the slave discards the partial file. `Ok(true)`:
@@ -236,7 +236,12 @@ pub async fn enter_boot_with(
     station: u16,
     l: &ecat_slave::device::MemoryLayout,
 ) -> Result<(), ClientError> {
-    enter_boot_geometry(md, station, crate::mailbox::MailboxGeometry::bootstrap_of(l)).await
+    enter_boot_geometry(
+        md,
+        station,
+        crate::mailbox::MailboxGeometry::bootstrap_of(l),
+    )
+    .await
 }
 
 /// INIT, SM0/SM1 set to the bootstrap mailbox `boot` (from the slave's SII

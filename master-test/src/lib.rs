@@ -1,9 +1,16 @@
-//! # master-test: an ethercrab master for software slaves
+//! # master-test: an ethercrab master for software slaves and real segments
 //!
 //! [`VirtualBus`] puts an ethercrab [`MainDevice`] on a virtual link
 //! ([`link`]) to a line of software slaves of any devices of the catalog
 //! (PAM-199-P-ETC by default): real EtherCAT frames, no sockets, no root.
-//! Integration tests and the demo CLI use it.
+//! [`bus::Bus`] is either that or ethercrab's raw socket on a network
+//! interface. On top: what ethercrab lacks for commissioning, a raw
+//! [`mailbox`] client (segmented SDO, [`sdo_info`], [`foe`], BOOT), the
+//! SII [`eeprom`] interface, and the live dictionary ([`od`]).
+//!
+//! The `master-test` binary is the commissioning tool built from these
+//! (see its `--help` and the README); the integration tests use the same
+//! pieces.
 
 pub mod bus;
 pub mod cli;

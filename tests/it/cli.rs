@@ -140,11 +140,7 @@ fn exit_status_says_refused_input_or_communication() {
     assert!(e.contains("500..=3000 mA"), "{e}");
     assert!(e.contains("nothing was sent"), "{e}");
     // The same value sent anyway: the device refuses it (abort 0x06090031).
-    let (_, e) = expect(
-        &mt,
-        &["sdo", "write", "0x800D:02", "5000", "--no-check"],
-        1,
-    );
+    let (_, e) = expect(&mt, &["sdo", "write", "0x800D:02", "5000", "--no-check"], 1);
     assert!(e.contains("0x06090031"), "{e}");
     // A read-only entry: the device refuses.
     let (_, e) = expect(&mt, &["sdo", "write", "0x1018:01", "5"], 1);
@@ -163,7 +159,12 @@ fn exit_status_says_refused_input_or_communication() {
     assert!(e.contains("nosuchif0"), "{e}");
     // The help documents the scheme.
     let (o, _) = expect(&mt, &["--help"], 0);
-    for needle in ["Exit status:", "1    the device refused", "2    usage", "130"] {
+    for needle in [
+        "Exit status:",
+        "1    the device refused",
+        "2    usage",
+        "130",
+    ] {
         assert!(o.contains(needle), "--help lacks '{needle}':\n{o}");
     }
 }
@@ -190,7 +191,10 @@ fn cli_limits_are_refused_before_anything_runs() {
     let runner = runner_binary().expect("pam-slave builds");
     let (o, e) = expect(&runner, &["--iface", "lo", "--count", "0"], 2);
     assert!(e.contains("1..=512"), "{e}");
-    assert!(!o.contains("slave") && !e.contains("Ctrl-C stops"), "{o}{e}");
+    assert!(
+        !o.contains("slave") && !e.contains("Ctrl-C stops"),
+        "{o}{e}"
+    );
 }
 
 #[test]
@@ -226,7 +230,15 @@ fn firmware_images_are_checked_and_downgrades_need_confirmation() {
     std::fs::write(p("app.bin"), vec![0x5Au8; 3000]).expect("write");
     let (_, e) = expect(
         &mt,
-        &["firmware", "pack", &p("empty.bin"), "--version", "11", "-o", &p("e.efw")],
+        &[
+            "firmware",
+            "pack",
+            &p("empty.bin"),
+            "--version",
+            "11",
+            "-o",
+            &p("e.efw"),
+        ],
         2,
     );
     assert!(e.contains("empty"), "{e}");
@@ -234,15 +246,35 @@ fn firmware_images_are_checked_and_downgrades_need_confirmation() {
     let (_, e) = expect(
         &mt,
         &[
-            "firmware", "pack", &p("app.bin"), "--version", "11", "-o", &p("x.efw"),
-            "--revision-min", "9", "--revision-max", "2",
+            "firmware",
+            "pack",
+            &p("app.bin"),
+            "--version",
+            "11",
+            "-o",
+            &p("x.efw"),
+            "--revision-min",
+            "9",
+            "--revision-max",
+            "2",
         ],
         2,
     );
-    assert!(e.contains("--revision-min 9 is above --revision-max 2"), "{e}");
+    assert!(
+        e.contains("--revision-min 9 is above --revision-max 2"),
+        "{e}"
+    );
     expect(
         &mt,
-        &["firmware", "pack", &p("app.bin"), "--version", "9", "-o", &p("old.efw")],
+        &[
+            "firmware",
+            "pack",
+            &p("app.bin"),
+            "--version",
+            "9",
+            "-o",
+            &p("old.efw"),
+        ],
         0,
     );
     let (_, e) = expect(
@@ -255,7 +287,11 @@ fn firmware_images_are_checked_and_downgrades_need_confirmation() {
     let (o, e) = expect(&mt, &["foe", "write", &p("old.efw")], 2);
     assert!(e.contains("--allow-downgrade"), "{e}");
     assert!(!o.contains("downloaded"), "{o}");
-    let (o, e) = expect(&mt, &["foe", "write", &p("old.efw"), "--allow-downgrade"], 0);
+    let (o, e) = expect(
+        &mt,
+        &["foe", "write", &p("old.efw"), "--allow-downgrade"],
+        0,
+    );
     assert!(e.contains("warning: downgrading"), "{e}");
     assert!(o.contains("0x100A SOFTWARE VERSION = 9"), "{o}");
     // An image without payload (packed by another tool) is refused too.
@@ -304,7 +340,11 @@ fn ctrl_c_stops_the_demo_in_order_and_says_where_it_left_the_slaves() {
     let code = wait(&mut child, Duration::from_secs(60));
     let out = reader.join().expect("reader");
     let mut err = String::new();
-    let _ = child.stderr.take().expect("stderr").read_to_string(&mut err);
+    let _ = child
+        .stderr
+        .take()
+        .expect("stderr")
+        .read_to_string(&mut err);
     assert_eq!(code, Some(130), "stdout:\n{out}\nstderr:\n{err}");
     assert!(err.contains("left in INIT"), "{err}");
     assert!(out.contains("state: INIT (done)"), "{out}");
@@ -383,7 +423,18 @@ fn master_test_iface_drives_the_raw_runner_over_veth() {
     assert!(o.contains("agrees"), "{o}");
     let (o, _) = on(&["--slave", "0", "esi", "check"], 0);
     assert!(o.contains("agrees"), "{o}");
-    let (o, _) = on(&["--slave", "1", "watch", "--cycles", "50", "--interval", "10"], 0);
+    let (o, _) = on(
+        &[
+            "--slave",
+            "1",
+            "watch",
+            "--cycles",
+            "50",
+            "--interval",
+            "10",
+        ],
+        0,
+    );
     assert!(o.contains("Input 1=false"), "{o}");
     let (o, _) = on(&["state"], 0);
     assert!(o.contains("PRE-OP"), "{o}");
@@ -391,7 +442,17 @@ fn master_test_iface_drives_the_raw_runner_over_veth() {
     let v: serde_json::Value = serde_json::from_str(&o).expect("od dump --json is JSON");
     assert!(v.as_array().is_some_and(|a| a.len() > 20), "{o}");
     let sii = std::env::temp_dir().join(format!("mt-sii-{}.bin", std::process::id()));
-    on(&["--slave", "0", "eeprom", "read", "-o", &sii.to_string_lossy()], 0);
+    on(
+        &[
+            "--slave",
+            "0",
+            "eeprom",
+            "read",
+            "-o",
+            &sii.to_string_lossy(),
+        ],
+        0,
+    );
     let image = std::fs::read(&sii).expect("SII written");
     // Everything up to the end marker; the generated image only pads
     // (0xFF) after it.

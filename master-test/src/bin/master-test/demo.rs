@@ -253,7 +253,9 @@ pub async fn run(w: &Where, a: &DemoArgs) -> Result<(), Failure> {
 }
 
 fn leds_of(bus: &master_test::bus::Bus) -> String {
-    bus.leds().map(|l| format!("   LEDs {l}")).unwrap_or_default()
+    bus.leds()
+        .map(|l| format!("   LEDs {l}"))
+        .unwrap_or_default()
 }
 
 /// The end of the run of one PAM from its last process data: what was

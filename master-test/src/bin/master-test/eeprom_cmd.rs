@@ -186,8 +186,7 @@ pub async fn esi(w: &Where, op: EsiCmd) -> Result<(), Failure> {
     let given = match &esi {
         Some(p) => Some(
             String::from_utf8(
-                std::fs::read(p)
-                    .map_err(|e| input(format!("cannot read {}: {e}", p.display())))?,
+                std::fs::read(p).map_err(|e| input(format!("cannot read {}: {e}", p.display())))?,
             )
             .map_err(|_| input(format!("{}: not an ESI XML file (not UTF-8)", p.display())))?,
         ),
@@ -201,7 +200,10 @@ pub async fn esi(w: &Where, op: EsiCmd) -> Result<(), Failure> {
             let x = ecat_esi::esi::generate(d.description)
                 .map_err(|e| input(format!("cannot generate the ESI: {e}")))?;
             let x = String::from_utf8(x).map_err(|_| input("generated ESI is not UTF-8"))?;
-            (x, format!("the generated ESI of {}", d.description.names.type_name))
+            (
+                x,
+                format!("the generated ESI of {}", d.description.names.type_name),
+            )
         }
         _ => {
             return Err(input(format!(

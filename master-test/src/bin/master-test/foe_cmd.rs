@@ -139,10 +139,13 @@ fn read_file(p: &Path) -> Result<Vec<u8>, Failure> {
 /// Checks the image against the live slave: what the slave would check,
 /// before anything is sent.
 fn check_image(image: &[u8], identity: DeviceIdentity) -> Result<EfwHeaderRepr, Failure> {
-    let header = EfwHeaderRepr::parse(image)
-        .map_err(|e| input(format!("not a valid .efw image: {e}")))?;
+    let header =
+        EfwHeaderRepr::parse(image).map_err(|e| input(format!("not a valid .efw image: {e}")))?;
     let mut v = EfwValidator::new(identity, usize::MAX);
-    let checked = v.feed(image).map(|_| ()).and_then(|()| v.finish().map(|_| ()));
+    let checked = v
+        .feed(image)
+        .map(|_| ())
+        .and_then(|()| v.finish().map(|_| ()));
     checked.map_err(|e| input(format!("the image does not fit this slave: {e}")))?;
     if header.payload_len == 0 {
         return Err(input("the image has an empty payload: nothing to update"));
@@ -402,7 +405,10 @@ mod tests {
         let Err(Failure::Input(m)) = check_image(&good[..50], id) else {
             panic!("truncated accepted");
         };
-        assert!(m.contains("not a valid .efw") || m.contains("does not fit"), "{m}");
+        assert!(
+            m.contains("not a valid .efw") || m.contains("does not fit"),
+            "{m}"
+        );
         let other = DeviceIdentity {
             product_code: 1,
             ..id

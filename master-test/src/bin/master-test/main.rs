@@ -174,7 +174,11 @@ fn run(cli: Cli) -> Result<(), Failure> {
         (None, None) => "pam".to_string(),
     };
     if cli.iface.is_some() && (cli.line.is_some() || cli.device.is_some()) {
-        let what = if cli.line.is_some() { "--line" } else { "--device" };
+        let what = if cli.line.is_some() {
+            "--line"
+        } else {
+            "--device"
+        };
         if !matches!(cli.command, Some(Cmd::Firmware { .. })) {
             return Err(input(format!(
                 "{what} describes the virtual bus; with --iface the slaves are whatever \
@@ -229,7 +233,11 @@ mod tests {
     fn station_addresses_parse_in_hex_and_decimal() {
         assert_eq!(parse_u16("0x1001"), Ok(0x1001));
         assert_eq!(parse_u16("4097"), Ok(0x1001));
-        assert!(parse_u16("0x10000").unwrap_err().contains("outside 0..=65535"));
+        assert!(
+            parse_u16("0x10000")
+                .unwrap_err()
+                .contains("outside 0..=65535")
+        );
         assert!(parse_u16("abc").unwrap_err().contains("not a number"));
     }
 }

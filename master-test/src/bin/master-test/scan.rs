@@ -267,7 +267,11 @@ pub async fn state(w: &Where, target: Option<AlTarget>) -> Result<(), Failure> {
             let Session { bus, group } = s;
             let md = bus.maindevice();
             let result: Result<(), Failure> = if target == AlTarget::SafeOp {
-                group.into_safe_op(md).await.map(|_| ()).map_err(Failure::from)
+                group
+                    .into_safe_op(md)
+                    .await
+                    .map(|_| ())
+                    .map_err(Failure::from)
             } else {
                 master_test::into_op_cyclic(group, md, Duration::from_millis(1))
                     .await
@@ -287,8 +291,7 @@ pub async fn state(w: &Where, target: Option<AlTarget>) -> Result<(), Failure> {
         AlTarget::Boot => {
             for sel in &selected {
                 let boot = sel.bootstrap()?;
-                if let Err(e) = master_test::foe::enter_boot_geometry(md, sel.station, boot).await
-                {
+                if let Err(e) = master_test::foe::enter_boot_geometry(md, sel.station, boot).await {
                     eprintln!("{}: {e}", sel.label());
                 }
             }
@@ -539,7 +542,11 @@ mod tests {
             name: name.into(),
             data_type: 1,
         };
-        let mut v = vec![m(0xA010, "SHORT CIRCUIT"), m(0xA020, "SHORT CIRCUIT"), m(0x6000, "READY")];
+        let mut v = vec![
+            m(0xA010, "SHORT CIRCUIT"),
+            m(0xA020, "SHORT CIRCUIT"),
+            m(0x6000, "READY"),
+        ];
         unique_names(&mut v);
         assert_eq!(v[0].name, "SHORT CIRCUIT (A010:01)");
         assert_eq!(v[1].name, "SHORT CIRCUIT (A020:01)");

@@ -49,7 +49,10 @@ pub struct Selected {
 impl Selected {
     /// `slave 0 (0x1000 PAM-199-P-ETC)`.
     pub fn label(&self) -> String {
-        format!("slave {} ({:#06x} {})", self.position, self.station, self.name)
+        format!(
+            "slave {} ({:#06x} {})",
+            self.position, self.station, self.name
+        )
     }
 
     /// The standard mailbox from the SII, or why there is none.
@@ -75,10 +78,12 @@ impl Selected {
 }
 
 /// The catalog device with `vendor`/`product`.
-pub fn device_by_identity(vendor: u32, product: u32) -> Option<&'static device_catalog::DeviceEntry> {
+pub fn device_by_identity(
+    vendor: u32,
+    product: u32,
+) -> Option<&'static device_catalog::DeviceEntry> {
     device_catalog::DEVICES.iter().find(|d| {
-        d.description.identity.vendor_id == vendor
-            && d.description.identity.product_code == product
+        d.description.identity.vendor_id == vendor && d.description.identity.product_code == product
     })
 }
 
@@ -87,19 +92,24 @@ impl Session {
     pub async fn open(w: &Where) -> Result<Self, Failure> {
         let bus = match &w.iface {
             Some(iface) => Bus::raw(iface).map_err(|e| Failure::Comm(e.to_string()))?,
-            None => Bus::virtual_line(&w.line, w.pcap.as_deref()).map_err(|e| match (&w.pcap, e) {
-                (Some(p), BusError::Thread(e)) => {
-                    input(format!("cannot write the capture {}: {e}", p.display()))
-                }
-                (_, e) => e.into(),
-            })?,
+            None => {
+                Bus::virtual_line(&w.line, w.pcap.as_deref()).map_err(|e| match (&w.pcap, e) {
+                    (Some(p), BusError::Thread(e)) => {
+                        input(format!("cannot write the capture {}: {e}", p.display()))
+                    }
+                    (_, e) => e.into(),
+                })?
+            }
         };
         let group = bus
             .init()
             .await
             .map_err(|e| Failure::from(e).context(format!("no slaves on {}", bus.describe())))?;
-        if group.len() == 0 {
-            return Err(Failure::Comm(format!("no slave answered on {}", bus.describe())));
+        if group.is_empty() {
+            return Err(Failure::Comm(format!(
+                "no slave answered on {}",
+                bus.describe()
+            )));
         }
         Ok(Session { bus, group })
     }
@@ -166,7 +176,10 @@ impl Session {
     /// values with `s`'s device dictionary where it is one of ours.
     pub fn client(&self, s: &Selected) -> Result<MailboxClient<'_>, Failure> {
         let geometry = s.mailbox()?;
-        master_test::cli::use_enums(s.device.map_or(&[][..], |d| d.description.dictionary.enums()));
+        master_test::cli::use_enums(
+            s.device
+                .map_or(&[][..], |d| d.description.dictionary.enums()),
+        );
         Ok(MailboxClient::new(self.md(), s.station, geometry))
     }
 }
