@@ -1,57 +1,55 @@
-//! Intel HEX encoding and decoding of EEPROM images (host tool).
+//! Intel HEX encoding and decoding of EEPROM images (host tool), on the
+//! `ihex` crate's records.
 //!
-//! Records: type 00 (data, 16 bytes per line), type 04 (extended linear
-//! address, only written above 64 KiB), type 01 (end of file). The checksum
-//! is the two's complement of the sum of all record bytes.
+//! Layout written: type 00 data records of [`RECORD_LEN`] bytes (the last
+//! one shorter), a type 04 extended linear address record before the first
+//! data record above each 64 KiB boundary (an SII image never needs one),
+//! and the type 01 end-of-file record; one record per line, each ending in
+//! `\n`. The checksum is the two's complement of the sum of all record
+//! bytes. Read: types 00, 01, 02 (extended segment address) and 04; the
+//! start-address records 03 and 05 have no meaning for an EEPROM image
+//! and are refused.
+
+use ::ihex::{ReaderError, Record};
 
 /// Data bytes per type-00 record.
 pub const RECORD_LEN: usize = 16;
 
-/// One record `:LLAAAATT<data>CC` with its checksum.
-fn record(address: u16, kind: u8, data: &[u8]) -> String {
-    let len = u8::try_from(data.len()).unwrap_or(u8::MAX);
-    let [hi, lo] = address.to_be_bytes();
-    let mut bytes = vec![len, hi, lo, kind];
-    bytes.extend_from_slice(&data[..usize::from(len)]);
-    let sum = bytes.iter().fold(0u8, |s, b| s.wrapping_add(*b));
-    bytes.push(sum.wrapping_neg());
-    let mut line = String::with_capacity(1 + bytes.len() * 2);
-    line.push(':');
-    for b in bytes {
-        line.push_str(&format!("{b:02X}"));
-    }
-    line
-}
-
 /// Encodes `data` (loaded at address 0) as Intel HEX, one record per line,
 /// each line ending in `\n`.
 pub fn encode(data: &[u8]) -> String {
-    let mut out = String::new();
+    let mut records = Vec::with_capacity(data.len() / RECORD_LEN + 2);
     let mut upper: u32 = 0;
     for (n, chunk) in data.chunks(RECORD_LEN).enumerate() {
         let address = u32::try_from(n * RECORD_LEN).unwrap_or(u32::MAX);
+        let [hi, hi_lo, lo_hi, lo] = address.to_be_bytes();
         if address >> 16 != upper {
             upper = address >> 16;
-            let ext = u16::try_from(upper).unwrap_or(u16::MAX).to_be_bytes();
-            out.push_str(&record(0, 0x04, &ext));
-            out.push('\n');
+            records.push(Record::ExtendedLinearAddress(u16::from_be_bytes([
+                hi, hi_lo,
+            ])));
         }
-        out.push_str(&record((address & 0xFFFF) as u16, 0x00, chunk));
-        out.push('\n');
+        records.push(Record::Data {
+            offset: u16::from_be_bytes([lo_hi, lo]),
+            value: chunk.to_vec(),
+        });
     }
-    out.push_str(&record(0, 0x01, &[]));
-    out.push('\n');
-    out
+    records.push(Record::EndOfFile);
+    // Cannot fail: every record holds at most 16 data bytes and the only
+    // end-of-file record is the last.
+    ::ihex::create_object_file_representation(&records).unwrap_or_default()
 }
 
 /// Why an Intel HEX text could not be decoded.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum IhexError {
     /// A line is not a well-formed record.
-    #[error("line {line}: malformed record")]
+    #[error("line {line}: malformed record ({reason})")]
     Malformed {
         /// 1-based line number.
         line: usize,
+        /// What the `ihex` reader found.
+        reason: ReaderError,
     },
     /// A record's checksum is wrong.
     #[error("line {line}: checksum mismatch")]
@@ -79,7 +77,8 @@ pub enum IhexError {
 }
 
 /// Decodes Intel HEX text into a flat image starting at address 0; gaps
-/// are filled with 0xFF (erased EEPROM).
+/// are filled with 0xFF (erased EEPROM). Blank lines and whitespace around
+/// a record are ignored; nothing after the end-of-file record is read.
 pub fn decode(text: &str) -> Result<Vec<u8>, IhexError> {
     const LIMIT: usize = 16 << 20;
     let mut out: Vec<u8> = Vec::new();
@@ -90,37 +89,34 @@ pub fn decode(text: &str) -> Result<Vec<u8>, IhexError> {
         if raw.is_empty() {
             continue;
         }
-        let hex = raw.strip_prefix(':').ok_or(IhexError::Malformed { line })?;
-        let bytes = crate::xml::hex_binary(hex).ok_or(IhexError::Malformed { line })?;
-        let (&len, rest) = bytes.split_first().ok_or(IhexError::Malformed { line })?;
-        if bytes.len() != usize::from(len) + 5 || rest.len() < 4 {
-            return Err(IhexError::Malformed { line });
-        }
-        if bytes.iter().fold(0u8, |s, b| s.wrapping_add(*b)) != 0 {
-            return Err(IhexError::Checksum { line });
-        }
-        let address = usize::from(u16::from_be_bytes([rest[0], rest[1]]));
-        let kind = rest[2];
-        let data = &rest[3..3 + usize::from(len)];
-        match kind {
-            0x00 => {
-                let at = base + address;
-                let end = at + data.len();
+        let record = Record::from_record_string(raw).map_err(|e| match e {
+            ReaderError::ChecksumMismatch(..) => IhexError::Checksum { line },
+            ReaderError::UnsupportedRecordType(kind) => IhexError::UnsupportedType { line, kind },
+            reason => IhexError::Malformed { line, reason },
+        })?;
+        match record {
+            Record::Data { offset, value } => {
+                let at = base + usize::from(offset);
+                let end = at + value.len();
                 if end > LIMIT {
                     return Err(IhexError::TooLarge { line });
                 }
                 if out.len() < end {
                     out.resize(end, 0xFF);
                 }
-                out[at..end].copy_from_slice(data);
+                if let Some(dst) = out.get_mut(at..end) {
+                    dst.copy_from_slice(&value);
+                }
             }
-            0x01 => return Ok(out),
-            0x02 | 0x04 if data.len() == 2 => {
-                let v = usize::from(u16::from_be_bytes([data[0], data[1]]));
-                base = if kind == 0x02 { v << 4 } else { v << 16 };
+            Record::EndOfFile => return Ok(out),
+            Record::ExtendedSegmentAddress(v) => base = usize::from(v) << 4,
+            Record::ExtendedLinearAddress(v) => base = usize::from(v) << 16,
+            other @ (Record::StartSegmentAddress { .. } | Record::StartLinearAddress(_)) => {
+                return Err(IhexError::UnsupportedType {
+                    line,
+                    kind: other.record_type(),
+                });
             }
-            0x02 | 0x04 => return Err(IhexError::Malformed { line }),
-            other => return Err(IhexError::UnsupportedType { line, kind: other }),
         }
     }
     Err(IhexError::NoEof)
@@ -129,30 +125,40 @@ pub fn decode(text: &str) -> Result<Vec<u8>, IhexError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
+    /// The record layout of the Wikipedia / Intel specification example.
     #[test]
     fn record_checksum_matches_the_textbook_example() {
         let data = [
             0x21, 0x46, 0x01, 0x36, 0x01, 0x21, 0x47, 0x01, 0x36, 0x00, 0x7E, 0xFE, 0x09, 0xD2,
             0x19, 0x01,
         ];
+        let rec = Record::Data {
+            offset: 0x0100,
+            value: data.to_vec(),
+        };
         assert_eq!(
-            record(0x0100, 0x00, &data),
+            rec.to_record_string().unwrap(),
             ":10010000214601360121470136007EFE09D2190140"
         );
-        assert_eq!(record(0, 0x01, &[]), ":00000001FF");
+        assert_eq!(
+            decode(":10010000214601360121470136007EFE09D2190140\n:00000001FF\n")
+                .unwrap()
+                .get(0x100..),
+            Some(&data[..])
+        );
     }
 
     #[test]
     fn encodes_sixteen_byte_records_and_a_short_last_one() {
         let data: Vec<u8> = (0..20).collect();
-        let text = encode(&data);
-        let lines: Vec<&str> = text.lines().collect();
-        assert_eq!(lines.len(), 3);
-        assert!(lines[0].starts_with(":10000000000102"));
-        assert!(lines[1].starts_with(":04001000101112"));
-        assert_eq!(lines[2], ":00000001FF");
-        assert!(text.ends_with('\n'));
+        assert_eq!(
+            encode(&data),
+            ":10000000000102030405060708090A0B0C0D0E0F78\n\
+             :0400100010111213A6\n\
+             :00000001FF\n"
+        );
     }
 
     #[test]
@@ -164,7 +170,8 @@ mod tests {
     fn images_above_64_kib_get_an_extended_linear_address_record() {
         let data = vec![0xA5u8; 0x10010];
         let text = encode(&data);
-        assert!(text.contains("\n:020000040001F9\n"));
+        assert!(text.contains("\n:020000040001F9\n:10000000A5A5"));
+        assert_eq!(text.matches(":02000004").count(), 1);
         assert_eq!(decode(&text).unwrap(), data);
     }
 
@@ -174,6 +181,32 @@ mod tests {
         assert_eq!(decode(&encode(&sii)).unwrap(), sii);
     }
 
+    /// The golden EEPROM image's Intel HEX: every line a 16-byte record at
+    /// the next address, the same bytes, one EOF record.
+    #[test]
+    fn the_golden_image_encodes_line_by_line() {
+        let sii = include_bytes!("../golden/eeprom.bin");
+        let text = encode(sii);
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), sii.len().div_ceil(RECORD_LEN) + 1);
+        for (n, (line, chunk)) in lines.iter().zip(sii.chunks(RECORD_LEN)).enumerate() {
+            let mut hex = format!(":{:02X}{:04X}00", chunk.len(), n * RECORD_LEN);
+            for b in chunk {
+                hex.push_str(&format!("{b:02X}"));
+            }
+            assert!(line.starts_with(&hex), "line {n}: {line}");
+            let address = n * RECORD_LEN;
+            let sum = chunk.len() + (address >> 8) + (address & 0xFF);
+            let sum = chunk.iter().fold(sum, |s, b| s + usize::from(*b));
+            assert_eq!(line.len(), hex.len() + 2);
+            assert_eq!(
+                u8::from_str_radix(&line[hex.len()..], 16).unwrap(),
+                (sum as u8).wrapping_neg()
+            );
+        }
+        assert_eq!(lines.last(), Some(&":00000001FF"));
+    }
+
     #[test]
     fn decode_reports_bad_checksums_types_and_missing_eof() {
         assert_eq!(
@@ -181,11 +214,47 @@ mod tests {
             Err(IhexError::Checksum { line: 1 })
         );
         assert_eq!(decode(":0100000000FF\n"), Err(IhexError::NoEof));
+        // A start segment address record: valid, meaningless for an EEPROM.
         assert_eq!(
-            decode(":00000003FD\n"),
+            decode(":0400000300000000F9\n"),
             Err(IhexError::UnsupportedType { line: 1, kind: 3 })
         );
-        assert_eq!(decode("garbage"), Err(IhexError::Malformed { line: 1 }));
-        assert_eq!(decode(":05000000"), Err(IhexError::Malformed { line: 1 }));
+        assert_eq!(
+            decode("\n:00000006FA\n"),
+            Err(IhexError::UnsupportedType { line: 2, kind: 6 })
+        );
+        assert_eq!(
+            decode("garbage"),
+            Err(IhexError::Malformed {
+                line: 1,
+                reason: ReaderError::MissingStartCode
+            })
+        );
+        assert!(matches!(
+            decode(":05000000"),
+            Err(IhexError::Malformed { line: 1, .. })
+        ));
+        // Gaps are erased EEPROM; an extended segment address moves the base.
+        assert_eq!(
+            decode(":020000020001FB\n:01000200AB52\n:00000001FF\n"),
+            Ok([vec![0xFF; 0x12], vec![0xAB]].concat())
+        );
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Any image up to 70 KiB (across the 64 KiB boundary) survives the
+        /// round trip.
+        #[test]
+        fn any_image_round_trips(data in prop::collection::vec(any::<u8>(), 0..70_000)) {
+            prop_assert_eq!(decode(&encode(&data)).unwrap(), data);
+        }
+
+        /// Text that is not Intel HEX is an error, never a panic.
+        #[test]
+        fn garbage_text_is_an_error_not_a_panic(text in "[:0-9A-Fa-fx \n]{0,200}") {
+            let _ = decode(&text);
+        }
     }
 }

@@ -4,6 +4,39 @@
 //! checksum, a category running past the end, an unknown category type, a
 //! cut string or PDO are collected in [`Inspection::problems`] and the rest
 //! of the image is still decoded.
+//!
+//! # JSON schema of `esi inspect --json`
+//!
+//! [`Inspection::to_json`] serialises an [`InspectionReport`] with
+//! serde_json, pretty-printed (two-space indent), keys in the order below.
+//! Every number is a plain JSON integer in decimal (no hex strings);
+//! strings are UTF-8 (bytes that are not are replaced by U+FFFD). The
+//! schema is stable: fields may be added at the end of an object in a
+//! later version, none is renamed, removed or retyped. Parsing the output
+//! back into [`InspectionReport`] (it implements `Deserialize`) is the
+//! check the tests run.
+//!
+//! | path | type | meaning |
+//! |---|---|---|
+//! | `size` | integer | image length in bytes |
+//! | `eeprom_bytes` | integer | EEPROM size the image declares (word 0x3E) |
+//! | `version` | integer | SII version (word 0x3F) |
+//! | `header.pdi_control`, `.pdi_config`, `.sync_impulse`, `.pdi_config2`, `.station_alias` | integer (u16) | words 0x00..0x04 |
+//! | `header.stored_crc`, `.computed_crc` | integer (u8) | checksum in word 0x07 and over bytes 0..14 |
+//! | `header.crc_ok` | bool | the two agree |
+//! | `identity.vendor_id`, `.product_code`, `.revision`, `.serial` | integer (u32) | words 0x08..0x0F |
+//! | `mailbox.standard`, `mailbox.bootstrap` | object | `out_offset`, `out_size` (master to slave), `in_offset`, `in_size` (integers, u16) |
+//! | `mailbox.protocols` | integer (u16) | protocol bits of word 0x1C |
+//! | `mailbox.protocol_names` | array of string | `"AoE"`, `"EoE"`, `"CoE"`, `"FoE"`, `"SoE"`, `"VoE"` for the bits set |
+//! | `categories[]` | array of object | the category chain: `word_offset` (u16), `type` (u16, raw), `kind` (string, e.g. `"Strings"`, `"unknown (0x1234)"`), `len` (data bytes) |
+//! | `strings[]` | array of object | `index` (1-based, u8), `text` (string) |
+//! | `general` | object or null | `group`, `image`, `order`, `name` (strings resolved), `coe_details`, `foe_details`, `eoe_details`, `flags` (u8), `current_on_ebus` (i16, mA), `physical_port` (u16) |
+//! | `fmmus[]` | array of object | `usage` (u8), `name` (`"Outputs"`, `"Inputs"`, `"SyncM status"`, `"unused"`, `"not used"`, `"unknown"`) |
+//! | `sync_managers[]` | array of object | `start`, `length` (u16), `control`, `enable`, `type` (u8), `type_name` (`"MBoxOut"`, `"MBoxIn"`, `"Outputs"`, `"Inputs"`, `"unused"`, `"unknown (n)"`) |
+//! | `pdos[]` | array of object | RxPDOs then TxPDOs: `direction` (`"RxPDO"`/`"TxPDO"`), `index` (u16), `sm` (u8, or null when not assigned), `dc_sync` (u8), `name`, `flags` (u16), `entries` |
+//! | `pdos[].entries[]` | array of object | `index` (u16, 0 for padding), `sub` (u8), `name`, `data_type` (u8, CoE code), `data_type_name` (e.g. `"UINT"`, `"BIT3"`), `bit_len` (u8), `flags` (u16) |
+//! | `dc[]` | array of object | `name`, `assign_activate` (u16), `cycle_time_sync0`, `shift_time_sync0`, `shift_time_sync1` (u32, ns), `sync0_cycle_factor`, `sync1_cycle_factor` (i16) |
+//! | `problems` | array of string | everything wrong with the image, empty for a clean one |
 
 use std::fmt::Write as _;
 
@@ -12,7 +45,7 @@ use ecat_slave::sii::{
     SiiReader, SiiStrings, SiiSyncManager, SmType, protocols,
 };
 
-use crate::json::{Json, obj};
+use serde::{Deserialize, Serialize};
 
 /// One category of the chain.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -385,13 +418,15 @@ fn direction_name(d: PdoDirection) -> &'static str {
     }
 }
 
-fn mailbox_json(m: &SiiMailbox) -> Json {
-    obj([
-        ("out_offset", m.rx_offset.into()),
-        ("out_size", m.rx_size.into()),
-        ("in_offset", m.tx_offset.into()),
-        ("in_size", m.tx_size.into()),
-    ])
+impl From<&SiiMailbox> for MailboxAreaReport {
+    fn from(m: &SiiMailbox) -> Self {
+        Self {
+            out_offset: m.rx_offset,
+            out_size: m.rx_size,
+            in_offset: m.tx_offset,
+            in_size: m.tx_size,
+        }
+    }
 }
 
 impl Inspection {
@@ -555,195 +590,383 @@ impl Inspection {
         o
     }
 
-    /// The same content as JSON.
-    pub fn to_json(&self) -> Json {
+    /// The same content as the JSON report (see the module docs for the
+    /// schema).
+    pub fn to_report(&self) -> InspectionReport {
         let id = &self.identity;
-        obj([
-            ("size", Json::Int(self.size as i64)),
-            ("eeprom_bytes", self.eeprom_bytes.into()),
-            ("version", self.version.into()),
-            (
-                "header",
-                obj([
-                    ("pdi_control", self.pdi[0].into()),
-                    ("pdi_config", self.pdi[1].into()),
-                    ("sync_impulse", self.pdi[2].into()),
-                    ("pdi_config2", self.pdi[3].into()),
-                    ("station_alias", self.pdi[4].into()),
-                    ("stored_crc", self.stored_crc.into()),
-                    ("computed_crc", self.computed_crc.into()),
-                    ("crc_ok", self.crc_ok().into()),
-                ]),
-            ),
-            (
-                "identity",
-                obj([
-                    ("vendor_id", id.vendor_id.into()),
-                    ("product_code", id.product_code.into()),
-                    ("revision", id.revision.into()),
-                    ("serial", id.serial.into()),
-                ]),
-            ),
-            (
-                "mailbox",
-                obj([
-                    ("standard", mailbox_json(&self.standard_mailbox)),
-                    ("bootstrap", mailbox_json(&self.bootstrap_mailbox)),
-                    ("protocols", self.mailbox_protocols.into()),
-                    (
-                        "protocol_names",
-                        Json::Arr(
-                            protocol_names(self.mailbox_protocols)
-                                .into_iter()
-                                .map(Json::from)
-                                .collect(),
-                        ),
-                    ),
-                ]),
-            ),
-            (
-                "categories",
-                Json::Arr(
-                    self.categories
+        InspectionReport {
+            size: self.size,
+            eeprom_bytes: self.eeprom_bytes,
+            version: self.version,
+            header: HeaderReport {
+                pdi_control: self.pdi[0],
+                pdi_config: self.pdi[1],
+                sync_impulse: self.pdi[2],
+                pdi_config2: self.pdi[3],
+                station_alias: self.pdi[4],
+                stored_crc: self.stored_crc,
+                computed_crc: self.computed_crc,
+                crc_ok: self.crc_ok(),
+            },
+            identity: IdentityReport {
+                vendor_id: id.vendor_id,
+                product_code: id.product_code,
+                revision: id.revision,
+                serial: id.serial,
+            },
+            mailbox: MailboxReport {
+                standard: (&self.standard_mailbox).into(),
+                bootstrap: (&self.bootstrap_mailbox).into(),
+                protocols: self.mailbox_protocols,
+                protocol_names: protocol_names(self.mailbox_protocols)
+                    .into_iter()
+                    .map(String::from)
+                    .collect(),
+            },
+            categories: self
+                .categories
+                .iter()
+                .map(|c| CategoryReport {
+                    word_offset: c.word_offset,
+                    raw_type: c.raw_type,
+                    kind: c.kind.clone(),
+                    len: c.len,
+                })
+                .collect(),
+            strings: self
+                .strings
+                .iter()
+                .map(|(index, text)| StringReport {
+                    index: *index,
+                    text: text.clone(),
+                })
+                .collect(),
+            general: self
+                .general
+                .as_ref()
+                .map(|(g, [group, image, order, name])| GeneralReport {
+                    group: group.clone(),
+                    image: image.clone(),
+                    order: order.clone(),
+                    name: name.clone(),
+                    coe_details: g.coe_details,
+                    foe_details: g.foe_details,
+                    eoe_details: g.eoe_details,
+                    flags: g.flags,
+                    current_on_ebus: g.current_on_ebus,
+                    physical_port: g.physical_port,
+                }),
+            fmmus: self
+                .fmmus
+                .iter()
+                .map(|u| FmmuReport {
+                    usage: *u,
+                    name: fmmu_name(*u).into(),
+                })
+                .collect(),
+            sync_managers: self
+                .sync_managers
+                .iter()
+                .map(|sm| SyncManagerReport {
+                    start: sm.start,
+                    length: sm.length,
+                    control: sm.control,
+                    enable: sm.enable,
+                    raw_type: sm.sm_type.raw(),
+                    type_name: sm_type_name(sm.sm_type),
+                })
+                .collect(),
+            pdos: self
+                .pdos
+                .iter()
+                .map(|p| PdoReport {
+                    direction: direction_name(p.direction).into(),
+                    index: p.index,
+                    sm: (p.sm_raw != 0xFF).then_some(p.sm_raw),
+                    dc_sync: p.dc_sync,
+                    name: p.name.clone(),
+                    flags: p.flags,
+                    entries: p
+                        .entries
                         .iter()
-                        .map(|c| {
-                            obj([
-                                ("word_offset", c.word_offset.into()),
-                                ("type", c.raw_type.into()),
-                                ("kind", c.kind.as_str().into()),
-                                ("len", Json::Int(c.len as i64)),
-                            ])
+                        .map(|e| PdoEntryReport {
+                            index: e.index,
+                            sub: e.sub,
+                            name: e.name.clone(),
+                            data_type: e.data_type,
+                            data_type_name: data_type_name(e.data_type),
+                            bit_len: e.bit_len,
+                            flags: e.flags,
                         })
                         .collect(),
-                ),
-            ),
-            (
-                "strings",
-                Json::Arr(
-                    self.strings
-                        .iter()
-                        .map(|(i, s)| obj([("index", (*i).into()), ("text", s.as_str().into())]))
-                        .collect(),
-                ),
-            ),
-            (
-                "general",
-                match &self.general {
-                    None => Json::Null,
-                    Some((g, [group, image, order, name])) => obj([
-                        ("group", group.as_str().into()),
-                        ("image", image.as_str().into()),
-                        ("order", order.as_str().into()),
-                        ("name", name.as_str().into()),
-                        ("coe_details", g.coe_details.into()),
-                        ("foe_details", g.foe_details.into()),
-                        ("eoe_details", g.eoe_details.into()),
-                        ("flags", g.flags.into()),
-                        ("current_on_ebus", g.current_on_ebus.into()),
-                        ("physical_port", g.physical_port.into()),
-                    ]),
-                },
-            ),
-            (
-                "fmmus",
-                Json::Arr(
-                    self.fmmus
-                        .iter()
-                        .map(|u| obj([("usage", (*u).into()), ("name", fmmu_name(*u).into())]))
-                        .collect(),
-                ),
-            ),
-            (
-                "sync_managers",
-                Json::Arr(
-                    self.sync_managers
-                        .iter()
-                        .map(|sm| {
-                            obj([
-                                ("start", sm.start.into()),
-                                ("length", sm.length.into()),
-                                ("control", sm.control.into()),
-                                ("enable", sm.enable.into()),
-                                ("type", sm.sm_type.raw().into()),
-                                ("type_name", sm_type_name(sm.sm_type).into()),
-                            ])
-                        })
-                        .collect(),
-                ),
-            ),
-            (
-                "pdos",
-                Json::Arr(
-                    self.pdos
-                        .iter()
-                        .map(|p| {
-                            obj([
-                                ("direction", direction_name(p.direction).into()),
-                                ("index", p.index.into()),
-                                (
-                                    "sm",
-                                    if p.sm_raw == 0xFF {
-                                        Json::Null
-                                    } else {
-                                        p.sm_raw.into()
-                                    },
-                                ),
-                                ("dc_sync", p.dc_sync.into()),
-                                ("name", p.name.as_str().into()),
-                                ("flags", p.flags.into()),
-                                (
-                                    "entries",
-                                    Json::Arr(
-                                        p.entries
-                                            .iter()
-                                            .map(|e| {
-                                                obj([
-                                                    ("index", e.index.into()),
-                                                    ("sub", e.sub.into()),
-                                                    ("name", e.name.as_str().into()),
-                                                    ("data_type", e.data_type.into()),
-                                                    (
-                                                        "data_type_name",
-                                                        data_type_name(e.data_type).into(),
-                                                    ),
-                                                    ("bit_len", e.bit_len.into()),
-                                                    ("flags", e.flags.into()),
-                                                ])
-                                            })
-                                            .collect(),
-                                    ),
-                                ),
-                            ])
-                        })
-                        .collect(),
-                ),
-            ),
-            (
-                "dc",
-                Json::Arr(
-                    self.dc
-                        .iter()
-                        .map(|d| {
-                            let e = &d.entry;
-                            obj([
-                                ("name", d.name.as_str().into()),
-                                ("assign_activate", e.assign_activate.into()),
-                                ("cycle_time_sync0", e.cycle_time_sync0.into()),
-                                ("shift_time_sync0", e.shift_time_sync0.into()),
-                                ("shift_time_sync1", e.shift_time_sync1.into()),
-                                ("sync0_cycle_factor", e.sync0_cycle_factor.into()),
-                                ("sync1_cycle_factor", e.sync1_cycle_factor.into()),
-                            ])
-                        })
-                        .collect(),
-                ),
-            ),
-            (
-                "problems",
-                Json::Arr(self.problems.iter().map(|p| p.as_str().into()).collect()),
-            ),
-        ])
+                })
+                .collect(),
+            dc: self
+                .dc
+                .iter()
+                .map(|d| {
+                    let e = &d.entry;
+                    DcReport {
+                        name: d.name.clone(),
+                        assign_activate: e.assign_activate,
+                        cycle_time_sync0: e.cycle_time_sync0,
+                        shift_time_sync0: e.shift_time_sync0,
+                        shift_time_sync1: e.shift_time_sync1,
+                        sync0_cycle_factor: e.sync0_cycle_factor,
+                        sync1_cycle_factor: e.sync1_cycle_factor,
+                    }
+                })
+                .collect(),
+            problems: self.problems.clone(),
+        }
     }
+
+    /// The JSON report, pretty-printed (two-space indent, no trailing
+    /// newline); the schema is in the module docs.
+    pub fn to_json(&self) -> String {
+        // Serialising plain structs of integers, strings and vectors into
+        // a `Vec` cannot fail.
+        serde_json::to_string_pretty(&self.to_report()).unwrap_or_default()
+    }
+}
+
+/// `esi inspect --json`: everything decoded from an SII image (schema in
+/// the module docs).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InspectionReport {
+    /// Image length in bytes.
+    pub size: usize,
+    /// Declared EEPROM size in bytes.
+    pub eeprom_bytes: u32,
+    /// SII version word 0x3F.
+    pub version: u16,
+    /// Words 0x00..0x07.
+    pub header: HeaderReport,
+    /// Words 0x08..0x0F.
+    pub identity: IdentityReport,
+    /// Mailbox areas and protocols.
+    pub mailbox: MailboxReport,
+    /// The category chain.
+    pub categories: Vec<CategoryReport>,
+    /// The Strings category.
+    pub strings: Vec<StringReport>,
+    /// The General category (`null` without one).
+    pub general: Option<GeneralReport>,
+    /// FMMU usage.
+    pub fmmus: Vec<FmmuReport>,
+    /// SyncManager elements.
+    pub sync_managers: Vec<SyncManagerReport>,
+    /// RxPDOs then TxPDOs.
+    pub pdos: Vec<PdoReport>,
+    /// DC operation modes.
+    pub dc: Vec<DcReport>,
+    /// Everything wrong with the image.
+    pub problems: Vec<String>,
+}
+
+/// `header`: words 0x00..0x07.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeaderReport {
+    /// Word 0x00.
+    pub pdi_control: u16,
+    /// Word 0x01.
+    pub pdi_config: u16,
+    /// Word 0x02.
+    pub sync_impulse: u16,
+    /// Word 0x03.
+    pub pdi_config2: u16,
+    /// Word 0x04.
+    pub station_alias: u16,
+    /// Checksum stored in word 0x07.
+    pub stored_crc: u8,
+    /// Checksum computed over bytes 0..14.
+    pub computed_crc: u8,
+    /// `stored_crc == computed_crc`.
+    pub crc_ok: bool,
+}
+
+/// `identity`: words 0x08..0x0F.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct IdentityReport {
+    /// Vendor ID.
+    pub vendor_id: u32,
+    /// Product code.
+    pub product_code: u32,
+    /// Revision number.
+    pub revision: u32,
+    /// Serial number.
+    pub serial: u32,
+}
+
+/// `mailbox`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MailboxReport {
+    /// Standard mailbox, words 0x18..0x1B.
+    pub standard: MailboxAreaReport,
+    /// Bootstrap mailbox, words 0x14..0x17.
+    pub bootstrap: MailboxAreaReport,
+    /// Protocol bits, word 0x1C.
+    pub protocols: u16,
+    /// Names of the protocol bits set.
+    pub protocol_names: Vec<String>,
+}
+
+/// `mailbox.standard` / `mailbox.bootstrap`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MailboxAreaReport {
+    /// Master-to-slave mailbox start.
+    pub out_offset: u16,
+    /// Master-to-slave mailbox size.
+    pub out_size: u16,
+    /// Slave-to-master mailbox start.
+    pub in_offset: u16,
+    /// Slave-to-master mailbox size.
+    pub in_size: u16,
+}
+
+/// `categories[]`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CategoryReport {
+    /// Word address of the category header.
+    pub word_offset: u16,
+    /// Raw type word.
+    #[serde(rename = "type")]
+    pub raw_type: u16,
+    /// Readable type.
+    pub kind: String,
+    /// Data length in bytes.
+    pub len: usize,
+}
+
+/// `strings[]`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StringReport {
+    /// 1-based string index.
+    pub index: u8,
+    /// The string.
+    pub text: String,
+}
+
+/// `general`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GeneralReport {
+    /// Group string.
+    pub group: String,
+    /// Image string.
+    pub image: String,
+    /// Order string.
+    pub order: String,
+    /// Name string.
+    pub name: String,
+    /// CoE details byte.
+    pub coe_details: u8,
+    /// FoE details byte.
+    pub foe_details: u8,
+    /// EoE details byte.
+    pub eoe_details: u8,
+    /// Flags byte.
+    pub flags: u8,
+    /// E-Bus current in mA.
+    pub current_on_ebus: i16,
+    /// Physical ports word.
+    pub physical_port: u16,
+}
+
+/// `fmmus[]`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FmmuReport {
+    /// Usage byte.
+    pub usage: u8,
+    /// Readable usage.
+    pub name: String,
+}
+
+/// `sync_managers[]`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SyncManagerReport {
+    /// Start address.
+    pub start: u16,
+    /// Length in bytes.
+    pub length: u16,
+    /// Control register byte.
+    pub control: u8,
+    /// Enable byte.
+    pub enable: u8,
+    /// Raw type byte.
+    #[serde(rename = "type")]
+    pub raw_type: u8,
+    /// Readable type.
+    pub type_name: String,
+}
+
+/// `pdos[]`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PdoReport {
+    /// `"RxPDO"` or `"TxPDO"`.
+    pub direction: String,
+    /// PDO index.
+    pub index: u16,
+    /// SyncManager, `null` when not assigned by default.
+    pub sm: Option<u8>,
+    /// DC sync byte.
+    pub dc_sync: u8,
+    /// Name.
+    pub name: String,
+    /// PDO flags.
+    pub flags: u16,
+    /// Entries in order.
+    pub entries: Vec<PdoEntryReport>,
+}
+
+/// `pdos[].entries[]`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PdoEntryReport {
+    /// Object index (0: padding).
+    pub index: u16,
+    /// Subindex.
+    pub sub: u8,
+    /// Name.
+    pub name: String,
+    /// CoE data type code.
+    pub data_type: u8,
+    /// Readable data type.
+    pub data_type_name: String,
+    /// Bit length.
+    pub bit_len: u8,
+    /// Entry flags.
+    pub flags: u16,
+}
+
+/// `dc[]`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DcReport {
+    /// Name.
+    pub name: String,
+    /// AssignActivate word.
+    pub assign_activate: u16,
+    /// Sync0 cycle time in ns.
+    pub cycle_time_sync0: u32,
+    /// Sync0 shift time in ns.
+    pub shift_time_sync0: u32,
+    /// Sync1 shift time in ns.
+    pub shift_time_sync1: u32,
+    /// Sync0 cycle factor.
+    pub sync0_cycle_factor: i16,
+    /// Sync1 cycle factor.
+    pub sync1_cycle_factor: i16,
 }
 
 #[cfg(test)]
@@ -810,8 +1033,10 @@ mod tests {
             );
             let text = i.to_text();
             assert!(text.contains("Identity:"));
-            let json = i.to_json().to_pretty();
+            let json = i.to_json();
             assert!(json.starts_with('{') && json.ends_with('}'));
+            let back: InspectionReport = serde_json::from_str(&json).unwrap();
+            assert_eq!(back, i.to_report(), "{}", f.display());
         }
     }
 
@@ -854,25 +1079,45 @@ mod tests {
     }
 
     #[test]
-    fn too_short_images_and_garbage_do_not_panic() {
+    fn too_short_images_and_constant_fills_do_not_panic() {
         assert!(inspect(&[0u8; 10]).is_err());
         for fill in [0x00u8, 0xFF, 0x55] {
             let _ = inspect(&vec![fill; 256]).unwrap().to_text();
         }
-        // Pseudo-random garbage.
-        let mut x: u32 = 0x1234_5678;
-        for len in [128usize, 300, 2048] {
-            let img: Vec<u8> = (0..len)
-                .map(|_| {
-                    x ^= x << 13;
-                    x ^= x >> 17;
-                    x ^= x << 5;
-                    x as u8
-                })
-                .collect();
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+
+        /// Random images of 128 bytes to 4 KiB decode (with problems) and
+        /// list as text and JSON without a panic; the JSON parses back into
+        /// the schema.
+        #[test]
+        fn random_images_do_not_panic(
+            img in proptest::collection::vec(proptest::prelude::any::<u8>(), 128..4096)
+        ) {
             let i = inspect(&img).unwrap();
             let _ = i.to_text();
-            let _ = i.to_json().to_pretty();
+            let back: InspectionReport = serde_json::from_str(&i.to_json()).unwrap();
+            proptest::prop_assert_eq!(back, i.to_report());
+        }
+
+        /// Our own image with random bytes overwritten in its category
+        /// area: the chain is mostly intact, so the decoders of every
+        /// category meet damaged data.
+        #[test]
+        fn damaged_categories_do_not_panic(
+            damage in proptest::collection::vec((0x80usize..2048, proptest::prelude::any::<u8>()), 1..16)
+        ) {
+            let mut img = crate::sii_image(&pam_199_p_etc::DEVICE);
+            for (at, b) in damage {
+                if let Some(x) = img.get_mut(at) {
+                    *x = b;
+                }
+            }
+            let i = inspect(&img).unwrap();
+            let _ = i.to_text();
+            let _ = i.to_json();
         }
     }
 
@@ -880,10 +1125,37 @@ mod tests {
     fn json_has_the_identity_and_pdo_entries() {
         let j = inspect(&crate::sii_image(&pam_199_p_etc::DEVICE))
             .unwrap()
-            .to_json()
-            .to_pretty();
+            .to_json();
         assert!(j.contains("\"product_code\": 13042675"));
         assert!(j.contains("\"name\": \"COMMAND VALUE\""));
         assert!(j.contains("\"crc_ok\": true"));
+        // Key order and shapes as documented.
+        let keys: Vec<&str> = j
+            .lines()
+            .filter(|l| l.starts_with("  \"") && !l.starts_with("   "))
+            .filter_map(|l| l.trim().split('"').nth(1))
+            .collect();
+        assert_eq!(
+            keys,
+            [
+                "size",
+                "eeprom_bytes",
+                "version",
+                "header",
+                "identity",
+                "mailbox",
+                "categories",
+                "strings",
+                "general",
+                "fmmus",
+                "sync_managers",
+                "pdos",
+                "dc",
+                "problems"
+            ]
+        );
+        assert!(j.contains("\"sm\": 3,"), "assigned PDOs name their SM");
+        assert!(j.contains("\"sm\": null,"), "alternative PDOs have none");
+        assert!(j.contains("\"dc\": [],\n  \"problems\": []\n}"));
     }
 }

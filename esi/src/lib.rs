@@ -7,12 +7,13 @@
 //!
 //! - [`sii_image`] is the SII EEPROM image as the slave's own encoder
 //!   ([`DeviceDescription::sii_image`]) produces it; [`ihex`] writes it as
-//!   Intel HEX.
+//!   Intel HEX (with the `ihex` crate).
 //! - [`esi::generate`] writes the ETG.2000 v1.17 ESI XML (dictionary, PDOs,
 //!   SyncManagers, mailbox, EEPROM, alternative PDO assignments) with
 //!   quick-xml's writer.
 //! - [`inspect::inspect`] decodes any SII image (ours or a vendor's dump)
-//!   into a listing or JSON, reporting broken images instead of failing.
+//!   into a listing or JSON (serde_json, schema in [`inspect`]), reporting
+//!   broken images instead of failing.
 //! - [`check::check`] cross-checks an ESI file against an SII image.
 //!
 //! The `esi` binary (`src/main.rs`) puts these behind a command line. This
@@ -23,7 +24,6 @@ pub mod check;
 pub mod esi;
 pub mod ihex;
 pub mod inspect;
-pub mod json;
 pub mod xml;
 
 use ecat_slave::device::DeviceDescription;

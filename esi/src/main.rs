@@ -133,7 +133,7 @@ fn run(cli: Cli) -> Result<ExitCode, Failure> {
             let report = inspect::inspect(&image)
                 .map_err(|e| Failure(format!("{}: not an SII image: {e}", file.display())))?;
             let text = if json {
-                report.to_json().to_pretty() + "\n"
+                report.to_json() + "\n"
             } else {
                 report.to_text()
             };

@@ -153,7 +153,7 @@ pub fn hex_dec(s: &str) -> Option<i64> {
 /// Decodes `xs:hexBinary` text into bytes.
 pub fn hex_binary(s: &str) -> Option<Vec<u8>> {
     let s = s.trim();
-    if s.len() % 2 != 0 {
+    if !s.len().is_multiple_of(2) {
         return None;
     }
     (0..s.len())

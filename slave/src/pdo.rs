@@ -3,7 +3,13 @@
 //! A [`ProcessImage`] is computed from the assignment object (0x1C12 for
 //! outputs, 0x1C13 for inputs) and the mapping objects it names, as the live
 //! object dictionary holds them. It packs entry values into the SyncManager
-//! buffer bit by bit (inputs) and unpacks the buffer into entries (outputs).
+//! buffer at bit granularity (inputs) and unpacks the buffer into entries
+//! (outputs); the bit fields are `bitvec` bit-slices ([`write_bits`],
+//! [`read_bits`]).
+
+use bitvec::field::BitField;
+use bitvec::order::Lsb0;
+use bitvec::slice::BitSlice;
 
 use crate::device::ProcessData;
 use crate::od::Dictionary;
@@ -263,44 +269,77 @@ impl ProcessImage {
     }
 }
 
-/// Writes the low `len` bits of `v` at bit `offset` of `buf` (LSB first).
-pub fn write_bits(buf: &mut [u8], offset: u16, len: u8, v: u64) {
-    if offset % 8 == 0 && len % 8 == 0 {
+/// `buf` as bits, bit 0 the LSB of byte 0 (EtherCAT's order); `None` only
+/// for a buffer too long to index by bit, which no image is.
+fn bits_mut(buf: &mut [u8]) -> Option<&mut BitSlice<u8, Lsb0>> {
+    BitSlice::try_from_slice_mut(buf).ok()
+}
+
+/// The bytes of a field that starts and ends on byte boundaries (at most 8
+/// bytes).
+fn whole_bytes(offset: u16, len: u8) -> Option<core::ops::Range<usize>> {
+    (offset.is_multiple_of(8) && len.is_multiple_of(8) && (1..=64).contains(&len)).then(|| {
         let start = usize::from(offset / 8);
-        let n = usize::from(len / 8);
-        let bytes = v.to_le_bytes();
-        if let (Some(dst), Some(src)) = (buf.get_mut(start..start + n), bytes.get(..n)) {
+        start..start + usize::from(len / 8)
+    })
+}
+
+/// The field of `len` (at most 64) bits at bit `offset` of `bits`, cut at
+/// its end; `None` when no bit of it is inside.
+fn field_range(bits: usize, offset: u16, len: u8) -> Option<core::ops::Range<usize>> {
+    let start = usize::from(offset);
+    let end = (start + usize::from(len.min(64))).min(bits);
+    (start < end).then_some(start..end)
+}
+
+/// Writes the low `len` bits of `v` at bit `offset` of `buf` (LSB first,
+/// little-endian across bytes). Bits past the end of `buf` are dropped;
+/// `len` is at most 64.
+pub fn write_bits(buf: &mut [u8], offset: u16, len: u8, v: u64) {
+    if let Some(bytes) = whole_bytes(offset, len) {
+        // Byte-aligned fields (most values) are plain little-endian bytes:
+        // a copy is cheaper than bitvec's general field store.
+        let le = v.to_le_bytes();
+        if let (Some(dst), Some(src)) = (buf.get_mut(bytes.clone()), le.get(..bytes.len())) {
             dst.copy_from_slice(src);
+            return;
+        }
+    }
+    let Some(bits) = bits_mut(buf) else {
+        return;
+    };
+    // Single bits (flags) through `BitSlice::set`: `store_le` on a one-bit
+    // field costs several times as much (packing the PAM's 14 input bytes,
+    // 9 flags: 1861 instructions with `store_le`, 1302 with `set`).
+    if len == 1 {
+        let at = usize::from(offset);
+        if at < bits.len() {
+            bits.set(at, v & 1 != 0);
         }
         return;
     }
-    for i in 0..u16::from(len) {
-        let bit = offset + i;
-        let Some(b) = buf.get_mut(usize::from(bit / 8)) else {
-            return;
-        };
-        let m = 1u8 << (bit % 8);
-        if (v >> i) & 1 != 0 {
-            *b |= m;
-        } else {
-            *b &= !m;
-        }
+    if let Some(field) = field_range(bits.len(), offset, len).and_then(|r| bits.get_mut(r)) {
+        field.store_le(v);
     }
 }
 
-/// Reads `len` bits at bit `offset` of `buf` (LSB first).
+/// Reads `len` bits at bit `offset` of `buf` (LSB first, little-endian
+/// across bytes); bits past the end of `buf` read as 0, `len` is at most
+/// 64.
 pub fn read_bits(buf: &[u8], offset: u16, len: u8) -> u64 {
-    let mut v = 0u64;
-    for i in 0..u16::from(len.min(64)) {
-        let bit = offset + i;
-        let set = buf
-            .get(usize::from(bit / 8))
-            .is_some_and(|b| b & (1 << (bit % 8)) != 0);
-        if set {
-            v |= 1 << i;
+    if let Some(src) = whole_bytes(offset, len).and_then(|r| buf.get(r)) {
+        let mut le = [0u8; 8];
+        if let Some(dst) = le.get_mut(..src.len()) {
+            dst.copy_from_slice(src);
+            return u64::from_le_bytes(le);
         }
     }
-    v
+    let Ok(bits) = BitSlice::<u8, Lsb0>::try_from_slice(buf) else {
+        return 0;
+    };
+    field_range(bits.len(), offset, len)
+        .and_then(|r| bits.get(r))
+        .map_or(0, |field| field.load_le())
 }
 
 #[cfg(test)]
@@ -309,6 +348,39 @@ mod tests {
     use super::*;
     use crate::al::AlState;
     use crate::testing::{DEVICE, store};
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2048))]
+
+        /// `write_bits` / `read_bits` agree with a per-bit model (LSB first,
+        /// little-endian, cut at the buffer's end) for any field of up to
+        /// 64 bits at any offset, and leave every other bit alone.
+        #[test]
+        fn bit_helpers_match_a_per_bit_model(
+            mut buf in prop::collection::vec(any::<u8>(), 0..12),
+            offset in 0u16..104,
+            len in 0u8..=64,
+            v in any::<u64>(),
+        ) {
+            let bits = buf.len() * 8;
+            let get = |b: &[u8], i: usize| b[i / 8] >> (i % 8) & 1;
+            let mut want = buf.clone();
+            let mut want_read = 0u64;
+            for i in 0..usize::from(len) {
+                let at = usize::from(offset) + i;
+                if at >= bits {
+                    break;
+                }
+                want_read |= u64::from(get(&buf, at)) << i;
+                let m = 1u8 << (at % 8);
+                want[at / 8] = if (v >> i) & 1 != 0 { want[at / 8] | m } else { want[at / 8] & !m };
+            }
+            prop_assert_eq!(read_bits(&buf, offset, len), want_read);
+            write_bits(&mut buf, offset, len, v);
+            prop_assert_eq!(&buf, &want);
+        }
+    }
 
     #[test]
     fn the_default_set_gives_3_byte_images_and_unpacks_signed_values() {
@@ -368,8 +440,17 @@ mod tests {
         assert_eq!(read_bits(&buf, 3, 11), 0x5A5);
         write_bits(&mut buf, 8, 16, 0xBEEF);
         assert_eq!(read_bits(&buf, 8, 16), 0xBEEF);
-        // Past the end: no panic, nothing written.
+        // Past the end: no panic, the bits inside are written, the rest
+        // dropped and read as 0.
         write_bits(&mut buf, 30, 8, 0xFF);
-        let _ = read_bits(&buf, 30, 8);
+        assert_eq!(buf[3] >> 6, 0b11);
+        assert_eq!(read_bits(&buf, 30, 8), 0b11);
+        write_bits(&mut buf, 40, 8, 0xFF);
+        assert_eq!(read_bits(&buf, 40, 8), 0);
+        // Up to 64 bits at any offset, little-endian.
+        let mut wide = [0u8; 10];
+        write_bits(&mut wide, 5, 64, 0x8123_4567_89AB_CDEF);
+        assert_eq!(read_bits(&wide, 5, 64), 0x8123_4567_89AB_CDEF);
+        assert_eq!(wide[0], 0xEF << 5);
     }
 }

@@ -5,6 +5,11 @@
 //! in turn) and `line` (the virtual link's `Chain`, which parses the frame
 //! once and hands each datagram to the slaves it addresses).
 //!
+//! A second group, `soft_esc_bit_fmmu`, runs one LRW through a line whose
+//! FMMUs are bit-granular (each slave 4 output bits and 4 input bits packed
+//! into one logical byte, as TwinCAT packs bit terminals), the ESC's
+//! bit-mapping path.
+//!
 //! Run: `cargo bench -p pam-199-p-etc --bench esc`. Criterion reports the time
 //! per cycle and, as throughput, slaves per second; ns per slave per cycle
 //! = time / slave count.
@@ -187,5 +192,77 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+/// Configuration frames for bit-granular FMMUs: slave `i` gets logical
+/// byte `i`, bits 0..=3 written to SM2 (0x1100, 1 byte) and bits 4..=7
+/// read from SM3 (0x1180, 1 byte), both at physical bit 0.
+fn bit_config_frames(n: usize) -> Vec<Vec<u8>> {
+    let mut frames = Vec::new();
+    for i in 0..n as u16 {
+        let mut buf = vec![0u8; 512];
+        let mut b = FrameBuilder::new(&mut buf, [0x10; 6]).expect("buffer");
+        let adp = 0u16.wrapping_sub(i) as u32;
+        b.push(
+            Command::Apwr,
+            adp | (0x0010 << 16),
+            &(0x1000 + i).to_le_bytes(),
+        )
+        .expect("fits");
+        let sm2 = [0x00, 0x11, 1, 0, 0x64, 0, 1, 0];
+        let sm3 = [0x80, 0x11, 1, 0, 0x20, 0, 1, 0];
+        b.push(Command::Apwr, adp | (0x0810 << 16), &sm2)
+            .expect("fits");
+        b.push(Command::Apwr, adp | (0x0818 << 16), &sm3)
+            .expect("fits");
+        let mut f0 = [0u8; 16];
+        f0[0..4].copy_from_slice(&u32::from(i).to_le_bytes());
+        f0[4..6].copy_from_slice(&1u16.to_le_bytes());
+        f0[6] = 0; // start bit
+        f0[7] = 3; // stop bit
+        f0[8..10].copy_from_slice(&0x1100u16.to_le_bytes());
+        f0[11] = 2;
+        f0[12] = 1;
+        let mut f1 = f0;
+        f1[6] = 4;
+        f1[7] = 7;
+        f1[8..10].copy_from_slice(&0x1180u16.to_le_bytes());
+        f1[11] = 1;
+        b.push(Command::Apwr, adp | (0x0600 << 16), &f0)
+            .expect("fits");
+        b.push(Command::Apwr, adp | (0x0610 << 16), &f1)
+            .expect("fits");
+        let len = b.finish();
+        buf.truncate(len);
+        frames.push(buf);
+    }
+    frames
+}
+
+fn bench_bits(c: &mut Criterion) {
+    let mut g = c.benchmark_group("soft_esc_bit_fmmu");
+    for n in [1usize, 64] {
+        g.throughput(Throughput::Elements(n as u64));
+        let mut buf = vec![0u8; 1600];
+        let mut b = FrameBuilder::new(&mut buf, [0x10; 6]).expect("buffer");
+        b.push(Command::Lrw, 0, &vec![0x5A; n]).expect("fits");
+        let len = b.finish();
+        buf.truncate(len);
+        let template = buf;
+        let mut chain = Chain::of(n, pam_199_p_etc::Pam::default);
+        for mut f in bit_config_frames(n) {
+            chain.process_frame(&mut f);
+        }
+        let mut frame = template.clone();
+        chain.process_frame(&mut frame);
+        assert_eq!(wkc_sum(&frame), 3 * n as u32, "every bit FMMU hit");
+        g.bench_with_input(BenchmarkId::new("line", n), &n, |bch, _| {
+            bch.iter(|| {
+                frame.copy_from_slice(&template);
+                black_box(&mut chain).process_frame(black_box(&mut frame));
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_bits);
 criterion_main!(benches);

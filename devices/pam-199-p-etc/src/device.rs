@@ -180,10 +180,10 @@ impl<P: PowerStage, N: NvStorage> Pam<P, N> {
     fn command(&mut self, od: &mut Od, sub: u8, now_ns: u64) -> Result<(), SdoAbortCode> {
         match sub {
             2 => {
-                if let Some(last) = self.last_save_ns {
-                    if now_ns.saturating_sub(last) < SAVE_MIN_INTERVAL_NS {
-                        return Err(SdoAbortCode::LocalControl);
-                    }
+                if let Some(last) = self.last_save_ns
+                    && now_ns.saturating_sub(last) < SAVE_MIN_INTERVAL_NS
+                {
+                    return Err(SdoAbortCode::LocalControl);
                 }
                 params::save(od, &mut self.nv).map_err(|_| SdoAbortCode::HardwareError)?;
                 self.last_save_ns = Some(now_ns);
@@ -305,11 +305,11 @@ impl<P: PowerStage + Send + 'static, N: NvStorage + Send + 'static> Application 
 
     fn tick(&mut self, t: &mut Tick<'_>) {
         t.od.set(0x10F8, 0, t.now_ns as i64);
-        if let Some((index, sub, until)) = self.ack {
-            if t.now_ns >= until {
-                t.od.set(index, sub, 0);
-                self.ack = None;
-            }
+        if let Some((index, sub, until)) = self.ack
+            && t.now_ns >= until
+        {
+            t.od.set(index, sub, 0);
+            self.ack = None;
         }
         self.amplifier
             .run_until(t.od, &mut self.stage, t.now_ns, t.outputs_valid);

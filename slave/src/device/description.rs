@@ -335,10 +335,10 @@ impl DeviceDescription {
         if m.size < 16 || m.size as usize > MAX_MAILBOX {
             return Err(DescriptionError::MailboxSize);
         }
-        if let Some(b) = m.boot_size {
-            if b < 16 || b as usize > MAX_MAILBOX {
-                return Err(DescriptionError::MailboxSize);
-            }
+        if let Some(b) = m.boot_size
+            && (b < 16 || b as usize > MAX_MAILBOX)
+        {
+            return Err(DescriptionError::MailboxSize);
         }
         let objects = self.dictionary.objects();
         if find_object(objects, 0x1000).is_none() {
@@ -436,23 +436,23 @@ impl DeviceDescription {
                     return Err(DescriptionError::ImageTooLarge { set: s });
                 }
                 // The default assignment is the first set.
-                if s == 0 {
-                    if let Some(a) = find_object(objects, dir.assign_index()) {
-                        let count = match int_default(a, 0) {
-                            Some(c) => c,
-                            None => -1,
-                        };
-                        if count != list.len() as i64 {
-                            return Err(DescriptionError::DefaultAssignment);
+                if s == 0
+                    && let Some(a) = find_object(objects, dir.assign_index())
+                {
+                    let count = match int_default(a, 0) {
+                        Some(c) => c,
+                        None => -1,
+                    };
+                    if count != list.len() as i64 {
+                        return Err(DescriptionError::DefaultAssignment);
+                    }
+                    let mut k = 0;
+                    while k < list.len() {
+                        match int_default(a, (k + 1) as u8) {
+                            Some(v) if v == list[k] as i64 => {}
+                            _ => return Err(DescriptionError::DefaultAssignment),
                         }
-                        let mut k = 0;
-                        while k < list.len() {
-                            match int_default(a, (k + 1) as u8) {
-                                Some(v) if v == list[k] as i64 => {}
-                                _ => return Err(DescriptionError::DefaultAssignment),
-                            }
-                            k += 1;
-                        }
+                        k += 1;
                     }
                 }
                 d += 1;

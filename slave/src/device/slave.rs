@@ -404,17 +404,17 @@ impl<E: Esc, A: Application> Slave<E, A> {
                 // record it is reported, not ignored: INIT with the error
                 // indication and 0x0007 "firmware update not successful,
                 // old firmware still running".
-                if let Some(st) = images.as_deref_mut() {
-                    if firmware::commit_pending(st).is_err() {
-                        self.al = AlStatus {
-                            state: AlState::Init,
-                            error: true,
-                            code: AlStatusCode::FirmwareUpdateFailed,
-                        };
-                        self.esc
-                            .write_u16(reg::AL_STATUS_CODE, self.al.code.code())?;
-                        self.esc.write_u16(reg::AL_STATUS, self.al.register())?;
-                    }
+                if let Some(st) = images.as_deref_mut()
+                    && firmware::commit_pending(st).is_err()
+                {
+                    self.al = AlStatus {
+                        state: AlState::Init,
+                        error: true,
+                        code: AlStatusCode::FirmwareUpdateFailed,
+                    };
+                    self.esc
+                        .write_u16(reg::AL_STATUS_CODE, self.al.code.code())?;
+                    self.esc.write_u16(reg::AL_STATUS, self.al.register())?;
                 }
             }
         }
@@ -641,14 +641,14 @@ impl<E: Esc, A: Application> Slave<E, A> {
         if request == pdi & smr::PDI_REPEAT_ACK {
             return Ok(());
         }
-        if !self.sm_full(1)? {
-            if let Some((_, frame)) = &self.last_sent {
-                let (_, inp) = self.mailbox_layout();
-                let n = usize::from(inp.1).min(MAX_MAILBOX);
-                let copy = *frame;
-                if let Some(f) = copy.get(..n) {
-                    self.esc.write(inp.0, f)?;
-                }
+        if !self.sm_full(1)?
+            && let Some((_, frame)) = &self.last_sent
+        {
+            let (_, inp) = self.mailbox_layout();
+            let n = usize::from(inp.1).min(MAX_MAILBOX);
+            let copy = *frame;
+            if let Some(f) = copy.get(..n) {
+                self.esc.write(inp.0, f)?;
             }
         }
         self.esc.write(

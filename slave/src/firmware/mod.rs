@@ -137,38 +137,20 @@ impl core::fmt::Display for FirmwareVersion {
     }
 }
 
-/// Reflected CRC-32 polynomial (`0x04C11DB7` bit-reversed).
-const CRC32_POLY_REFLECTED: u32 = 0xEDB8_8320;
-
-/// Byte-wise lookup table for [`Crc32`] (1 KiB, built at compile time).
-// `i < 256` is the loop bound; `get_mut` is not usable in a const block.
-#[allow(clippy::indexing_slicing)]
-const CRC32_TABLE: [u32; 256] = {
-    let mut table = [0u32; 256];
-    let mut i = 0;
-    while i < 256 {
-        let mut c = i as u32;
-        let mut bit = 0;
-        while bit < 8 {
-            c = if c & 1 != 0 {
-                (c >> 1) ^ CRC32_POLY_REFLECTED
-            } else {
-                c >> 1
-            };
-            bit += 1;
-        }
-        table[i] = c;
-        i += 1;
-    }
-    table
-};
+/// The `crc` crate's CRC-32/ISO-HDLC (byte-wise 1 KiB table, built at
+/// compile time).
+static CRC32_ISO_HDLC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 
 /// Incremental CRC-32/ISO-HDLC (zlib `crc32`): polynomial `0x04C11DB7`
 /// reflected, init `0xFFFFFFFF`, xor-out `0xFFFFFFFF`; check value of
-/// `"123456789"` is `0xCBF43926`.
+/// `"123456789"` is `0xCBF43926`. Computed by the `crc` crate.
+///
+/// The state is the CRC of the bytes fed so far, so a `Crc32` is a plain
+/// `Copy` value that can sit in `const` structures and be compared.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Crc32 {
-    state: u32,
+    /// CRC of everything fed so far (0 for no bytes).
+    crc: u32,
 }
 
 impl Default for Crc32 {
@@ -180,30 +162,29 @@ impl Default for Crc32 {
 impl Crc32 {
     /// A CRC over no bytes yet.
     pub const fn new() -> Self {
-        Self { state: 0xFFFF_FFFF }
+        Self { crc: 0 }
     }
 
     /// Feeds `data`.
-    pub fn update(&mut self, data: &[u8]) {
-        let mut c = self.state;
-        for &b in data {
-            let idx = usize::from((c as u8) ^ b);
-            c = (c >> 8) ^ CRC32_TABLE.get(idx).copied().unwrap_or(0);
-        }
-        self.state = c;
+    pub const fn update(&mut self, data: &[u8]) {
+        // Resume the crate's digest where the CRC so far left it: for this
+        // reflected algorithm with xor-out `0xFFFFFFFF` the shift register
+        // is `!crc`, and `digest_with_initial` bit-reverses the initial
+        // value it is given (as for the algorithm's own `init`).
+        let mut digest = CRC32_ISO_HDLC.digest_with_initial((!self.crc).reverse_bits());
+        digest.update(data);
+        self.crc = digest.finalize();
     }
 
     /// The CRC of everything fed so far (the state is kept).
     pub const fn finish(&self) -> u32 {
-        !self.state
+        self.crc
     }
 }
 
 /// CRC-32/ISO-HDLC of `data` (see [`Crc32`]).
 pub fn crc32(data: &[u8]) -> u32 {
-    let mut c = Crc32::new();
-    c.update(data);
-    c.finish()
+    CRC32_ISO_HDLC.checksum(data)
 }
 
 #[cfg(test)]
@@ -221,6 +202,45 @@ mod tests {
         assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
         assert_eq!(crc32(b""), 0);
         assert_eq!(crc32(b"a"), 0xE8B7_BE43);
+    }
+
+    /// CRC-32/ISO-HDLC bit by bit, from its definition.
+    fn crc32_bitwise(data: &[u8]) -> u32 {
+        let mut c = 0xFFFF_FFFFu32;
+        for &b in data {
+            c ^= u32::from(b);
+            for _ in 0..8 {
+                c = if c & 1 != 0 {
+                    (c >> 1) ^ 0xEDB8_8320
+                } else {
+                    c >> 1
+                };
+            }
+        }
+        !c
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(512))]
+
+        /// Fed in any pieces, [`Crc32`] gives the CRC of the whole, which
+        /// is the bitwise definition's.
+        #[test]
+        fn crc32_in_pieces_equals_the_bitwise_definition(
+            data in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..600),
+            cuts in proptest::collection::vec(proptest::prelude::any::<proptest::sample::Index>(), 0..6),
+        ) {
+            let mut at: Vec<usize> = cuts.iter().map(|i| i.index(data.len() + 1)).collect();
+            at.sort_unstable();
+            let mut c = Crc32::new();
+            let mut from = 0;
+            for to in at.into_iter().chain([data.len()]) {
+                c.update(&data[from..to]);
+                from = to;
+            }
+            proptest::prop_assert_eq!(c.finish(), crc32(&data));
+            proptest::prop_assert_eq!(crc32(&data), crc32_bitwise(&data));
+        }
     }
 
     #[test]

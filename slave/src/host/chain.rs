@@ -467,70 +467,103 @@ impl Chain {
 mod tests {
     use super::*;
     use crate::wire::builder::FrameBuilder;
+    use proptest::prelude::*;
 
-    fn rng(seed: &mut u64) -> u64 {
-        *seed ^= *seed << 13;
-        *seed ^= *seed >> 7;
-        *seed ^= *seed << 17;
-        *seed
+    /// An EEPROM alias program + reload for one slave: the alias is
+    /// written to SII word 4 and the EEPROM reloaded, addressed by position,
+    /// station or broadcast; alias addressing must follow.
+    #[derive(Debug, Clone)]
+    struct AliasReload {
+        cmd: Command,
+        adp: u16,
+        alias: u16,
     }
 
     /// A random frame of plausible datagrams aimed at a 6-slave line.
-    fn random_frame(seed: &mut u64) -> Vec<u8> {
-        let mut buf = vec![0u8; 1600];
-        let mut b = FrameBuilder::new(&mut buf, [0x10; 6]).unwrap();
-        // Now and then an EEPROM alias program + reload for one slave (by
-        // position, station or broadcast): alias addressing must follow.
-        if rng(seed) % 4 == 0 {
-            let alias = 0x2000 + (rng(seed) % 8) as u16;
-            let (cmd, adp) = match rng(seed) % 3 {
-                0 => (Command::Apwr, 0u16.wrapping_sub((rng(seed) % 6) as u16)),
-                1 => (Command::Fpwr, 0x1000 + (rng(seed) % 6) as u16),
-                _ => (Command::Bwr, 0),
-            };
-            let at = |ado: u16| u32::from(adp) | (u32::from(ado) << 16);
-            for (ado, data) in [
-                (0x0502u16, &[0x01u8, 0x00][..]),
-                (0x0508, &alias.to_le_bytes()[..]),
-                (0x0502, &[0x01, 0x02, 0x04, 0x00, 0x00, 0x00][..]),
-                (0x0502, &[0x00, 0x04, 0x00, 0x00, 0x00, 0x00][..]),
-            ] {
-                b.push(cmd, at(ado), data).unwrap();
+    #[derive(Debug, Clone)]
+    struct RandomFrame {
+        /// Now and then (1 in 4) an alias reload first.
+        reload: Option<AliasReload>,
+        /// 1 to 8 datagrams: command, address, data.
+        datagrams: Vec<(Command, u32, Vec<u8>)>,
+    }
+
+    fn alias_reload() -> impl Strategy<Value = AliasReload> {
+        let target = prop_oneof![
+            (0u16..6).prop_map(|p| (Command::Apwr, 0u16.wrapping_sub(p))),
+            (0x1000u16..0x1006).prop_map(|s| (Command::Fpwr, s)),
+            Just((Command::Bwr, 0)),
+        ];
+        (target, 0x2000u16..0x2008).prop_map(|((cmd, adp), alias)| AliasReload { cmd, adp, alias })
+    }
+
+    fn datagram() -> impl Strategy<Value = (Command, u32, Vec<u8>)> {
+        let ado = prop_oneof![
+            Just(0x0010u16),
+            Just(0x0120),
+            Just(0x0130),
+            0x0600u16..0x0620,
+            // SyncManagers, reconfigured anywhere (also over the
+            // registers, where they must not hide them).
+            0x0800u16..0x0820,
+            0x1000u16..0x1300,
+        ];
+        let adp = prop_oneof![
+            (0u16..8).prop_map(|p| 0u16.wrapping_sub(p)),
+            0x1000u16..0x1008,
+            0x2000u16..0x2008,
+            any::<u16>(),
+        ];
+        (
+            0u8..16,
+            ado,
+            adp,
+            0u32..0x80,
+            prop::collection::vec(any::<u8>(), 1..=20),
+        )
+            .prop_map(|(cmd, ado, adp, logical, data)| {
+                let cmd = Command::from(cmd);
+                let address = if matches!(cmd.addressing(), Addressing::Logical) {
+                    logical
+                } else {
+                    u32::from(adp) | (u32::from(ado) << 16)
+                };
+                (cmd, address, data)
+            })
+    }
+
+    fn random_frame() -> impl Strategy<Value = RandomFrame> {
+        (
+            proptest::option::weighted(0.25, alias_reload()),
+            prop::collection::vec(datagram(), 1..=8),
+        )
+            .prop_map(|(reload, datagrams)| RandomFrame { reload, datagrams })
+    }
+
+    impl RandomFrame {
+        fn bytes(&self) -> Vec<u8> {
+            let mut buf = vec![0u8; 1600];
+            let mut b = FrameBuilder::new(&mut buf, [0x10; 6]).unwrap();
+            if let Some(r) = &self.reload {
+                let at = |ado: u16| u32::from(r.adp) | (u32::from(ado) << 16);
+                for (ado, data) in [
+                    (0x0502u16, &[0x01u8, 0x00][..]),
+                    (0x0508, &r.alias.to_le_bytes()[..]),
+                    (0x0502, &[0x01, 0x02, 0x04, 0x00, 0x00, 0x00][..]),
+                    (0x0502, &[0x00, 0x04, 0x00, 0x00, 0x00, 0x00][..]),
+                ] {
+                    b.push(r.cmd, at(ado), data).unwrap();
+                }
             }
-        }
-        let count = 1 + rng(seed) % 8;
-        for _ in 0..count {
-            let cmd = Command::from((rng(seed) % 16) as u8);
-            let ado = match rng(seed) % 6 {
-                0 => 0x0010,
-                1 => 0x0120,
-                2 => 0x0130,
-                3 => 0x0600 + (rng(seed) % 32) as u16,
-                // SyncManagers, reconfigured anywhere (also over the
-                // registers, where they must not hide them).
-                4 => 0x0800 + (rng(seed) % 32) as u16,
-                _ => 0x1000 + (rng(seed) % 0x300) as u16,
-            };
-            let adp = match rng(seed) % 4 {
-                0 => 0u16.wrapping_sub((rng(seed) % 8) as u16),
-                1 => 0x1000 + (rng(seed) % 8) as u16,
-                2 => 0x2000 + (rng(seed) % 8) as u16,
-                _ => rng(seed) as u16,
-            };
-            let address = if matches!(cmd.addressing(), Addressing::Logical) {
-                (rng(seed) % 0x80) as u32
-            } else {
-                u32::from(adp) | (u32::from(ado) << 16)
-            };
-            let len = 1 + (rng(seed) % 20) as usize;
-            let data: Vec<u8> = (0..len).map(|_| rng(seed) as u8).collect();
-            if b.push(cmd, address, &data).is_err() {
-                break;
+            for (cmd, address, data) in &self.datagrams {
+                if b.push(*cmd, *address, data).is_err() {
+                    break;
+                }
             }
+            let len = b.finish();
+            buf.truncate(len);
+            buf
         }
-        let len = b.finish();
-        buf.truncate(len);
-        buf
     }
 
     /// Sets station addresses 0x1000.. and a process-data configuration so
@@ -587,78 +620,99 @@ mod tests {
         assert_eq!(wkc, 1, "FPRD by the reloaded alias answered on the line");
     }
 
-    #[test]
-    fn dispatch_equals_serial_processing() {
-        let (mut serial, mut fast) = configured_pair();
-        let mut seed = 0x1234_5678_9ABC_DEF1u64;
-        let mut counted = 0u32;
-        for round in 0..3000 {
-            let mut f1 = random_frame(&mut seed);
-            let mut f2 = f1.clone();
-            let o1 = serial.process_serial(&mut f1);
-            let o2 = fast.process_frame(&mut f2);
-            assert_eq!(o1, o2, "round {round}");
-            assert_eq!(f1, f2, "frame differs in round {round}");
-            let eth = EthernetFrame::new_checked(&f1[..]).unwrap();
-            let ecat = EcatFrame::new_checked(eth.payload()).unwrap();
-            for r in ecat.datagrams() {
-                let dg = Datagram::new_checked(&ecat.payload()[r.unwrap()]).unwrap();
-                counted += u32::from(dg.wkc() != 0);
+    proptest! {
+        // 32 sequences of 128 frames: 4096 frames against fresh lines (the
+        // xorshift loop this replaces ran one sequence of 3000).
+        #![proptest_config(ProptestConfig::with_cases(32))]
+
+        /// The line's dispatch (each datagram to the slaves it addresses)
+        /// and the reference (every ESC walks the whole frame) give the
+        /// same frames, outcomes and slave memories on random traffic.
+        #[test]
+        fn dispatch_equals_serial_processing(
+            frames in prop::collection::vec(random_frame(), 128)
+        ) {
+            let (mut serial, mut fast) = configured_pair();
+            let mut counted = 0usize;
+            for (round, frame) in frames.iter().enumerate() {
+                let mut f1 = frame.bytes();
+                let mut f2 = f1.clone();
+                let o1 = serial.process_serial(&mut f1);
+                let o2 = fast.process_frame(&mut f2);
+                prop_assert_eq!(o1, o2, "round {}", round);
+                prop_assert_eq!(&f1, &f2, "frame differs in round {}", round);
+                let eth = EthernetFrame::new_checked(&f1[..]).unwrap();
+                let ecat = EcatFrame::new_checked(eth.payload()).unwrap();
+                for r in ecat.datagrams() {
+                    let dg = Datagram::new_checked(&ecat.payload()[r.unwrap()]).unwrap();
+                    counted += usize::from(dg.wkc() != 0);
+                }
             }
-        }
-        // The traffic really reached slaves (not a comparison of no-ops).
-        assert!(counted > 3000, "only {counted} datagrams were answered");
-        // And the slaves' memories agree: read back every station's AL status
-        // and a span of process RAM through both paths.
-        for i in 0..6u16 {
-            let mut buf = vec![0u8; 200];
-            let mut fb = FrameBuilder::new(&mut buf, [0x10; 6]).unwrap();
-            fb.push(
-                Command::Fprd,
-                u32::from(0x1000 + i) | (0x0600 << 16),
-                &[0; 16],
-            )
-            .unwrap();
-            fb.push(
-                Command::Fprd,
-                u32::from(0x1000 + i) | (0x1100 << 16),
-                &[0; 64],
-            )
-            .unwrap();
-            let len = fb.finish();
-            let mut f1 = buf[..len].to_vec();
-            let mut f2 = f1.clone();
-            serial.process_serial(&mut f1);
-            fast.process_frame(&mut f2);
-            assert_eq!(f1, f2, "slave {i} memory");
+            // The traffic really reached slaves (not a comparison of no-ops).
+            prop_assert!(counted > frames.len(), "only {} datagrams were answered", counted);
+            // And the slaves' memories agree: read back every station's
+            // FMMU registers and a span of process RAM through both paths.
+            for i in 0..6u16 {
+                let mut buf = vec![0u8; 200];
+                let mut fb = FrameBuilder::new(&mut buf, [0x10; 6]).unwrap();
+                fb.push(
+                    Command::Fprd,
+                    u32::from(0x1000 + i) | (0x0600 << 16),
+                    &[0; 16],
+                )
+                .unwrap();
+                fb.push(
+                    Command::Fprd,
+                    u32::from(0x1000 + i) | (0x1100 << 16),
+                    &[0; 64],
+                )
+                .unwrap();
+                let len = fb.finish();
+                let mut f1 = buf[..len].to_vec();
+                let mut f2 = f1.clone();
+                serial.process_serial(&mut f1);
+                fast.process_frame(&mut f2);
+                prop_assert_eq!(f1, f2, "slave {} memory", i);
+            }
         }
     }
 }
 
 #[cfg(test)]
 mod garbage_tests {
-    #[test]
-    fn random_ethercat_frames_never_panic_the_line_or_its_firmware() {
-        let mut chain = crate::testing::line(2);
-        let mut x: u64 = 0x2545_F491_4F6C_DD1D;
-        let mut next = move || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x
-        };
-        for i in 0..20_000u64 {
-            let len = 16 + (next() % 1400) as usize;
-            let mut f: Vec<u8> = (0..len).map(|_| next() as u8).collect();
-            f[6] = 0x10;
-            f[12] = 0x88;
-            f[13] = 0xA4;
-            if i % 2 == 0 {
-                let pl = (len - 16).min(0x7FF) as u16;
-                f[14] = pl as u8;
-                f[15] = 0x10 | ((pl >> 8) as u8 & 0x07);
+    use proptest::prelude::*;
+
+    /// A frame of random bytes with the EtherCAT EtherType and, when
+    /// `plausible`, an EtherCAT header whose length fits, so datagrams are
+    /// reached.
+    fn garbage_frame() -> impl Strategy<Value = Vec<u8>> {
+        (prop::collection::vec(any::<u8>(), 16..1416), any::<bool>()).prop_map(
+            |(mut f, plausible)| {
+                f[6] = 0x10;
+                f[12] = 0x88;
+                f[13] = 0xA4;
+                if plausible {
+                    let pl = (f.len() - 16).min(0x7FF) as u16;
+                    f[14] = pl as u8;
+                    f[15] = 0x10 | ((pl >> 8) as u8 & 0x07);
+                }
+                f
+            },
+        )
+    }
+
+    proptest! {
+        // 200 sequences of 100 frames: the 20 000 of the loop this replaces.
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        #[test]
+        fn random_ethercat_frames_never_panic_the_line_or_its_firmware(
+            frames in prop::collection::vec(garbage_frame(), 100)
+        ) {
+            let mut chain = crate::testing::line(2);
+            for (i, mut f) in frames.into_iter().enumerate() {
+                chain.process(&mut f, i as u64 * 1_000_000);
             }
-            chain.process(&mut f, i * 1_000_000);
         }
     }
 }

@@ -347,10 +347,10 @@ const fn check_entry(
     enums: &[&EnumDesc],
 ) -> Result<(), DescriptionError> {
     let sub = e.sub;
-    if let DataType::Enum(en) = e.data_type {
-        if !enum_listed(enums, en) {
-            return Err(DescriptionError::UnknownEnum { index, sub });
-        }
+    if let DataType::Enum(en) = e.data_type
+        && !enum_listed(enums, en)
+    {
+        return Err(DescriptionError::UnknownEnum { index, sub });
     }
     if e.gap {
         let ok = matches!(e.data_type, DataType::Bits(_))
@@ -377,10 +377,10 @@ const fn check_entry(
             {
                 return Err(DescriptionError::BitLength { index, sub });
             }
-            if let (Some(lo), Some(hi)) = (e.min, e.max) {
-                if lo > hi {
-                    return Err(DescriptionError::EmptyRange { index, sub });
-                }
+            if let (Some(lo), Some(hi)) = (e.min, e.max)
+                && lo > hi
+            {
+                return Err(DescriptionError::EmptyRange { index, sub });
             }
             let (lo, hi) = natural_range(&e.data_type, e.bit_len);
             let lo = match e.min {
@@ -463,10 +463,10 @@ impl Dictionary {
         let mut i = 0usize;
         while let Some((o, tail)) = objs.split_first() {
             let index = o.index;
-            if let Some(p) = prev {
-                if p >= index {
-                    return Err(DescriptionError::ObjectOrder { index });
-                }
+            if let Some(p) = prev
+                && p >= index
+            {
+                return Err(DescriptionError::ObjectOrder { index });
             }
             prev = Some(index);
             // The flat positions handed in must be the prefix sums.
@@ -493,10 +493,10 @@ impl Dictionary {
             let mut last: Option<u8> = None;
             let mut es = o.entries;
             while let Some((e, t)) = es.split_first() {
-                if let Some(l) = last {
-                    if l >= e.sub {
-                        return Err(DescriptionError::EntryOrder { index, sub: e.sub });
-                    }
+                if let Some(l) = last
+                    && l >= e.sub
+                {
+                    return Err(DescriptionError::EntryOrder { index, sub: e.sub });
                 }
                 last = Some(e.sub);
                 if let Err(err) = check_entry(index, o.code, highest, e, self.enums) {

@@ -278,15 +278,15 @@ impl Od {
         if !entry.data_type.is_signed() && bits < 64 && unsigned >> bits != 0 {
             return Err(SdoAbortCode::ValueTooHigh);
         }
-        if let Some(max) = entry.max {
-            if value > max {
-                return Err(SdoAbortCode::ValueTooHigh);
-            }
+        if let Some(max) = entry.max
+            && value > max
+        {
+            return Err(SdoAbortCode::ValueTooHigh);
         }
-        if let Some(min) = entry.min {
-            if value < min {
-                return Err(SdoAbortCode::ValueTooLow);
-            }
+        if let Some(min) = entry.min
+            && value < min
+        {
+            return Err(SdoAbortCode::ValueTooLow);
         }
         Ok(value)
     }

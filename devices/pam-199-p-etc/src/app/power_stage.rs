@@ -152,7 +152,7 @@ impl Default for PiGains {
 /// lower gains; this table is our own choice, equal to the defaults at and
 /// above 2000 Hz:
 ///
-/// | PWM [Hz]     | PPWM | IPWM |
+/// | PWM (Hz)     | PPWM | IPWM |
 /// |--------------|------|------|
 /// | ≥ 2000       | 7    | 40   |
 /// | 1000 … 1999  | 6    | 35   |
