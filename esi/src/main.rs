@@ -2,18 +2,27 @@
 //! default, any device of the catalog with `--device`), inspect SII images
 //! and cross-check an ESI against an SII.
 //!
-//! Exit codes: 0 success, 1 `check` found mismatches, 2 an input or output
-//! file could not be read, parsed or written.
+//! Exit status (the scheme of every tool of the workspace): 0 done (also
+//! when the reader of the output goes away), 1 `check` found mismatches or
+//! `inspect` found problems, 2 usage or input error (a file that cannot be
+//! read, parsed or written).
 
+use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use ecat_esi::{check, esi, ihex, inspect};
 
+const AFTER_HELP: &str = "\
+Exit status:
+  0    done (also when the reader of the output goes away, e.g. `| head`)
+  1    `check` found mismatches, or `inspect` found problems in the image
+  2    usage or input error (a file that cannot be read, parsed or written)";
+
 /// ESI and SII tooling for the devices of the ecat-slave catalog.
 #[derive(Debug, Parser)]
-#[command(name = "esi", version, about)]
+#[command(name = "esi", version, about, after_help = AFTER_HELP)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -32,7 +41,8 @@ enum Command {
     },
     /// List the devices of the catalog.
     Devices,
-    /// Write the SII EEPROM image (binary; Intel HEX with --hex).
+    /// Write the SII EEPROM image (binary; Intel HEX with --hex). Binary
+    /// goes to a file or a pipe, never to a terminal.
     Sii {
         /// The device (pam, io8, ...).
         #[arg(long, default_value = "pam")]
@@ -44,7 +54,8 @@ enum Command {
         #[arg(long)]
         hex: bool,
     },
-    /// Decode an SII image (binary, or Intel HEX starting with ':').
+    /// Decode an SII image (binary, or Intel HEX starting with ':'); exit 1
+    /// when the image has problems (they are listed).
     Inspect {
         /// The image file.
         file: PathBuf,
@@ -88,11 +99,21 @@ fn write(path: Option<&Path>, data: &[u8]) -> Result<(), Failure> {
         None => {
             use std::io::Write;
             let mut out = std::io::stdout().lock();
-            out.write_all(data)
-                .and_then(|()| out.flush())
-                .map_err(|e| Failure(format!("cannot write to stdout: {e}")))
+            match out.write_all(data).and_then(|()| out.flush()) {
+                // `esi generate | head`: the reader went away; not an error.
+                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+                r => r.map_err(|e| Failure(format!("cannot write to stdout: {e}"))),
+            }
         }
     }
+}
+
+/// Whether `data` starts like an XML document (after a BOM and blanks).
+fn looks_like_xml(data: &[u8]) -> bool {
+    let data = data.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(data);
+    data.iter()
+        .find(|b| !b.is_ascii_whitespace())
+        .is_some_and(|&b| b == b'<')
 }
 
 fn find(name: &str) -> Result<&'static device_catalog::DeviceEntry, Failure> {
@@ -120,6 +141,13 @@ fn run(cli: Cli) -> Result<ExitCode, Failure> {
             hex,
             device,
         } => {
+            if output.is_none() && !hex && std::io::stdout().is_terminal() {
+                return Err(Failure(
+                    "refusing to write a binary image to a terminal: use -o FILE, --hex, \
+                     or a pipe"
+                        .into(),
+                ));
+            }
             let image = ecat_esi::sii_image(find(&device)?.description);
             let data = if hex {
                 ihex::encode(&image).into_bytes()
@@ -130,6 +158,13 @@ fn run(cli: Cli) -> Result<ExitCode, Failure> {
         }
         Command::Inspect { file, json } => {
             let image = read_image(&file)?;
+            if looks_like_xml(&image) {
+                return Err(Failure(format!(
+                    "{} is XML (an ESI file?), not an SII image: compare an ESI with an \
+                     image with `esi check ESI SII`",
+                    file.display()
+                )));
+            }
             let report = inspect::inspect(&image)
                 .map_err(|e| Failure(format!("{}: not an SII image: {e}", file.display())))?;
             let text = if json {
@@ -138,6 +173,14 @@ fn run(cli: Cli) -> Result<ExitCode, Failure> {
                 report.to_text()
             };
             write(None, text.as_bytes())?;
+            if !report.problems.is_empty() {
+                eprintln!(
+                    "esi: {}: {} problem(s) in the image",
+                    file.display(),
+                    report.problems.len()
+                );
+                return Ok(ExitCode::from(1));
+            }
         }
         Command::Check { esi, sii } => {
             let xml = String::from_utf8(read(&esi)?).map_err(|_| {
@@ -154,13 +197,17 @@ fn run(cli: Cli) -> Result<ExitCode, Failure> {
                     sii.display()
                 ))
             })?;
+            let mut text = String::new();
             if mismatches.is_empty() {
-                println!("{} and {} agree", esi.display(), sii.display());
+                text.push_str(&format!("{} and {} agree\n", esi.display(), sii.display()));
             } else {
                 for m in &mismatches {
-                    println!("{m}");
+                    text.push_str(&format!("{m}\n"));
                 }
-                println!("{} mismatch(es)", mismatches.len());
+                text.push_str(&format!("{} mismatch(es)\n", mismatches.len()));
+            }
+            write(None, text.as_bytes())?;
+            if !mismatches.is_empty() {
                 return Ok(ExitCode::from(1));
             }
         }
@@ -175,5 +222,19 @@ fn main() -> ExitCode {
             eprintln!("esi: {msg}");
             ExitCode::from(2)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn xml_is_told_apart_from_sii_images() {
+        assert!(looks_like_xml(b"<?xml version=\"1.0\"?><EtherCATInfo/>"));
+        assert!(looks_like_xml(b"\xEF\xBB\xBF  \n<EtherCATInfo/>"));
+        assert!(!looks_like_xml(&[0x05, 0x00, 0x00]));
+        assert!(!looks_like_xml(b""));
+        assert!(!looks_like_xml(b":10000000"));
     }
 }

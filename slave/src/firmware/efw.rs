@@ -150,6 +150,10 @@ pub enum EfwError {
     /// [`pack`]/emit: the output buffer is too small.
     #[error("output buffer too small")]
     BufferTooSmall,
+    /// The image carries no firmware (payload length 0): installing it
+    /// would replace working firmware with nothing.
+    #[error("image has an empty payload")]
+    EmptyPayload,
 }
 
 impl EfwError {
@@ -159,7 +163,7 @@ impl EfwError {
     /// | error                                            | code                        |
     /// |--------------------------------------------------|-----------------------------|
     /// | bad magic / format / header length / header CRC  | `0x8010` NoFileHeader       |
-    /// | wrong vendor / product / revision out of range   | `0x800D` InvalidFirmware    |
+    /// | wrong vendor / product / revision, empty payload | `0x800D` InvalidFirmware    |
     /// | payload larger than a slot                       | `0x8003` DiskFull           |
     /// | truncated / oversized / payload CRC              | `0x800C` InvalidChecksum    |
     /// | buffer too small (tools only)                    | `0x800B` ProgramError       |
@@ -171,7 +175,8 @@ impl EfwError {
             | Self::HeaderCrc { .. } => FoeErrorCode::NoFileHeader,
             Self::WrongVendor { .. }
             | Self::WrongProduct { .. }
-            | Self::RevisionOutOfRange { .. } => FoeErrorCode::InvalidFirmware,
+            | Self::RevisionOutOfRange { .. }
+            | Self::EmptyPayload => FoeErrorCode::InvalidFirmware,
             Self::TooLarge { .. } => FoeErrorCode::DiskFull,
             Self::Truncated { .. } | Self::Oversized { .. } | Self::PayloadCrc { .. } => {
                 FoeErrorCode::InvalidChecksum
@@ -389,6 +394,9 @@ impl EfwHeaderRepr {
             });
         }
         let len = self.payload_len();
+        if len == 0 {
+            return Err(EfwError::EmptyPayload);
+        }
         if len > capacity {
             return Err(EfwError::TooLarge { len, capacity });
         }
@@ -877,6 +885,17 @@ mod tests {
                 min: 8,
                 max: 8
             })
+        );
+    }
+
+    #[test]
+    fn empty_payload_is_refused_with_invalid_firmware() {
+        let img = image(&header("1"), b"");
+        let mut v = EfwValidator::new(DEVICE, 10);
+        assert_eq!(v.feed(&img), Err(EfwError::EmptyPayload));
+        assert_eq!(
+            EfwError::EmptyPayload.foe_code(),
+            FoeErrorCode::InvalidFirmware
         );
     }
 
