@@ -10,7 +10,7 @@
 //! and reader ([`sii`]), parameter storage ([`params`]), LEDs ([`led`]).
 //!
 //! A device is one static description plus one application trait
-//! ([`device`]); see `docs/WRITE-YOUR-OWN-DEVICE.md`.
+//! ([`device`]); see `examples/io8/WRITE-YOUR-OWN-DEVICE.md`.
 //!
 //! Layers (top depends on bottom only): `device` → `od` → `coe`/`mailbox` →
 //! `al`/`pdo` → `esc` → `hal`; byte formats live in [`wire`] and carry no

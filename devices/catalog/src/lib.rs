@@ -5,7 +5,7 @@
 //! ESI and the SII, and a factory for software slaves on a line. A *line*
 //! is written `pam,io8,pam` or `pam*3,io8`.
 //!
-//! Adding a device: write its crate (see `docs/WRITE-YOUR-OWN-DEVICE.md`),
+//! Adding a device: write its crate (see `examples/io8/WRITE-YOUR-OWN-DEVICE.md`),
 //! add a [`DeviceEntry`] to [`DEVICES`].
 
 use ecat_slave::device::{DeviceDescription, SoftSlave};

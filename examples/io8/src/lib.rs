@@ -48,7 +48,7 @@ pub fn soft_slave() -> SoftSlave<Io8> {
     SoftSlave::new(Io8::default())
 }
 
-#[doc = include_str!("../../../docs/WRITE-YOUR-OWN-DEVICE.md")]
+#[doc = include_str!("../WRITE-YOUR-OWN-DEVICE.md")]
 pub mod guide {}
 
 #[cfg(test)]
