@@ -466,3 +466,45 @@ fn master_test_iface_drives_the_raw_runner_over_veth() {
     assert!(o.contains("downloaded 4056 bytes"), "{o}");
     let _ = std::fs::remove_file(&fw);
 }
+
+/// Runs `bin args` with standard output on a pseudo-terminal (util-linux
+/// `script`), as a user at a shell does; `None` where `script` is missing.
+fn on_terminal(bin: &std::path::Path, args: &[&str]) -> Option<(Option<i32>, String)> {
+    let line = std::iter::once(bin.to_string_lossy().into_owned())
+        .chain(args.iter().map(|a| a.to_string()))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let out = std::process::Command::new("script")
+        .args(["-qec", &line, "/dev/null"])
+        .stdin(Stdio::null())
+        .output()
+        .ok()?;
+    Some((out.status.code(), text(&out.stdout)))
+}
+
+#[test]
+fn binary_output_is_refused_on_a_terminal_but_not_in_a_pipe() {
+    let esi = esi();
+    let mt = master_test();
+    let Some((code, out)) = on_terminal(&esi, &["sii"]) else {
+        return skip("util-linux `script` (for a pseudo-terminal) is missing");
+    };
+    assert_eq!(code, Some(2), "{out}");
+    assert!(
+        out.contains("refusing to write a binary image to a terminal"),
+        "{out}"
+    );
+    let (code, out) = on_terminal(&mt, &["eeprom", "read", "--format", "bin"]).expect("script");
+    assert_eq!(code, Some(2), "{out}");
+    assert!(
+        out.contains("refusing to write binary to a terminal"),
+        "{out}"
+    );
+    // The same commands into a pipe give the image.
+    let image = run(&esi, &["sii"]);
+    assert!(image.status.success());
+    assert_eq!(image.stdout, ecat_esi::sii_image(&pam_199_p_etc::DEVICE));
+    let read = run(&mt, &["eeprom", "read", "--format", "bin"]);
+    assert!(read.status.success());
+    assert_eq!(read.stdout, image.stdout[..read.stdout.len()]);
+}
