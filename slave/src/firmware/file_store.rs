@@ -1,7 +1,15 @@
 //! A file-backed [`ImageStore`] for the host (soft slave): a directory with
 //! `slot_a.bin`, `slot_b.bin` and the two boot-state copies `state_0.bin`,
-//! `state_1.bin`. Every write is flushed to disk (`sync_data`) before it
-//! returns. Host only (`std` feature).
+//! `state_1.bin`. Host only (`std` feature).
+//!
+//! Durability follows what the boot logic relies on, at the lowest cost
+//! per FoE chunk: erasing a slot truncates its file (no 2 MiB of 0xFF to
+//! write); chunk writes go to the page cache without a sync; writing a
+//! boot-state record first syncs every slot written since the last
+//! record, then writes and syncs the record (and the directory when a
+//! file was created). A record therefore never points at image data that
+//! is not on stable storage, and a download costs one sync at its end
+//! instead of one per chunk.
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{Read, Seek, SeekFrom, Write};
@@ -15,6 +23,10 @@ use super::{BootState, ImageStore, STATE_RECORD_LEN, Slot, StoreError};
 pub struct FileStore {
     dir: PathBuf,
     capacity: usize,
+    /// Slot A written since the last sync.
+    dirty_a: bool,
+    /// Slot B written since the last sync.
+    dirty_b: bool,
 }
 
 fn io<T>(r: std::io::Result<T>) -> Result<T, StoreError> {
@@ -29,7 +41,41 @@ impl FileStore {
         Ok(Self {
             dir: dir.as_ref().to_path_buf(),
             capacity,
+            dirty_a: false,
+            dirty_b: false,
         })
+    }
+
+    /// Whether anything was ever written here (a slot or a boot record):
+    /// a store that has been written and has no readable boot record lost
+    /// it, it is not new.
+    pub fn has_been_written(&self) -> bool {
+        [Slot::A, Slot::B]
+            .iter()
+            .map(|s| self.slot_path(*s))
+            .chain([self.state_path(0), self.state_path(1)])
+            .any(|p| p.exists())
+    }
+
+    fn dirty(&mut self, slot: Slot) -> &mut bool {
+        match slot {
+            Slot::A => &mut self.dirty_a,
+            Slot::B => &mut self.dirty_b,
+        }
+    }
+
+    fn sync_dirty(&mut self) -> Result<(), StoreError> {
+        for slot in [Slot::A, Slot::B] {
+            if *self.dirty(slot) {
+                io(io(File::open(self.slot_path(slot)))?.sync_data())?;
+                *self.dirty(slot) = false;
+            }
+        }
+        Ok(())
+    }
+
+    fn sync_dir(&self) -> Result<(), StoreError> {
+        io(io(File::open(&self.dir))?.sync_all())
     }
 
     /// The directory.
@@ -76,27 +122,38 @@ impl ImageStore for FileStore {
     }
 
     fn erase(&mut self, slot: Slot) -> Result<(), StoreError> {
-        let mut f = io(File::create(self.slot_path(slot)))?;
-        let block = [0xFFu8; 4096];
-        let mut left = self.capacity;
-        while left > 0 {
-            let n = left.min(block.len());
-            io(f.write_all(block.get(..n).unwrap_or(&[])))?;
-            left -= n;
+        // An empty file reads as erased flash (0xFF) to its capacity.
+        let created = !self.slot_path(slot).exists();
+        io(File::create(self.slot_path(slot)))?;
+        *self.dirty(slot) = true;
+        if created {
+            self.sync_dir()?;
         }
-        io(f.sync_data())
+        Ok(())
     }
 
     fn write(&mut self, slot: Slot, offset: usize, data: &[u8]) -> Result<(), StoreError> {
         self.check(offset, data.len())?;
+        let created = !self.slot_path(slot).exists();
         let mut f = io(OpenOptions::new()
             .write(true)
             .create(true)
             .truncate(false)
             .open(self.slot_path(slot)))?;
+        // Erased flash between the end of the file and `offset`.
+        let len = io(f.metadata())?.len();
+        if len < offset as u64 {
+            io(f.seek(SeekFrom::Start(len)))?;
+            let gap = offset - len as usize;
+            io(f.write_all(&vec![0xFF; gap]))?;
+        }
         io(f.seek(SeekFrom::Start(offset as u64)))?;
         io(f.write_all(data))?;
-        io(f.sync_data())
+        *self.dirty(slot) = true;
+        if created {
+            self.sync_dir()?;
+        }
+        Ok(())
     }
 
     fn read(&self, slot: Slot, offset: usize, buf: &mut [u8]) -> Result<usize, StoreError> {
@@ -128,15 +185,22 @@ impl ImageStore for FileStore {
     }
 
     fn write_state(&mut self, state: &BootState) -> Result<(), StoreError> {
+        // The image data a record may point at is durable first.
+        self.sync_dirty()?;
         let (a, b) = (self.read_copy(0), self.read_copy(1));
         let (copy, record) = BootState::bank_write([&a, &b], state);
+        let created = !self.state_path(copy).exists();
         let mut f = io(OpenOptions::new()
             .write(true)
             .create(true)
             .truncate(false)
             .open(self.state_path(copy)))?;
         io(f.write_all(&record))?;
-        io(f.sync_all())
+        io(f.sync_all())?;
+        if created {
+            self.sync_dir()?;
+        }
+        Ok(())
     }
 }
 

@@ -8,3 +8,4 @@ pub mod chain;
 pub mod image_store;
 pub mod pcap;
 pub mod raw;
+pub mod state_dir;

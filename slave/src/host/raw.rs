@@ -8,6 +8,7 @@
 
 use super::chain::{Chain, IMAGE_SLOT_CAPACITY, LineSlave, provision_factory};
 use super::pcap::PcapWriter;
+use super::state_dir::{Loaded, SlaveState};
 use crate::firmware::ImageStore;
 use crate::firmware::file_store::FileStore;
 use pnet_datalink::{Channel, Config, NetworkInterface};
@@ -47,6 +48,15 @@ pub enum RunnerError {
     /// The slave count is out of range.
     #[error("a line needs 1 to {MAX_LINE} slaves, got {0}")]
     Count(usize),
+    /// The firmware store was written once but its boot records are gone:
+    /// the runner will not fall back to the factory firmware silently.
+    #[error(
+        "the firmware boot records in {} are unreadable although the store was written: \
+         refusing to fall back to the factory firmware silently (remove the directory to \
+         start from the factory firmware)",
+        .0.display()
+    )]
+    LostBootState(PathBuf),
     /// Any other I/O failure.
     #[error("{context}: {source}")]
     Io {
@@ -104,15 +114,10 @@ pub fn run(
         None => None,
     };
     let (mut tx, mut rx) = open(&iface)?;
-    let mut chain = match &config.state_dir {
+    let (mut chain, mut states) = match &config.state_dir {
         Some(dir) => persistent_chain(dir, slaves)?,
-        None => Chain::with_slaves(slaves),
+        None => (Chain::with_slaves(slaves), Vec::new()),
     };
-    let mut saved: Vec<u32> = chain
-        .slaves()
-        .iter()
-        .map(|s| s.nv().map_or(0, |n| n.write_count()))
-        .collect();
     let start = Instant::now();
     let mut stats = RunStats::default();
     let mut buf = Vec::with_capacity(1600);
@@ -146,9 +151,10 @@ pub fn run(
                 }
                 stats.answered += 1;
                 let _ = chain.poll(now);
-                if let Some(dir) = &config.state_dir {
-                    persist_parameters(dir, &chain, &mut saved)?;
-                }
+                // Before the next frame: whatever the firmware step just
+                // acknowledged (SAVE) is on stable storage before the
+                // master can read the acknowledgement.
+                persist_parameters(&chain, &mut states)?;
             }
             Err(e)
                 if matches!(
@@ -160,6 +166,7 @@ pub fn run(
                 // injected; the slave handles it (fail-safe) and
                 // `Chain::pdi_failures` counts it.
                 let _ = chain.poll(now);
+                persist_parameters(&chain, &mut states)?;
             }
             Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
             Err(source) => {
@@ -184,11 +191,18 @@ fn slave_dir(dir: &Path, i: usize) -> PathBuf {
     dir.join(format!("slave-{i}"))
 }
 
-/// Slaves whose parameters (`slave-N/params.bin`) and firmware store
-/// (`slave-N/firmware/`) live under `dir`; blank stores get the factory
-/// firmware.
-fn persistent_chain(dir: &Path, mut slaves: Vec<Box<dyn LineSlave>>) -> Result<Chain, RunnerError> {
+/// Slaves whose parameter storage (`slave-N/params-*.bin`, see
+/// [`super::state_dir`]) and firmware store (`slave-N/firmware/`) live
+/// under `dir`. A blank firmware store gets the factory firmware; a store
+/// whose boot records were lost is an error, not a silent downgrade to the
+/// factory version. Damaged parameter storage is loaded as such: the device
+/// reports its EEPROM data error.
+pub fn persistent_chain(
+    dir: &Path,
+    mut slaves: Vec<Box<dyn LineSlave>>,
+) -> Result<(Chain, Vec<SlaveState>), RunnerError> {
     let mut stores: Vec<Box<dyn ImageStore + Send>> = Vec::with_capacity(slaves.len());
+    let mut states = Vec::with_capacity(slaves.len());
     for (i, slave) in slaves.iter_mut().enumerate() {
         let sd = slave_dir(dir, i);
         let fw_dir = sd.join("firmware");
@@ -198,46 +212,45 @@ fn persistent_chain(dir: &Path, mut slaves: Vec<Box<dyn LineSlave>>) -> Result<C
             "opening firmware store {}",
             fw_dir.display()
         )))?;
+        if store.read_state().is_err() && store.has_been_written() {
+            return Err(RunnerError::LostBootState(fw_dir));
+        }
         let _ = provision_factory(&mut store);
         stores.push(Box::new(store));
-        let params = sd.join("params.bin");
-        match std::fs::read(&params) {
-            Ok(bytes) => {
-                if let Some(nv) = slave.nv_mut() {
-                    let n = bytes.len().min(nv.capacity());
-                    let _ = nv.write(0, bytes.get(..n).unwrap_or(&[]));
-                    // Restart with the loaded EEPROM so the parameters apply.
-                    slave.power_cycle();
-                }
+        let mut state =
+            SlaveState::open(&sd).map_err(io_err(format!("opening {}", sd.display())))?;
+        if let Some(nv) = slave.nv_mut() {
+            let loaded = state.load(nv).map_err(io_err(format!(
+                "reading the parameters in {}",
+                sd.display()
+            )))?;
+            if let Loaded::Damaged(regions) = &loaded {
+                eprintln!(
+                    "warning: slave {i}: parameter storage in {} damaged (regions {regions:?}); \
+                     the device reports an EEPROM data error unless its other copy is valid",
+                    sd.display()
+                );
             }
-            Err(e) if e.kind() == io::ErrorKind::NotFound => {}
-            Err(e) => return Err(io_err(format!("reading {}", params.display()))(e)),
+            if loaded != Loaded::Blank {
+                // Restart with the loaded EEPROM so the parameters apply.
+                slave.power_cycle();
+            }
         }
+        states.push(state);
     }
-    Ok(Chain::with_stores(slaves, stores))
+    Ok((Chain::with_stores(slaves, stores), states))
 }
 
-/// Writes the parameter storage of every slave whose EEPROM changed since
-/// the last call (write to a temporary file, then rename: atomic).
-fn persist_parameters(dir: &Path, chain: &Chain, saved: &mut [u32]) -> Result<(), RunnerError> {
-    for (i, (s, seen)) in chain.slaves().iter().zip(saved.iter_mut()).enumerate() {
-        let Some(nv) = s.nv() else {
-            continue;
-        };
-        let count = nv.write_count();
-        if count == *seen {
-            continue;
+/// Writes the parameter storage of every slave whose EEPROM changed,
+/// durably ([`SlaveState::persist`]).
+fn persist_parameters(chain: &Chain, states: &mut [SlaveState]) -> Result<(), RunnerError> {
+    for (s, state) in chain.slaves().iter().zip(states.iter_mut()) {
+        if let Some(nv) = s.nv() {
+            state.persist(nv).map_err(io_err(format!(
+                "writing the parameters in {}",
+                state.dir().display()
+            )))?;
         }
-        *seen = count;
-        let mut bytes = vec![0u8; nv.capacity()];
-        if nv.read(0, &mut bytes).is_err() {
-            continue;
-        }
-        let sd = slave_dir(dir, i);
-        let tmp = sd.join("params.bin.tmp");
-        let path = sd.join("params.bin");
-        std::fs::write(&tmp, &bytes).map_err(io_err(format!("writing {}", tmp.display())))?;
-        std::fs::rename(&tmp, &path).map_err(io_err(format!("renaming to {}", path.display())))?;
     }
     Ok(())
 }
@@ -308,18 +321,19 @@ mod tests {
                 .collect()
         };
         {
-            let mut chain = persistent_chain(&dir, slaves()).unwrap();
-            let mut saved = vec![0u32; 2];
+            let (mut chain, mut states) = persistent_chain(&dir, slaves()).unwrap();
             assert_eq!(chain.slaves()[1].firmware_version(), "10");
             let s = chain.slave_mut::<TestApp>(1).unwrap().slave_mut();
             s.od_mut().set(0x8000, 1, 777);
             let (app, od) = s.app_and_od();
             crate::params::save(od, &mut app.nv).unwrap();
-            persist_parameters(&dir, &chain, &mut saved).unwrap();
+            persist_parameters(&chain, &mut states).unwrap();
         }
-        assert!(dir.join("slave-1/params.bin").exists());
+        assert!(dir.join("slave-1/params-0.bin").exists());
+        assert!(dir.join("slave-1/params-1.bin").exists());
+        assert!(!dir.join("slave-0/params-0.bin").exists(), "never saved");
         assert!(dir.join("slave-1/firmware").is_dir());
-        let chain = persistent_chain(&dir, slaves()).unwrap();
+        let (chain, _) = persistent_chain(&dir, slaves()).unwrap();
         assert_eq!(chain.slaves()[1].od().get(0x8000, 1), Some(777), "restored");
         assert_eq!(
             chain.slaves()[0].od().get(0x8000, 1),
@@ -328,6 +342,25 @@ mod tests {
         );
         assert_eq!(chain.slaves()[0].firmware_version(), "10");
         let _ = line(1);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn lost_firmware_boot_records_are_an_error_not_a_silent_factory_reflash() {
+        let dir = std::env::temp_dir().join(format!("ecat-lost-boot-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let one = || -> Vec<Box<dyn LineSlave>> { vec![Box::new(crate::testing::slave())] };
+        drop(persistent_chain(&dir, one()).unwrap());
+        let fw = dir.join("slave-0/firmware");
+        std::fs::remove_file(fw.join("state_0.bin")).unwrap();
+        let _ = std::fs::remove_file(fw.join("state_1.bin"));
+        let err = persistent_chain(&dir, one()).map(|_| ()).unwrap_err();
+        assert!(matches!(err, RunnerError::LostBootState(_)), "{err}");
+        assert!(err.to_string().contains("refusing to fall back"), "{err}");
+        // Removing the store is the explicit way back to the factory image.
+        std::fs::remove_dir_all(&fw).unwrap();
+        let (chain, _) = persistent_chain(&dir, one()).unwrap();
+        assert_eq!(chain.slaves()[0].firmware_version(), "10");
         let _ = std::fs::remove_dir_all(&dir);
     }
 

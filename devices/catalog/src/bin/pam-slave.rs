@@ -19,8 +19,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
     name = "pam-slave",
     version,
     about = "Answer EtherCAT frames on a network interface as a line of software slaves",
-    after_help = "Exit status:\n  0    stopped by Ctrl-C (or SIGTERM) after serving\n  \
+    after_help = "Exit status:\n  0    stopped by Ctrl-C after serving\n  \
                   2    usage or input error (bad argument, unknown device, line too long)\n  \
+                  2    also: the --state-dir firmware store lost its boot records\n  \
                   3    the interface cannot be opened or fails (needs root or CAP_NET_RAW)"
 )]
 struct Cli {
@@ -88,7 +89,11 @@ fn main() -> ExitCode {
         }
         Err(e) => {
             eprintln!("pam-slave: error: {e}");
-            ExitCode::from(3)
+            match e {
+                // The state directory is input the user gave.
+                ecat_slave::host::raw::RunnerError::LostBootState(_) => ExitCode::from(2),
+                _ => ExitCode::from(3),
+            }
         }
     }
 }
