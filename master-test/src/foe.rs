@@ -48,9 +48,32 @@ pub async fn write(
     data: &[u8],
     mut progress: impl FnMut(usize, usize),
 ) -> Result<(), ClientError> {
-    write_inner(client, name, password, data, &mut progress, &mut |_| false)
-        .await
-        .map(|_| ())
+    match write_inner(client, name, password, data, &mut progress, &mut |_| false).await {
+        Ok(_) => Ok(()),
+        Err(e) => {
+            // Unless the slave itself refused, tell it the master gave up:
+            // a slave that finished the file but whose final
+            // acknowledgement was lost then drops the image, and both
+            // agree the update did not happen (best effort).
+            if !matches!(e, ClientError::Foe { .. }) {
+                let _ = send_abort(client).await;
+            }
+            Err(e)
+        }
+    }
+}
+
+/// Sends a FoE error request "aborted by the master" (no reply expected).
+pub async fn send_abort(client: &mut MailboxClient<'_>) -> Result<(), ClientError> {
+    let abort = FoeRepr::Error {
+        code: ecat_slave::wire::foe::FoeErrorCode::NotDefined,
+        text: b"aborted by the master",
+    };
+    let mut buf = vec![0u8; abort.buffer_len()];
+    abort
+        .emit(&mut buf)
+        .map_err(|e| ClientError::Protocol(e.to_string()))?;
+    client.send(MailboxType::FoE, &buf).await.map(|_| ())
 }
 
 /// Like [`write()`] but stops after `stop_after` bytes without ending the
@@ -82,17 +105,17 @@ pub async fn write_cancellable(
     progress: &mut impl FnMut(usize, usize),
     cancel: impl Fn() -> bool,
 ) -> Result<bool, ClientError> {
-    let done = write_inner(client, name, password, data, progress, &mut |_| cancel()).await?;
+    let done = match write_inner(client, name, password, data, progress, &mut |_| cancel()).await {
+        Ok(done) => done,
+        Err(e) => {
+            if !matches!(e, ClientError::Foe { .. }) {
+                let _ = send_abort(client).await;
+            }
+            return Err(e);
+        }
+    };
     if !done {
-        let abort = FoeRepr::Error {
-            code: ecat_slave::wire::foe::FoeErrorCode::NotDefined,
-            text: b"aborted by the master",
-        };
-        let mut buf = vec![0u8; abort.buffer_len()];
-        abort
-            .emit(&mut buf)
-            .map_err(|e| ClientError::Protocol(e.to_string()))?;
-        client.send(MailboxType::FoE, &buf).await?;
+        send_abort(client).await?;
     }
     Ok(done)
 }

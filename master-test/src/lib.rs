@@ -22,7 +22,7 @@ pub mod od;
 pub mod sdo_info;
 
 use ethercrab::{MainDevice, MainDeviceConfig, PduStorage, RetryBehaviour, Timeouts};
-use link::{Chain, Clock, Link, SharedChain};
+use link::{Chain, Clock, FaultConfig, FaultInjector, Link, SharedChain, SharedFaults};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -83,7 +83,22 @@ pub struct VirtualBus {
     pub chain: SharedChain,
     /// The slaves' clock.
     pub clock: Clock,
+    /// The faulty wire, if the bus has one ([`VirtualBus::with_faults`]).
+    pub faults: Option<SharedFaults>,
     _link: Link,
+}
+
+/// Timeouts of a master on a faulty wire: a lost frame must cost about
+/// a cycle, not half a second, or the slaves' SM watchdog (100 ms) fires
+/// before the master notices; a lost frame is sent again up to 3 times.
+pub fn fault_timeouts() -> (Timeouts, RetryBehaviour) {
+    (
+        Timeouts {
+            pdu: Duration::from_millis(10),
+            ..timeouts()
+        },
+        RetryBehaviour::Count(3),
+    )
 }
 
 impl VirtualBus {
@@ -141,7 +156,22 @@ impl VirtualBus {
         let pcap = pcap
             .map(ecat_slave::host::pcap::PcapWriter::create)
             .transpose()?;
-        Self::on_shared(Arc::new(Mutex::new(chain)), clock, pcap)
+        Self::on_shared(Arc::new(Mutex::new(chain)), clock, pcap, None)
+    }
+
+    /// A bus over `chain` whose wire injects `faults` (see
+    /// [`link::FaultConfig`]); the master uses [`fault_timeouts`].
+    pub fn with_faults(chain: Chain, clock: Clock, faults: FaultConfig) -> Result<Self, BusError> {
+        let f = Arc::new(Mutex::new(FaultInjector::new(faults)));
+        Self::on_shared(Arc::new(Mutex::new(chain)), clock, None, Some(f))
+    }
+
+    /// What the faulty wire injected so far (zeros without faults).
+    pub fn fault_stats(&self) -> link::FaultStats {
+        self.faults
+            .as_ref()
+            .map(|f| link::lock_faults(f).stats())
+            .unwrap_or_default()
     }
 
     /// Another master session on the same line: a new ethercrab
@@ -149,32 +179,39 @@ impl VirtualBus {
     /// one master program stops and the next one starts). The slaves keep
     /// their state; both links may run.
     pub fn next_session(&self) -> Result<Self, BusError> {
-        Self::on_shared(self.chain.clone(), self.clock.clone(), None)
+        Self::on_shared(self.chain.clone(), self.clock.clone(), None, None)
     }
 
     fn on_shared(
         chain: SharedChain,
         clock: Clock,
         pcap: Option<ecat_slave::host::pcap::PcapWriter<std::io::BufWriter<std::fs::File>>>,
+        faults: Option<SharedFaults>,
     ) -> Result<Self, BusError> {
         // Each bus owns its storage for the life of the process; tests
         // create a handful, so leaking is the simple, safe choice.
         let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
             Box::leak(Box::new(PduStorage::new()));
         let (tx, rx, pdu_loop) = storage.try_split().map_err(|()| BusError::Storage)?;
+        let (t, retry_behaviour) = match faults {
+            Some(_) => fault_timeouts(),
+            None => (timeouts(), RetryBehaviour::None),
+        };
         let maindevice = Arc::new(MainDevice::new(
             pdu_loop,
-            timeouts(),
+            t,
             MainDeviceConfig {
                 dc_static_sync_iterations: 0,
-                retry_behaviour: RetryBehaviour::None,
+                retry_behaviour,
             },
         ));
-        let link = Link::spawn(tx, rx, chain.clone(), clock.clone(), pcap)?;
+        let link =
+            Link::spawn_with_faults(tx, rx, chain.clone(), clock.clone(), pcap, faults.clone())?;
         Ok(VirtualBus {
             maindevice,
             chain,
             clock,
+            faults,
             _link: link,
         })
     }

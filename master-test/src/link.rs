@@ -5,8 +5,14 @@
 //! [`PduTx`], runs them through [`Chain::process`] and hands the result to
 //! [`PduRx`]. The slaves' firmware is polled after every frame and at least
 //! every millisecond, with time from a [`Clock`] the test controls.
+//!
+//! With a [`FaultInjector`] the link is a bad wire: frames are dropped
+//! (before or after the slaves), corrupted (the first slave counts an
+//! invalid frame, nobody acts on it), duplicated, delayed, reordered, or
+//! lost while the link is down (see [`ecat_slave::host::faults`]).
 
 pub use ecat_slave::host::chain::Chain;
+pub use ecat_slave::host::faults::{Fate, FaultConfig, FaultInjector, FaultStats};
 use ecat_slave::host::pcap::PcapWriter;
 use ethercrab::{PduRx, PduTx};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -55,6 +61,14 @@ impl Clock {
 /// A chain shared between the link thread and the test.
 pub type SharedChain = Arc<Mutex<Chain>>;
 
+/// A fault injector shared between the link thread and the test.
+pub type SharedFaults = Arc<Mutex<FaultInjector>>;
+
+/// Locks the fault injector (recovering from a poisoned lock).
+pub fn lock_faults(f: &SharedFaults) -> MutexGuard<'_, FaultInjector> {
+    f.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// Locks a shared chain, recovering it if a panicking test poisoned it.
 pub fn lock(chain: &SharedChain) -> MutexGuard<'_, Chain> {
     chain.lock().unwrap_or_else(|e| e.into_inner())
@@ -81,11 +95,23 @@ impl Link {
     /// Starts the link thread between ethercrab's `tx`/`rx` and `chain`;
     /// with `pcap`, every frame is captured in both directions.
     pub fn spawn(
+        tx: PduTx<'static>,
+        rx: PduRx<'static>,
+        chain: SharedChain,
+        clock: Clock,
+        pcap: Option<PcapWriter<std::io::BufWriter<std::fs::File>>>,
+    ) -> std::io::Result<Self> {
+        Self::spawn_with_faults(tx, rx, chain, clock, pcap, None)
+    }
+
+    /// [`Link::spawn`] through the faulty wire `faults`.
+    pub fn spawn_with_faults(
         mut tx: PduTx<'static>,
         mut rx: PduRx<'static>,
         chain: SharedChain,
         clock: Clock,
         mut pcap: Option<PcapWriter<std::io::BufWriter<std::fs::File>>>,
+        faults: Option<SharedFaults>,
     ) -> std::io::Result<Self> {
         let stop = Arc::new(AtomicBool::new(false));
         let stop2 = stop.clone();
@@ -94,6 +120,11 @@ impl Link {
             .spawn(move || {
                 let waker = Waker::from(Arc::new(ThreadWaker(thread::current())));
                 let mut buf: Vec<u8> = Vec::with_capacity(1536);
+                let start_ns = clock.now_ns();
+                // Replies held back: (release time, frame).
+                let mut delayed: Vec<(Instant, Vec<u8>)> = Vec::new();
+                let mut reordered: Option<(Instant, Vec<u8>)> = None;
+                let mut was_down = false;
                 while !stop2.load(Ordering::Acquire) && !tx.should_exit() {
                     tx.replace_waker(&waker);
                     let mut sent = false;
@@ -106,23 +137,84 @@ impl Link {
                         if res.is_err() {
                             continue;
                         }
-                        if let Some(p) = pcap.as_mut() {
-                            let _ = p.write_frame(&buf);
-                        }
-                        lock(&chain).process(&mut buf, clock.now_ns());
-                        if let Some(p) = pcap.as_mut() {
-                            let _ = p.write_frame(&buf);
-                        }
-                        // A frame ethercrab no longer waits for is dropped,
-                        // as on a real wire.
-                        let _ = rx.receive_frame(&buf);
                         sent = true;
+                        if let Some(p) = pcap.as_mut() {
+                            let _ = p.write_frame(&buf);
+                        }
+                        let now = clock.now_ns();
+                        let fate = faults.as_ref().map_or(Fate::Deliver, |f| {
+                            lock_faults(f).fate(Duration::from_nanos(now.saturating_sub(start_ns)))
+                        });
+                        let down = fate == Fate::LinkDown;
+                        if down && !was_down {
+                            lock(&chain).link_lost();
+                        }
+                        was_down = down;
+                        match fate {
+                            Fate::DropBefore | Fate::LinkDown => {
+                                // The slaves keep running on their own.
+                                let _ = lock(&chain).poll(now);
+                                continue;
+                            }
+                            Fate::Corrupt => {
+                                let mut c = lock(&chain);
+                                c.corrupted_frame();
+                                let _ = c.poll(now);
+                                continue;
+                            }
+                            _ => {}
+                        }
+                        let request = (fate == Fate::Duplicate).then(|| buf.clone());
+                        lock(&chain).process(&mut buf, now);
+                        if let Some(p) = pcap.as_mut() {
+                            let _ = p.write_frame(&buf);
+                        }
+                        match fate {
+                            Fate::DropAfter => {}
+                            Fate::Delay(d) => delayed.push((Instant::now() + d, buf.clone())),
+                            Fate::Reorder => {
+                                let held = (Instant::now() + REORDER_HOLD, buf.clone());
+                                if let Some((_, older)) = reordered.replace(held) {
+                                    let _ = rx.receive_frame(&older);
+                                }
+                            }
+                            _ => {
+                                // A frame ethercrab no longer waits for is
+                                // dropped, as on a real wire.
+                                let _ = rx.receive_frame(&buf);
+                                if let Some(mut again) = request {
+                                    lock(&chain).process(&mut again, clock.now_ns());
+                                    let _ = rx.receive_frame(&again);
+                                }
+                                if let Some((_, r)) = reordered.take() {
+                                    let _ = rx.receive_frame(&r);
+                                }
+                            }
+                        }
+                    }
+                    let t = Instant::now();
+                    delayed.retain(|(at, f)| {
+                        let due = *at <= t;
+                        if due {
+                            let _ = rx.receive_frame(f);
+                        }
+                        !due
+                    });
+                    if reordered.as_ref().is_some_and(|(at, _)| *at <= t)
+                        && let Some((_, r)) = reordered.take()
+                    {
+                        let _ = rx.receive_frame(&r);
                     }
                     if !sent {
                         // PDI failures (injected faults) are handled by the
                         // slave and counted by the chain.
                         let _ = lock(&chain).poll(clock.now_ns());
-                        thread::park_timeout(Duration::from_millis(1));
+                        let wait = if delayed.is_empty() && reordered.is_none() {
+                            Duration::from_millis(1)
+                        } else {
+                            Duration::from_micros(100)
+                        };
+                        thread::park_timeout(wait);
                     }
                 }
                 if let Some(p) = pcap.as_mut() {
@@ -135,6 +227,9 @@ impl Link {
         })
     }
 }
+
+/// Longest a reordered reply waits for the next frame.
+const REORDER_HOLD: Duration = Duration::from_millis(5);
 
 impl Drop for Link {
     fn drop(&mut self) {

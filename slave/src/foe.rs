@@ -51,7 +51,7 @@ use core::fmt::Write as _;
 
 use crate::firmware::{
     DeviceIdentity, EfwError, EfwValidator, ImageStore, Slot, StoreError, begin_download,
-    finish_download, write_chunk,
+    cancel_download, finish_download, write_chunk,
 };
 use crate::wire::foe::{FoeErrorCode, FoeRepr, HEADER_LEN};
 
@@ -171,6 +171,12 @@ impl FoeServer {
             FoeRepr::Ack { packet } => self.ack(packet, out),
             FoeRepr::Busy { .. } => self.master_busy(out),
             FoeRepr::Error { .. } => {
+                // The master gave up. After a completed download that
+                // means it never saw the final acknowledgement: the image
+                // is dropped so both agree the update did not happen.
+                if matches!(self.state, FoeState::Complete { .. }) {
+                    let _ = cancel_download(ctx.store);
+                }
                 self.state = FoeState::Idle;
                 None
             }
@@ -992,6 +998,27 @@ mod tests {
             Reply::None
         );
         assert_eq!(b.server.state(), &FoeState::Idle);
+    }
+
+    #[test]
+    fn a_master_error_after_the_last_packet_drops_the_downloaded_image() {
+        // The master lost the final acknowledgement and gave up: the
+        // update must not happen behind its back at BOOT -> INIT.
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let file = efw(&header("2.0.0"), &payload(1000));
+        let mut b = Bench::new(&mut store);
+        assert!(matches!(b.download(&file), Reply::Ack(_)));
+        assert!(matches!(b.server.state(), FoeState::Complete { .. }));
+        assert_eq!(
+            b.send(FoeRepr::Error {
+                code: FoeErrorCode::NotDefined,
+                text: b"aborted by the master"
+            }),
+            Reply::None
+        );
+        drop(b);
+        assert_eq!(commit_pending(&mut store), Ok(None), "nothing pending");
+        assert_eq!(running_version(&mut store), "1.0.0");
     }
 
     #[test]

@@ -10,6 +10,7 @@ mod coe;
 mod common;
 mod consistency;
 mod failsafe;
+mod faults;
 mod foe;
 mod generic_core;
 mod mixed_line;

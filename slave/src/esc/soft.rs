@@ -309,6 +309,24 @@ impl SoftEsc {
         self.set_u16(reg::DL_STATUS, (dl & !0x0002) | keep | 0x0002);
     }
 
+    /// Counts a frame that arrived on `port` with a bad checksum (a bit
+    /// flip, a runt): the invalid frame counter of the port (0x0300 +
+    /// 2 x port, saturating at 255, cleared by any ECAT write) goes up; the
+    /// ESC does not act on such a frame.
+    pub fn count_invalid_frame(&mut self, port: u8) {
+        let a = reg::RX_ERROR_COUNTER + 2 * u16::from(port.min(3));
+        let v = self.mem_u8(a);
+        self.set_u8(a, v.saturating_add(1));
+    }
+
+    /// Counts a loss of link on `port` (lost link counter 0x0310 + port,
+    /// saturating at 255, cleared by any ECAT write).
+    pub fn count_lost_link(&mut self, port: u8) {
+        let a = 0x0310 + u16::from(port.min(3));
+        let v = self.mem_u8(a);
+        self.set_u8(a, v.saturating_add(1));
+    }
+
     /// Sets or clears DL status bit 1, "PDI watchdog not expired".
     pub fn set_pdi_watchdog_ok(&mut self, ok: bool) {
         let dl = self.mem_u16(reg::DL_STATUS);

@@ -153,6 +153,26 @@ pub fn finish_download<S: ImageStore + ?Sized>(
     Ok(info)
 }
 
+/// The master ended the transfer with an error after the last packet (it
+/// lost the final acknowledgement and gave up): a downloaded, not yet
+/// committed image is dropped, so BOOT → INIT keeps the running firmware
+/// and master and slave agree that the update did not happen. Returns
+/// whether an image was dropped.
+pub fn cancel_download<S: ImageStore + ?Sized>(store: &mut S) -> Result<bool, StoreError> {
+    let mut state = load(store)?;
+    match state.candidate {
+        Some(Candidate {
+            stage: CandidateStage::Downloaded,
+            ..
+        }) => {
+            state.candidate = None;
+            store.write_state(&state)?;
+            Ok(true)
+        }
+        _ => Ok(false),
+    }
+}
+
 /// What BOOT → INIT does: a downloaded image becomes pending, to be tried
 /// at the next power-on. Returns the pending image, or `None` if there is
 /// nothing to commit.

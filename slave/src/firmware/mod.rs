@@ -61,8 +61,9 @@ pub mod file_store;
 mod store;
 
 pub use boot::{
-    BootDecision, BootOutcome, MAX_BOOT_ATTEMPTS, RollbackReason, begin_download, commit_pending,
-    confirm_boot, finish_download, power_on, provision, reject_boot, verify_slot, write_chunk,
+    BootDecision, BootOutcome, MAX_BOOT_ATTEMPTS, RollbackReason, begin_download, cancel_download,
+    commit_pending, confirm_boot, finish_download, power_on, provision, reject_boot, verify_slot,
+    write_chunk,
 };
 pub use efw::{
     EFW_FORMAT_VERSION, EFW_HEADER_LEN, EFW_MAGIC, EFW_MAX_HEADER_LEN, EfwError, EfwHeader,

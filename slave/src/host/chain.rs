@@ -404,6 +404,22 @@ impl Chain {
         first.map_or(Ok(()), Err)
     }
 
+    /// A frame with a bad checksum reached the line (bit flip, runt): the
+    /// first slave counts it on port 0 and nobody acts on it (what an ESC
+    /// does with an FCS error).
+    pub fn corrupted_frame(&mut self) {
+        if let Some(first) = self.slaves.first_mut() {
+            first.esc_mut().count_invalid_frame(0);
+        }
+    }
+
+    /// The link into the line (port 0 of the first slave) went down.
+    pub fn link_lost(&mut self) {
+        if let Some(first) = self.slaves.first_mut() {
+            first.esc_mut().count_lost_link(0);
+        }
+    }
+
     /// PDI failures seen by [`Chain::poll`] since the chain was built.
     pub fn pdi_failures(&self) -> u64 {
         self.pdi_failures

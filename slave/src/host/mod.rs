@@ -5,6 +5,7 @@
 //! from a host operating system.
 
 pub mod chain;
+pub mod faults;
 pub mod image_store;
 pub mod pcap;
 pub mod raw;
