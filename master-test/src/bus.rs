@@ -16,6 +16,8 @@ pub enum Bus {
         iface: String,
         /// The master on it.
         maindevice: &'static MainDevice<'static>,
+        /// The raw-socket link thread.
+        _link: crate::link::RawLink,
     },
 }
 
@@ -46,19 +48,15 @@ impl Bus {
                 retry_behaviour: RetryBehaviour::None,
             },
         )));
-        let task = ethercrab::std::tx_rx_task(iface, tx, rx).map_err(|e| {
+        let link = crate::link::RawLink::spawn(iface, tx, rx).map_err(|e| {
             BusError::Thread(std::io::Error::other(format!(
                 "cannot open a raw socket on '{iface}': {e} (needs root or CAP_NET_RAW)"
             )))
         })?;
-        std::thread::Builder::new()
-            .name(format!("ethercat-{iface}"))
-            .spawn(move || {
-                let _ = smol::block_on(task);
-            })?;
         Ok(Bus::Raw {
             iface: iface.to_string(),
             maindevice,
+            _link: link,
         })
     }
 

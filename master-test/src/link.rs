@@ -240,3 +240,84 @@ impl Drop for Link {
         }
     }
 }
+
+/// ethercrab on a network interface through a raw socket (pnet), with a
+/// link thread like the virtual one: a reply nobody waits for any more
+/// (late after a timeout, duplicated by the wire, another master's) is
+/// dropped and the link goes on.
+///
+/// ethercrab's own `std::tx_rx_task` ends for good on such a frame (it
+/// returns `Error::ReceiveFrame`), after which every request times out; on
+/// a wire that may lose or delay a frame the master would be dead after
+/// the first one. The tools and the tests use this link instead.
+pub struct RawLink {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl RawLink {
+    /// Opens a raw socket on `iface` and carries ethercrab's frames.
+    pub fn spawn(
+        iface: &str,
+        mut tx: PduTx<'static>,
+        mut rx: PduRx<'static>,
+    ) -> std::io::Result<Self> {
+        let nic = pnet_datalink::interfaces()
+            .into_iter()
+            .find(|i| i.name == iface)
+            .ok_or_else(|| {
+                std::io::Error::new(
+                    std::io::ErrorKind::NotFound,
+                    format!("no network interface '{iface}'"),
+                )
+            })?;
+        let cfg = pnet_datalink::Config {
+            read_timeout: Some(Duration::from_micros(200)),
+            promiscuous: true,
+            ..pnet_datalink::Config::default()
+        };
+        let (mut net_tx, mut net_rx) = match pnet_datalink::channel(&nic, cfg)? {
+            pnet_datalink::Channel::Ethernet(t, r) => (t, r),
+            _ => return Err(std::io::Error::other("not an Ethernet channel")),
+        };
+        let stop = Arc::new(AtomicBool::new(false));
+        let stop2 = stop.clone();
+        let thread = thread::Builder::new()
+            .name(format!("ecat-raw-{iface}"))
+            .spawn(move || {
+                let waker = Waker::from(Arc::new(ThreadWaker(thread::current())));
+                while !stop2.load(Ordering::Acquire) && !tx.should_exit() {
+                    tx.replace_waker(&waker);
+                    while let Some(frame) = tx.next_sendable_frame() {
+                        let _ = frame.send_blocking(|data| match net_tx.send_to(data, None) {
+                            Some(Err(_)) => Err(ethercrab::error::Error::SendFrame),
+                            _ => Ok(data.len()),
+                        });
+                    }
+                    if let Ok(frame) = net_rx.next() {
+                        // EtherCAT frames a slave processed (source MAC
+                        // with the locally administered bit set).
+                        let ours = frame.len() >= 16
+                            && frame.get(12..14) == Some(&[0x88, 0xA4][..])
+                            && frame.get(6).is_some_and(|b| b & 0x02 != 0);
+                        if ours {
+                            let _ = rx.receive_frame(frame);
+                        }
+                    }
+                }
+            })?;
+        Ok(RawLink {
+            stop,
+            thread: Some(thread),
+        })
+    }
+}
+
+impl Drop for RawLink {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Release);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}

@@ -118,19 +118,128 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
     );
 }
 
+#[test]
+fn raw_runner_behind_a_faulty_wire_stays_in_op_and_counts_the_corruption() {
+    let Some(bin) = runner_binary() else {
+        return skip("pam-slave binary not built next to the test binary");
+    };
+    let _serial = crate::common::NET_TESTS
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
+    let (mut guard, host_if, slave_if) = match setup("f") {
+        Ok(x) => x,
+        Err(e) => {
+            return skip(&format!(
+                "cannot create a network namespace and veth pair here ({e}); needs root and iproute2"
+            ));
+        }
+    };
+    let child = Command::new("ip")
+        .args(["netns", "exec", &guard.name])
+        .arg(&bin)
+        .args(["--iface", &slave_if, "--line", "pam,io8"])
+        .args(["--faults", "from=4s,drop=1%,corrupt=1%,dup=0.5%,seed=9"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .expect("start pam-slave in the namespace");
+    let start = std::time::Instant::now();
+    guard.runner = Some(child);
+    std::thread::sleep(Duration::from_millis(300));
+    let (timeouts, retry) = master_test::fault_timeouts();
+    // ethercrab's own raw-socket task ends for good at the first reply
+    // it no longer waits for (a late or duplicated frame), so this master
+    // uses master-test's RawLink.
+    let md = new_master_with(&host_if, timeouts, retry, true);
+    smol::block_on(async {
+        let group = md
+            .init_single_group::<MAX_SUBDEVICES, PDI_LEN>(ethercrab::std::ethercat_now)
+            .await
+            .expect("bring-up");
+        // The runner runs on real time; switch the SM watchdog off so a
+        // loaded machine cannot pause the master past it.
+        for _ in 0..5 {
+            if ethercrab::Command::bwr(0x0420).send(md, 0u16).await.is_ok() {
+                break;
+            }
+        }
+        let group = master_test::into_op_cyclic(group, md, Duration::from_millis(1))
+            .await
+            .expect("OP");
+        // The wire turns bad 4 s after the runner started.
+        let mut failed = 0;
+        while start.elapsed() < Duration::from_secs(5) {
+            let _ = group.tx_rx(md).await;
+            smol::Timer::after(Duration::from_millis(1)).await;
+        }
+        let mut first = None;
+        for _ in 0..1000 {
+            if let Err(e) = group.tx_rx(md).await {
+                failed += 1;
+                first.get_or_insert(e);
+            }
+        }
+        eprintln!("first error: {first:?}");
+        assert!(failed < 20, "{failed} failed cycles of 1000");
+        let mut invalid = None;
+        for _ in 0..10 {
+            if let Ok(v) = ethercrab::Command::fprd(0x1000, 0x0300)
+                .receive::<u8>(md)
+                .await
+            {
+                invalid = Some(v);
+                break;
+            }
+        }
+        let invalid = invalid.expect("invalid frame counter");
+        assert!(invalid > 0, "the first ESC counted the corrupted frames");
+        for sd in group.iter(md) {
+            let mut st = None;
+            for _ in 0..10 {
+                if let Ok(v) = ethercrab::Command::fprd(sd.configured_address(), 0x0130)
+                    .receive::<u16>(md)
+                    .await
+                {
+                    st = Some(v);
+                    break;
+                }
+            }
+            assert_eq!(st, Some(0x0008), "{} still in OP", sd.name());
+        }
+    });
+}
+
 /// An ethercrab master with its standard raw-socket task on `iface`.
 fn new_master(iface: &str) -> &'static MainDevice<'static> {
+    new_master_with(iface, master_test::timeouts(), RetryBehaviour::None, false)
+}
+
+/// [`new_master`] with other timeouts and retries.
+/// With `robust`, frames travel through `master_test::link::RawLink`,
+/// which drops replies nobody waits for, instead of ethercrab's own task.
+fn new_master_with(
+    iface: &str,
+    timeouts: ethercrab::Timeouts,
+    retry_behaviour: RetryBehaviour,
+    robust: bool,
+) -> &'static MainDevice<'static> {
     let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
         Box::leak(Box::new(PduStorage::new()));
     let (tx, rx, pdu_loop) = storage.try_split().expect("split");
     let md: &'static MainDevice<'static> = Box::leak(Box::new(MainDevice::new(
         pdu_loop,
-        master_test::timeouts(),
+        timeouts,
         MainDeviceConfig {
             dc_static_sync_iterations: 0,
-            retry_behaviour: RetryBehaviour::None,
+            retry_behaviour,
         },
     )));
+    if robust {
+        let link = master_test::link::RawLink::spawn(iface, tx, rx).expect("raw socket");
+        // The master lives for the rest of the test process.
+        std::mem::forget(link);
+        return md;
+    }
     let task = ethercrab::std::tx_rx_task(iface, tx, rx).expect("raw socket on the host end");
     std::thread::spawn(move || {
         let _ = smol::block_on(task);
@@ -149,16 +258,11 @@ fn send_garbage(iface: &str, n: usize) {
     else {
         panic!("second raw socket on {iface}");
     };
-    let mut x: u64 = 0x2545_F491_4F6C_DD1D;
+    use rand::{Rng as _, SeedableRng as _};
+    let mut rng = rand::rngs::StdRng::seed_from_u64(0x2545_F491_4F6C_DD1D);
     for i in 0..n {
-        let mut next = || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x
-        };
-        let len = 16 + (next() % 1400) as usize;
-        let mut f: Vec<u8> = (0..len).map(|_| next() as u8).collect();
+        let len = rng.random_range(16..1416);
+        let mut f: Vec<u8> = (0..len).map(|_| rng.random()).collect();
         f[0..6].fill(0xFF);
         f[6] = 0x10; // from a master: the runner must look at it
         f[12] = 0x88;

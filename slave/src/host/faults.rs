@@ -19,8 +19,9 @@
 //!   loss exactly as on a real line.
 //!
 //! Configured by a text such as
-//! `drop=1%,corrupt=0.1%,dup=0.1%,delay=5ms@1%,reorder=0.5%,down=2s+500ms,seed=7`
-//! ([`FaultConfig::from_str`]).
+//! `drop=1%,corrupt=0.1%,dup=0.1%,delay=5ms@1%,reorder=0.5%,down=2s+500ms,from=3s,seed=7`
+//! ([`FaultConfig::from_str`]; `from` delays the random faults so a master
+//! can bring the line up on a clean wire first).
 
 use rand::rngs::SmallRng;
 use rand::{Rng as _, SeedableRng as _};
@@ -67,6 +68,9 @@ pub struct FaultConfig {
     pub reorder: f64,
     /// Link-down windows: (start after the link comes up, duration).
     pub down: Vec<(Duration, Duration)>,
+    /// The random faults start this long after the link comes up (a
+    /// master brings the line up on a clean wire first).
+    pub from: Duration,
     /// Seed of the random decisions.
     pub seed: u64,
 }
@@ -80,6 +84,7 @@ impl Default for FaultConfig {
             delay: (Duration::ZERO, 0.0),
             reorder: 0.0,
             down: Vec::new(),
+            from: Duration::ZERO,
             seed: 1,
         }
     }
@@ -88,7 +93,7 @@ impl Default for FaultConfig {
 /// Why a fault configuration text was refused.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "bad fault setting '{item}': {why} (e.g. drop=1%,corrupt=0.1%,dup=0.1%,delay=5ms@1%,reorder=0.5%,down=2s+500ms,seed=7)"
+    "bad fault setting '{item}': {why} (e.g. drop=1%,corrupt=0.1%,dup=0.1%,delay=5ms@1%,reorder=0.5%,down=2s+500ms,from=3s,seed=7)"
 )]
 pub struct FaultConfigError {
     /// The item that could not be read.
@@ -118,7 +123,9 @@ fn duration(s: &str) -> Option<Duration> {
         return None;
     };
     let v: f64 = num.trim().parse().ok()?;
-    (0.0..1e6).contains(&v).then(|| Duration::from_secs_f64(v * scale))
+    (0.0..1e6)
+        .contains(&v)
+        .then(|| Duration::from_secs_f64(v * scale))
 }
 
 impl FromStr for FaultConfig {
@@ -165,9 +172,13 @@ impl FromStr for FaultConfig {
                         .parse()
                         .map_err(|_| bad("a seed is an integer"))?
                 }
+                "from" => {
+                    c.from =
+                        duration(value).ok_or_else(|| bad("a time is e.g. 5ms, 250us, 1.5s"))?;
+                }
                 _ => {
                     return Err(bad(
-                        "unknown kind (drop, corrupt, dup, delay, reorder, down, seed)",
+                        "unknown kind (drop, corrupt, dup, delay, reorder, down, from, seed)",
                     ));
                 }
             }
@@ -197,6 +208,9 @@ impl fmt::Display for FaultConfig {
         )?;
         for (at, len) in &self.down {
             write!(f, ",down={at:?}+{len:?}")?;
+        }
+        if !self.from.is_zero() {
+            write!(f, ",from={:?}", self.from)?;
         }
         write!(f, ",seed={}", self.seed)
     }
@@ -313,6 +327,9 @@ impl FaultInjector {
             self.count(f);
             return f;
         }
+        if since_start < self.config.from {
+            return Fate::Deliver;
+        }
         let c = &self.config;
         let x: f64 = self.rng.random();
         let mut edge = c.drop;
@@ -388,6 +405,13 @@ mod tests {
         );
         assert_eq!(c.seed, 7);
         assert_eq!("".parse::<FaultConfig>().unwrap(), FaultConfig::default());
+        let late: FaultConfig = "drop=100%,from=1s".parse().unwrap();
+        let mut f = FaultInjector::new(late);
+        assert_eq!(f.fate(Duration::from_millis(999)), Fate::Deliver);
+        assert!(matches!(
+            f.fate(Duration::from_secs(1)),
+            Fate::DropBefore | Fate::DropAfter
+        ));
     }
 
     #[test]

@@ -7,6 +7,7 @@
 //! replies seen again), is ignored.
 
 use super::chain::{Chain, IMAGE_SLOT_CAPACITY, LineSlave, provision_factory};
+use super::faults::{Fate, FaultConfig, FaultInjector};
 use super::pcap::PcapWriter;
 use super::state_dir::{Loaded, SlaveState};
 use crate::firmware::ImageStore;
@@ -27,6 +28,8 @@ pub struct RunnerConfig {
     pub pcap: Option<PathBuf>,
     /// Directory for the slaves' persistent state.
     pub state_dir: Option<PathBuf>,
+    /// A faulty wire in front of the line ([`super::faults`]).
+    pub faults: Option<FaultConfig>,
 }
 
 /// Why the runner could not run.
@@ -79,6 +82,9 @@ pub struct RunStats {
 /// Most slaves one runner serves.
 pub const MAX_LINE: usize = 512;
 
+/// How long a reordered reply is held (it then follows later replies).
+const REORDER_HOLD: Duration = Duration::from_millis(2);
+
 /// Opens the interface and serves frames for the line `slaves` (first to
 /// last) until `stop` is set.
 pub fn run(
@@ -121,8 +127,33 @@ pub fn run(
     let start = Instant::now();
     let mut stats = RunStats::default();
     let mut buf = Vec::with_capacity(1600);
+    let mut faults = config.faults.clone().map(FaultInjector::new);
+    // Replies held back by the faulty wire: (release time, frame).
+    let mut held: Vec<(Instant, Vec<u8>)> = Vec::new();
+    let mut was_down = false;
+    let send = |tx: &mut Tx, frame: &[u8]| -> Result<(), RunnerError> {
+        match tx.send_to(frame, None) {
+            Some(Err(source)) => Err(RunnerError::Io {
+                context: format!("sending on {}", iface.name),
+                source,
+            }),
+            _ => Ok(()),
+        }
+    };
     while !stop.load(Ordering::Acquire) {
         let now = u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX);
+        let t = Instant::now();
+        let mut due = Vec::new();
+        held.retain(|(at, f)| {
+            let ready = *at <= t;
+            if ready {
+                due.push(f.clone());
+            }
+            !ready
+        });
+        for f in due {
+            send(&mut tx, &f)?;
+        }
         match rx.next() {
             Ok(frame) => {
                 if !is_request(frame) {
@@ -134,6 +165,23 @@ pub fn run(
                 if let Some(p) = pcap.as_mut() {
                     let _ = p.write_frame(&buf);
                 }
+                let fate = faults
+                    .as_mut()
+                    .map_or(Fate::Deliver, |f| f.fate(start.elapsed()));
+                let down = fate == Fate::LinkDown;
+                if down && !was_down {
+                    chain.link_lost();
+                }
+                was_down = down;
+                if matches!(fate, Fate::DropBefore | Fate::LinkDown | Fate::Corrupt) {
+                    if fate == Fate::Corrupt {
+                        chain.corrupted_frame();
+                    }
+                    let _ = chain.poll(now);
+                    persist_parameters(&chain, &mut states)?;
+                    continue;
+                }
+                let request = (fate == Fate::Duplicate).then(|| buf.clone());
                 // As on silicon, the ESCs answer the frame at once; the
                 // firmware runs afterwards. A slow firmware step (a flash
                 // write with fsync in FoE) delays the mailbox answer, never
@@ -143,11 +191,17 @@ pub fn run(
                 if let Some(p) = pcap.as_mut() {
                     let _ = p.write_frame(&buf);
                 }
-                if let Some(Err(source)) = tx.send_to(&buf, None) {
-                    return Err(RunnerError::Io {
-                        context: format!("sending on {}", iface.name),
-                        source,
-                    });
+                match fate {
+                    Fate::DropAfter => {}
+                    Fate::Delay(d) => held.push((Instant::now() + d, buf.clone())),
+                    Fate::Reorder => held.push((Instant::now() + REORDER_HOLD, buf.clone())),
+                    _ => {
+                        send(&mut tx, &buf)?;
+                        if let Some(mut again) = request {
+                            chain.process_frame(&mut again);
+                            send(&mut tx, &again)?;
+                        }
+                    }
                 }
                 stats.answered += 1;
                 let _ = chain.poll(now);
@@ -370,6 +424,7 @@ mod tests {
             iface: "no-such-if0".into(),
             pcap: None,
             state_dir: None,
+            faults: None,
         };
         let one: Vec<Box<dyn LineSlave>> = vec![Box::new(crate::testing::slave())];
         let err = run(&cfg, one, &AtomicBool::new(false)).unwrap_err();

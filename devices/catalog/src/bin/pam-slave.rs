@@ -44,6 +44,11 @@ struct Cli {
     /// Directory for persistent slave state (saved parameters, firmware).
     #[arg(long)]
     state_dir: Option<PathBuf>,
+    /// A faulty wire in front of the line, e.g.
+    /// drop=1%,corrupt=0.1%,dup=0.1%,delay=5ms@1%,reorder=0.5%,down=2s+500ms,seed=7
+    /// (rates per frame; `down` pulls the cable at START for LENGTH).
+    #[arg(long, value_name = "SPEC", value_parser = parse_faults)]
+    faults: Option<ecat_slave::host::faults::FaultConfig>,
 }
 
 fn main() -> ExitCode {
@@ -68,6 +73,7 @@ fn main() -> ExitCode {
         iface: cli.iface,
         pcap: cli.pcap,
         state_dir: cli.state_dir,
+        faults: cli.faults,
     };
     let names: Vec<&str> = entries
         .iter()
@@ -96,6 +102,11 @@ fn main() -> ExitCode {
             }
         }
     }
+}
+
+fn parse_faults(s: &str) -> Result<ecat_slave::host::faults::FaultConfig, String> {
+    s.parse()
+        .map_err(|e: ecat_slave::host::faults::FaultConfigError| e.to_string())
 }
 
 /// `PAM-199-P-ETC x2, IO8` for a line.
