@@ -304,7 +304,7 @@ impl<P: PowerStage + Send + 'static, N: NvStorage + Send + 'static> Application 
     }
 
     fn tick(&mut self, t: &mut Tick<'_>) {
-        t.od.set(0x10F8, 0, t.now_ns as i64);
+        crate::app::entries::TIMESTAMP.set(t.od, t.now_ns as i64);
         if let Some((index, sub, until)) = self.ack
             && t.now_ns >= until
         {

@@ -38,14 +38,15 @@ impl FaultState {
     /// The faults the diagnosis objects (0xA000/0xA010/0xA020, true = fault)
     /// show.
     pub fn from_od(od: &Od) -> Self {
-        let d = |i: u16, s: u8| od.get(i, s) == Some(1);
+        let e = &crate::app::entries::DIAGNOSIS;
+        let d = |p: crate::app::entries::EntryPos| p.get(od) == 1;
         FaultState {
-            short: [d(0xA010, 1), d(0xA020, 1)],
-            open: [d(0xA010, 2), d(0xA020, 2)],
-            overvoltage: d(0xA000, 3),
-            undervoltage: d(0xA000, 2),
-            overtemperature: d(0xA000, 4),
-            eeprom: d(0xA000, 1),
+            short: e.short.map(d),
+            open: e.open.map(d),
+            overvoltage: d(e.overvoltage),
+            undervoltage: d(e.undervoltage),
+            overtemperature: d(e.temperature),
+            eeprom: d(e.memory),
         }
     }
 

@@ -622,6 +622,32 @@ pub fn entry_at(flat: usize) -> Option<&'static Entry> {
     DICT.entry_at(flat)
 }
 
+/// The flat position of the entry `index:sub` (gaps included), found in
+/// `const` context: what [`find_entry`] answers, for tables of positions
+/// resolved at build time (see [`crate::app::entries`]).
+#[must_use]
+pub const fn position(index: u16, sub: u8) -> Option<usize> {
+    let mut base = 0usize;
+    let mut objects = OBJECTS;
+    while let Some((o, rest)) = objects.split_first() {
+        if o.index == index {
+            let mut at = 0usize;
+            let mut entries = o.entries;
+            while let Some((e, tail)) = entries.split_first() {
+                if e.sub == sub {
+                    return Some(base + at);
+                }
+                at += 1;
+                entries = tail;
+            }
+            return None;
+        }
+        base += o.entries.len();
+        objects = rest;
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

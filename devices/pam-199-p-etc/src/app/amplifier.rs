@@ -23,6 +23,9 @@
 use super::chain::{DirectionalChain, DirectionalParams, IndependentChain, IndependentParams};
 use super::curve::{DirectionalCurve, IndependentCurve};
 use super::deadband::{Deadband, DirectionalDeadband, MmType};
+use super::entries::{
+    BASIS, DIAGNOSIS, DIRECTIONAL, INDEPENDENT, IndependentEntries, StageEntries,
+};
 use super::power_stage::{Faults, PowerStage, Solenoid, StageParams, acc_gains, pwm_from_code};
 use ecat_slave::od::Od;
 
@@ -132,24 +135,20 @@ impl Default for Amplifier {
     }
 }
 
-fn get(store: &Od, index: u16, sub: u8) -> i64 {
-    store.get(index, sub).unwrap_or(0)
-}
-
 fn u16_of(v: i64) -> u16 {
     v.clamp(0, i64::from(u16::MAX)) as u16
 }
 
-fn stage_params(store: &Od, base: u16) -> StageParams {
-    let pwm_hz = pwm_from_code(get(store, base, 5).clamp(0, 255) as u8).unwrap_or(2500);
+fn stage_params(store: &Od, e: &StageEntries) -> StageParams {
+    let pwm_hz = pwm_from_code(e.pwm.get(store).clamp(0, 255) as u8).unwrap_or(2500);
     StageParams {
-        current_ma: u16_of(get(store, base, 2)),
-        dampl: u16_of(get(store, base, 3)),
-        dfreq: u16_of(get(store, base, 4)),
+        current_ma: u16_of(e.current.get(store)),
+        dampl: u16_of(e.dampl.get(store)),
+        dfreq: u16_of(e.dfreq.get(store)),
         pwm_hz,
-        acc: get(store, base, 7) == 1,
-        ppwm: u16_of(get(store, base, 9)),
-        ipwm: u16_of(get(store, base, 10)),
+        acc: e.acc.get(store) == 1,
+        ppwm: u16_of(e.ppwm.get(store)),
+        ipwm: u16_of(e.ipwm.get(store)),
     }
 }
 
@@ -158,60 +157,64 @@ fn mmtype(v: i64) -> MmType {
 }
 
 fn directional_params(store: &Od) -> DirectionalParams {
+    let d = &DIRECTIONAL;
     let mut curve = DirectionalCurve::default();
-    for sub in 1..=42u8 {
-        curve.od_set(sub, get(store, 0x8006, sub).clamp(-10_000, 10_000) as i16);
+    for (sub, v) in d.curve.values(store) {
+        curve.od_set(sub, v.clamp(-10_000, 10_000) as i16);
     }
     DirectionalParams {
-        ramp_up_a_ms: get(store, 0x8002, 2).clamp(1, 120_000) as u32,
-        ramp_down_a_ms: get(store, 0x8002, 3).clamp(1, 120_000) as u32,
-        ramp_up_b_ms: get(store, 0x8002, 4).clamp(1, 120_000) as u32,
-        ramp_down_b_ms: get(store, 0x8002, 5).clamp(1, 120_000) as u32,
-        cc_enabled: get(store, 0x800A, 1) == 1,
+        ramp_up_a_ms: d.ramp_up_a.get(store).clamp(1, 120_000) as u32,
+        ramp_down_a_ms: d.ramp_down_a.get(store).clamp(1, 120_000) as u32,
+        ramp_up_b_ms: d.ramp_up_b.get(store).clamp(1, 120_000) as u32,
+        ramp_down_b_ms: d.ramp_down_b.get(store).clamp(1, 120_000) as u32,
+        cc_enabled: d.cc_mode.get(store) == 1,
         curve,
         deadband: DirectionalDeadband {
-            mmtype: mmtype(get(store, 0x800A, 3)),
-            trigger: u16_of(get(store, 0x800A, 5)),
-            min_a: u16_of(get(store, 0x800A, 6)),
-            max_a: u16_of(get(store, 0x800A, 7)),
-            min_b: u16_of(get(store, 0x800A, 8)),
-            max_b: u16_of(get(store, 0x800A, 9)),
+            mmtype: mmtype(d.mmtype.get(store)),
+            trigger: u16_of(d.trigger.get(store)),
+            min_a: u16_of(d.min_a.get(store)),
+            max_a: u16_of(d.max_a.get(store)),
+            min_b: u16_of(d.min_b.get(store)),
+            max_b: u16_of(d.max_b.get(store)),
         },
-        io_base: u16_of(get(store, 0xF800, 1)).max(1),
-        current_ma: u16_of(get(store, 0x800D, 2)),
+        io_base: u16_of(BASIS.io_base.get(store)).max(1),
+        current_ma: u16_of(d.stage.current.get(store)),
     }
 }
 
-fn independent_params(store: &Od, ch: u16) -> IndependentParams {
-    let off = ch * 0x10;
+fn independent_params(store: &Od, e: &IndependentEntries) -> IndependentParams {
     let mut curve = IndependentCurve::default();
-    for sub in 1..=22u8 {
-        curve.od_set(sub, get(store, 0x8006 + off, sub).clamp(0, 10_000) as i16);
+    for (sub, v) in e.curve.values(store) {
+        curve.od_set(sub, v.clamp(0, 10_000) as i16);
     }
     IndependentParams {
-        ramp_up_ms: get(store, 0x8002 + off, 2).clamp(1, 120_000) as u32,
-        ramp_down_ms: get(store, 0x8002 + off, 3).clamp(1, 120_000) as u32,
-        cc_enabled: get(store, 0x800A + off, 1) == 1,
+        ramp_up_ms: e.ramp_up.get(store).clamp(1, 120_000) as u32,
+        ramp_down_ms: e.ramp_down.get(store).clamp(1, 120_000) as u32,
+        cc_enabled: e.cc_mode.get(store) == 1,
         curve,
         deadband: Deadband {
-            mmtype: mmtype(get(store, 0x800A + off, 3)),
-            trigger: u16_of(get(store, 0x800A + off, 5)),
-            min: u16_of(get(store, 0x800A + off, 6)),
-            max: u16_of(get(store, 0x800A + off, 7)),
+            mmtype: mmtype(e.mmtype.get(store)),
+            trigger: u16_of(e.trigger.get(store)),
+            min: u16_of(e.min.get(store)),
+            max: u16_of(e.max.get(store)),
         },
-        io_base: u16_of(get(store, 0xF800, 1)).max(1),
-        current_ma: u16_of(get(store, 0x800D + off, 2)),
+        io_base: u16_of(BASIS.io_base.get(store)).max(1),
+        current_ma: u16_of(e.stage.current.get(store)),
     }
 }
 
 /// While ACC is on, PPWM/IPWM show the gains adapted to the PWM frequency.
-fn publish_acc_gains(store: &mut Od, base: u16) {
-    let p = stage_params(store, base);
+/// Returns the stage's parameters as they are after that.
+fn publish_acc_gains(store: &mut Od, e: &StageEntries) -> StageParams {
+    let mut p = stage_params(store, e);
     if p.acc {
         let g = acc_gains(p.pwm_hz);
-        store.set(base, 9, i64::from(g.ppwm));
-        store.set(base, 10, i64::from(g.ipwm));
+        e.ppwm.set(store, i64::from(g.ppwm));
+        e.ipwm.set(store, i64::from(g.ipwm));
+        p.ppwm = u16_of(i64::from(g.ppwm));
+        p.ipwm = u16_of(i64::from(g.ipwm));
     }
+    p
 }
 
 impl Amplifier {
@@ -273,16 +276,17 @@ impl Amplifier {
         if recheck {
             self.next_recheck_ns = now_ns + AUTO_RECHECK_NS;
         }
-        let sens = get(store, 0xF800, 3);
+        let sens = BASIS.sens.get(store);
         let faults = stage.faults();
         let eeprom = self.eeprom_error;
         let mut shown = Faults::default();
-        if get(store, 0xF800, 2) == FUNCTION_IND {
+        if BASIS.function.get(store) == FUNCTION_IND {
             let mut outs = [None, None];
             for (i, sol) in [Solenoid::A, Solenoid::B].into_iter().enumerate() {
-                let ch = i as u16 + 1;
-                let base_out = 0x7000 + ch * 0x10;
-                let enable = get(store, base_out, 1) != 0 && outputs_valid;
+                let Some(e) = INDEPENDENT.get(i) else {
+                    continue;
+                };
+                let enable = e.enable.get(store) != 0 && outputs_valid;
                 let rel = relevant(&faults, ChannelKind::Independent(sol));
                 let Some(mon) = self.monitors.get_mut(i + 1) else {
                     continue;
@@ -293,10 +297,9 @@ impl Amplifier {
                 let Some(chain) = self.ind.get_mut(i) else {
                     continue;
                 };
-                chain.set_params(independent_params(store, ch));
-                let out = chain.step(get(store, base_out, 3) as i32, ready, TICK_US);
-                publish_acc_gains(store, 0x800D + ch * 0x10);
-                let sp = stage_params(store, 0x800D + ch * 0x10);
+                chain.set_params(independent_params(store, e));
+                let out = chain.step(e.command.get(store) as i32, ready, TICK_US);
+                let sp = publish_acc_gains(store, &e.stage);
                 if ready {
                     let ma = u16_of(i64::from(out.current_setpoint_ma));
                     stage.set_current(sol, ma, sp.dither(), sp.pwm_hz, sp.gains());
@@ -309,88 +312,62 @@ impl Amplifier {
             }
             stage.step(TICK_US);
             for (i, sol) in [Solenoid::A, Solenoid::B].into_iter().enumerate() {
-                let base_in = 0x6000 + (i as u16 + 1) * 0x10;
-                if let Some(Some((ready, out))) = outs.get(i) {
-                    store.set(base_in, 1, i64::from(*ready));
-                    store.set(base_in, 3, i64::from(out.w.max(0)));
-                    store.set(base_in, 4, i64::from(out.c.max(0)));
-                    store.set(base_in, 5, i64::from(out.u.max(0)));
-                    store.set(base_in, 6, i64::from(stage.measured_ma(sol)));
+                if let (Some(e), Some(Some((ready, out)))) = (INDEPENDENT.get(i), outs.get(i)) {
+                    e.ready.set(store, i64::from(*ready));
+                    e.w.set(store, i64::from(out.w.max(0)));
+                    e.c.set(store, i64::from(out.c.max(0)));
+                    e.u.set(store, i64::from(out.u.max(0)));
+                    e.current.set(store, i64::from(stage.measured_ma(sol)));
                 }
             }
-            for sub in 1..=7 {
-                store.set(0x6000, sub, 0);
-            }
+            DIRECTIONAL.inputs.clear(store);
             self.dir.reset();
         } else {
-            let enable = get(store, 0x7000, 1) != 0 && outputs_valid;
+            let d = &DIRECTIONAL;
+            let enable = d.enable.get(store) != 0 && outputs_valid;
             let rel = relevant(&faults, ChannelKind::Directional);
             let mon = &mut self.monitors[0];
             let ok = mon.update(sens, enable, rel, recheck);
             shown = mon.flags;
             let ready = enable && ok && !eeprom;
             self.dir.set_params(directional_params(store));
-            let out = self.dir.step(get(store, 0x7000, 3) as i32, ready, TICK_US);
-            publish_acc_gains(store, 0x800D);
-            let sp = stage_params(store, 0x800D);
+            let out = self.dir.step(d.command.get(store) as i32, ready, TICK_US);
+            let sp = publish_acc_gains(store, &d.stage);
             let setpoint = if ready { out.current_setpoint_ma } else { 0 };
             let a = u16_of(i64::from(setpoint.max(0)));
             let b = u16_of(i64::from((-setpoint).max(0)));
             stage.set_current(Solenoid::A, a, sp.dither(), sp.pwm_hz, sp.gains());
             stage.set_current(Solenoid::B, b, sp.dither(), sp.pwm_hz, sp.gains());
             stage.step(TICK_US);
-            store.set(0x6000, 1, i64::from(ready));
-            store.set(0x6000, 3, i64::from(out.w));
-            store.set(0x6000, 4, i64::from(out.c));
-            store.set(0x6000, 5, i64::from(out.u));
-            store.set(0x6000, 6, i64::from(stage.measured_ma(Solenoid::A)));
-            store.set(0x6000, 7, i64::from(stage.measured_ma(Solenoid::B)));
-            for base in [0x6010u16, 0x6020] {
-                for sub in 1..=6 {
-                    store.set(base, sub, 0);
-                }
+            d.ready.set(store, i64::from(ready));
+            d.w.set(store, i64::from(out.w));
+            d.c.set(store, i64::from(out.c));
+            d.u.set(store, i64::from(out.u));
+            d.ia.set(store, i64::from(stage.measured_ma(Solenoid::A)));
+            d.ib.set(store, i64::from(stage.measured_ma(Solenoid::B)));
+            for e in &INDEPENDENT {
+                e.inputs.clear(store);
             }
             for c in &mut self.ind {
                 c.reset();
             }
         }
         let show = sens != SENS_OFF;
-        store.set(0xA000, 1, i64::from(show && eeprom));
-        store.set(
-            0xA000,
-            2,
-            i64::from(show && (shown.undervoltage || faults.undervoltage)),
-        );
-        store.set(
-            0xA000,
-            3,
-            i64::from(show && (shown.overvoltage || faults.overvoltage)),
-        );
-        store.set(
-            0xA000,
-            4,
-            i64::from(show && (shown.overtemperature || faults.overtemperature)),
-        );
-        store.set(
-            0xA010,
-            1,
-            i64::from(show && (shown.short_a || faults.short_a)),
-        );
-        store.set(
-            0xA010,
-            2,
-            i64::from(show && (shown.open_a || faults.open_a)),
-        );
-        store.set(
-            0xA020,
-            1,
-            i64::from(show && (shown.short_b || faults.short_b)),
-        );
-        store.set(
-            0xA020,
-            2,
-            i64::from(show && (shown.open_b || faults.open_b)),
-        );
+        let flag = |on: bool| i64::from(show && on);
+        let diag = &DIAGNOSIS;
+        diag.memory.set(store, flag(eeprom));
+        diag.undervoltage
+            .set(store, flag(shown.undervoltage || faults.undervoltage));
+        diag.overvoltage
+            .set(store, flag(shown.overvoltage || faults.overvoltage));
+        diag.temperature
+            .set(store, flag(shown.overtemperature || faults.overtemperature));
+        let [short_a, short_b] = diag.short;
+        let [open_a, open_b] = diag.open;
+        short_a.set(store, flag(shown.short_a || faults.short_a));
+        open_a.set(store, flag(shown.open_a || faults.open_a));
+        short_b.set(store, flag(shown.short_b || faults.short_b));
+        open_b.set(store, flag(shown.open_b || faults.open_b));
     }
 }
 

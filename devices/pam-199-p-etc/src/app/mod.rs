@@ -28,6 +28,7 @@ pub mod amplifier;
 pub mod chain;
 pub mod curve;
 pub mod deadband;
+pub mod entries;
 pub mod power_stage;
 pub mod ramp;
 
