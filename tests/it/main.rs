@@ -14,6 +14,7 @@ mod faults;
 mod foe;
 mod generic_core;
 mod mixed_line;
+mod power_cut;
 mod sdo;
 mod sii;
 mod soem;
