@@ -690,6 +690,32 @@ mod tests {
                 fast.process_frame(&mut f2);
                 prop_assert_eq!(f1, f2, "slave {} memory", i);
             }
+            // Whatever the traffic did (station addresses, SMs over the
+            // registers, EEPROM reloads), every slave still answers an AL
+            // status read by position, on both paths, and a broadcast
+            // read reaches all six.
+            for i in 0..6u16 {
+                let mut buf = vec![0u8; 200];
+                let mut fb = FrameBuilder::new(&mut buf, [0x10; 6]).unwrap();
+                let aprd = fb
+                    .push(
+                        Command::Aprd,
+                        u32::from(0u16.wrapping_sub(i)) | (0x0130 << 16),
+                        &[0, 0],
+                    )
+                    .unwrap();
+                let brd = fb.push(Command::Brd, 0x0130 << 16, &[0, 0]).unwrap();
+                let len = fb.finish();
+                let mut f1 = buf[..len].to_vec();
+                let mut f2 = f1.clone();
+                serial.process_serial(&mut f1);
+                fast.process_frame(&mut f2);
+                for f in [&f1, &f2] {
+                    let wkc = |end: usize| u16::from_le_bytes([f[end], f[end + 1]]);
+                    prop_assert_eq!(wkc(aprd.end), 1, "AL status of slave {} unreadable", i);
+                    prop_assert_eq!(wkc(brd.end), 6, "a broadcast AL status read missed slaves");
+                }
+            }
         }
     }
 }
