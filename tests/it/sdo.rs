@@ -97,6 +97,10 @@ fn sdo_length_and_access_errors_carry_their_abort_codes() {
 /// and segmented transfers, lengths right and wrong, read-only, absent and
 /// out-of-range targets).
 #[test]
+#[allow(
+    clippy::await_holding_refcell_ref,
+    reason = "each case runs alone in block_on: no other borrow can happen"
+)]
 fn sdo_download_then_upload_gives_the_value_or_an_abort_never_half_of_it() {
     use master_test::mailbox::{MailboxClient, MailboxGeometry};
     use proptest::prelude::*;
