@@ -175,7 +175,7 @@ fn main() -> ExitCode {
             }
             let i = ((cycle / a.sdo_every) as usize) % stations.len();
             let sd = group.subdevice(md, i).expect("slave");
-            let write = (cycle / a.sdo_every / stations.len() as u64) % 2 == 0;
+            let write = (cycle / a.sdo_every / stations.len() as u64).is_multiple_of(2);
             let ok = if write {
                 value = if value >= 3000 { 500 } else { value + 7 };
                 r.sdo_writes += 1;
@@ -200,9 +200,7 @@ fn main() -> ExitCode {
                         match known[i] {
                             Known::Acked(k) if k != v => {
                                 r.lost_writes += 1;
-                                eprintln!(
-                                    "cycle {cycle}: slave {i} reads {v}, acknowledged {k}"
-                                );
+                                eprintln!("cycle {cycle}: slave {i} reads {v}, acknowledged {k}");
                             }
                             Known::Unsure { new, old } if v != new && v != old => {
                                 r.lost_writes += 1;
@@ -231,12 +229,7 @@ fn main() -> ExitCode {
             .iter()
             .filter(|s| s.al_status().state != AlState::Op)
             .count() as u64;
-        (
-            r,
-            live_warm,
-            live(),
-            GLOBAL.stats().allocations as u64,
-        )
+        (r, live_warm, live(), GLOBAL.stats().allocations as u64)
     });
     let stats = bus.fault_stats();
     let growth = live_end - live_warm;

@@ -14,6 +14,7 @@
 
 pub mod bus;
 pub mod cli;
+pub mod conformance;
 pub mod eeprom;
 pub mod foe;
 pub mod link;

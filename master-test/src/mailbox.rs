@@ -157,6 +157,14 @@ pub struct MailboxClient<'a> {
     started: bool,
     /// How long to wait for a response.
     pub timeout: Duration,
+    /// Accept an SDO abort sent as CoE service 3 (SDO response) as an abort
+    /// instead of refusing it as a protocol error: for checks that look at
+    /// the abort code only (the conformance checker tests the service
+    /// separately).
+    pub lenient_abort_service: bool,
+    /// CoE Emergency messages that arrived while waiting for an SDO answer
+    /// (the CoE payloads, header included), oldest first.
+    pub emergencies: Vec<Vec<u8>>,
 }
 
 impl<'a> MailboxClient<'a> {
@@ -169,6 +177,8 @@ impl<'a> MailboxClient<'a> {
             counter: 0,
             started: false,
             timeout: Duration::from_secs(2),
+            lenient_abort_service: false,
+            emergencies: Vec::new(),
         }
     }
 
@@ -335,7 +345,12 @@ impl<'a> MailboxClient<'a> {
                             // A response with command specifier 4 is not an
                             // abort: SOEM and Wireshark would read it as a
                             // successful transfer. Refuse it.
-                            if let Ok(SdoResponse::Abort { code, .. }) = SdoResponse::parse(sdo) {
+                            if let Ok(SdoResponse::Abort { index, sub, code }) =
+                                SdoResponse::parse(sdo)
+                            {
+                                if self.lenient_abort_service {
+                                    return Err(ClientError::Abort { index, sub, code });
+                                }
                                 return Err(ClientError::Protocol(format!(
                                     "SDO abort {:#010x} sent as CoE service 3 (SDO response); ETG.1000.6 sends Abort SDO Transfer as service 2 (SDO request)",
                                     u32::from(code)
@@ -343,7 +358,11 @@ impl<'a> MailboxClient<'a> {
                             }
                             return Ok(sdo.to_vec());
                         }
-                        // Emergencies and other services are not the answer.
+                        CoeService::Emergency => {
+                            self.emergencies.push(msg.payload.clone());
+                            continue;
+                        }
+                        // Other services are not the answer.
                         _ => continue,
                     }
                 }

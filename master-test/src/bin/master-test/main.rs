@@ -7,6 +7,7 @@
 
 #![deny(clippy::print_stdout)]
 
+mod conformance_cmd;
 mod demo;
 mod eeprom_cmd;
 mod failure;
@@ -138,6 +139,15 @@ enum Cmd {
         #[command(subcommand)]
         op: eeprom_cmd::EsiCmd,
     },
+    /// Check one slave against the ETG rules this tool knows: ESC, SII,
+    /// state machine, mailbox, CoE, FoE (a table of check, expectation
+    /// with its ETG reference, observation, verdict; exit status 1 on any
+    /// failure).
+    ///
+    /// The slave is left in PRE-OP. The checks write: AL control, the
+    /// SyncManager registers (restored), every writable object entry (with
+    /// the value it had), and with --foe-file the file in BOOT.
+    Conformance(conformance_cmd::ConformanceArgs),
     /// Firmware image tools (no bus).
     Firmware {
         #[command(subcommand)]
@@ -212,6 +222,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Cmd::Foe { op } => smol::block_on(foe_cmd::foe(&w, op)),
         Cmd::Eeprom { op } => smol::block_on(eeprom_cmd::eeprom(&w, op)),
         Cmd::Esi { op } => smol::block_on(eeprom_cmd::esi(&w, op)),
+        Cmd::Conformance(args) => smol::block_on(conformance_cmd::conformance(&w, &args)),
         Cmd::Firmware { op } => {
             let dev = device.unwrap_or(&device_catalog::DEVICES[0]);
             foe_cmd::firmware(dev, op)
