@@ -8,6 +8,7 @@ mod capture;
 mod cli;
 mod coe;
 mod common;
+mod conformance;
 mod consistency;
 mod failsafe;
 mod faults;

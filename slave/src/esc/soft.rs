@@ -387,6 +387,20 @@ impl SoftEsc {
         self.mem_u16(reg::DL_STATUS) & 0x0002 == 0
     }
 
+    /// The ESC memory (registers and process RAM) as a debug probe sees
+    /// it: no SyncManager rules, no side effects. For test tooling that
+    /// plays a defective firmware or corrupts memory; firmware uses the
+    /// [`Esc`] trait.
+    pub fn raw_memory(&self) -> &[u8] {
+        &self.mem
+    }
+
+    /// The ESC memory, writable without SyncManager rules or side effects
+    /// (see [`SoftEsc::raw_memory`]).
+    pub fn raw_memory_mut(&mut self) -> &mut [u8] {
+        &mut self.mem
+    }
+
     /// The SII image as the EEPROM holds it (including master writes).
     pub fn sii(&self) -> &[u8] {
         &self.sii
