@@ -98,8 +98,20 @@ def cycles(m, n, period_s=0.002):
 
 
 def set_sm_watchdog(m, ms):
-    for s in m.slaves:
-        s.set_watchdog("processdata", ms)
+    """SOEM's set_watchdog (register reads and writes with SOEM's
+    compiled-in 2 ms timeout). A frame lost to a scheduling delay on a
+    loaded machine (WkcError) is tried again, up to 3 times, as a master
+    retries a lost frame; the log says so."""
+    for i, s in enumerate(m.slaves):
+        for attempt in range(3):
+            try:
+                s.set_watchdog("processdata", ms)
+                break
+            except pysoem.WkcError:
+                log(f"      slave {i + 1}: set_watchdog lost a frame (attempt {attempt + 1}), again")
+                if attempt == 2:
+                    raise
+                time.sleep(0.01)
 
 
 def foe_write(s, name, password, data):
