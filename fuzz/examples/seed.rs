@@ -15,8 +15,9 @@
 //!   the mailbox messages it wrote into SM0 become `mailbox` inputs.
 //! - `sii`: the PAM's and the IO8's generated SII images, the PAM's as
 //!   Intel HEX, and the vendor dumps of `shared/reference/sii-dumps`.
-//! - `esi`: the generated ESIs (the PAM's without its 155 KB dictionary,
-//!   the IO8's whole) and the small ETG schema files of `shared`.
+//! - `esi`: the generated ESIs (the PAM's without its 155 KB dictionary
+//!   and with a dictionary of one object, the IO8's whole). The ETG schema
+//!   files of `shared/esi-schema` are not copied into the repository.
 //! - `efw`: `.efw` images packed with the library (`master-test firmware
 //!   pack` does the same), one with a header extension, one for another
 //!   product, and a boot state record.
@@ -312,13 +313,6 @@ fn main() -> Result<(), Error> {
         "io8.xml",
         &with_mode(&ecat_esi::generate(io8.description)?),
     )?;
-    for f in ["EtherCATDict.xsd", "EtherCATDiag.xsd", "EtherCATBase.xsd"] {
-        write(
-            &dir,
-            f,
-            &with_mode(&std::fs::read(shared.join("esi-schema").join(f))?),
-        )?;
-    }
 
     // --- efw (first byte: validator chunk size selector) -------------------
     let dir = seeds.join("efw");
