@@ -20,7 +20,7 @@
 
 use crate::eeprom;
 use crate::foe;
-use crate::mailbox::{ClientError, MailboxClient, MailboxGeometry};
+use crate::mailbox::{ClientError, MailboxClient, MailboxGeometry, sm_register};
 use crate::sdo_info::{self, EntryInfo};
 use ecat_slave::wire::coe::{CoeHeader, CoeService, SdoRequest};
 use ecat_slave::wire::mailbox::{MailboxError as WireMailboxError, MailboxType};
@@ -1113,11 +1113,9 @@ async fn process_data_sms(r: &Run<'_>) -> ([u8; 8], [u8; 8]) {
             }
             len = u16::try_from(bits.div_ceil(8)).unwrap_or(u16::MAX);
         }
-        let b = &mut out[k];
-        b[0..2].copy_from_slice(&sm.start.to_le_bytes());
-        b[2..4].copy_from_slice(&len.to_le_bytes());
-        b[4] = sm.control;
-        b[6] = u8::from(len > 0 && sm.enable & 1 != 0);
+        if let Some(b) = out.get_mut(k) {
+            *b = sm_register(sm.start, len, sm.control, len > 0 && sm.enable & 1 != 0);
+        }
     }
     (out[0], out[1])
 }
@@ -1377,7 +1375,7 @@ async fn mailbox_checks(r: &mut Run<'_>) {
         .map(|i| i.mailbox_protocols)
         .unwrap_or(0);
     // A protocol the SII does not announce: SoE (bit 4), else VoE, AoE.
-    let (kind, bit) = [
+    let (kind, _) = [
         (MailboxType::SoE, 0x0010u16),
         (MailboxType::VoE, 0x0020),
         (MailboxType::AoE, 0x0001),
@@ -1385,7 +1383,6 @@ async fn mailbox_checks(r: &mut Run<'_>) {
     .into_iter()
     .find(|(_, b)| protocols & b == 0)
     .unwrap_or((MailboxType::VoE, 0x0020));
-    let _ = bit;
     let o = match exchange_raw(&mut c, kind, 1, 4, &[0, 0, 0, 0], wait).await {
         Ok(Some(m)) if mailbox_error(&m) == Some(0x0002) => {
             Outcome::Pass(format!("{kind:?}: mailbox error 0x0002"))
@@ -1603,8 +1600,6 @@ async fn coe_checks(r: &mut Run<'_>, esi: Option<&str>) {
         }
         return;
     };
-    let details = coe_details & 0x02 != 0 || coe_details & 0x01 != 0;
-    let _ = details;
 
     // SDO Information.
     let mut entries: Vec<EntryInfo> = Vec::new();
@@ -1976,13 +1971,8 @@ async fn foe_checks(r: &mut Run<'_>, foe_opts: Option<&FoeOptions>) {
     let _ = foe::request_state(r.md, r.station, 0x11).await;
     // Back to the standard mailbox.
     if let Some(g) = r.mailbox {
-        for (n, (start, len), control) in [(0u16, g.out, 0x26u8), (1, g.inp, 0x22)] {
-            let mut b = [0u8; 8];
-            b[0..2].copy_from_slice(&start.to_le_bytes());
-            b[2..4].copy_from_slice(&len.to_le_bytes());
-            b[4] = control;
-            b[6] = 1;
-            let _ = r.write(0x0800 + 8 * n, &b).await;
+        for (reg, b) in g.sm_registers() {
+            let _ = r.write(reg, &b).await;
         }
     }
 }

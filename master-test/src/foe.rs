@@ -275,13 +275,8 @@ pub async fn enter_boot_geometry(
     boot: crate::mailbox::MailboxGeometry,
 ) -> Result<(), ClientError> {
     request_state(md, station, 0x11).await?;
-    for (n, (start, len), control) in [(0u16, boot.out, 0x26u8), (1, boot.inp, 0x22)] {
-        let mut b = [0u8; 8];
-        b[0..2].copy_from_slice(&start.to_le_bytes());
-        b[2..4].copy_from_slice(&len.to_le_bytes());
-        b[4] = control;
-        b[6] = 1;
-        Command::fpwr(station, 0x0800 + 8 * n).send(md, b).await?;
+    for (reg, b) in boot.sm_registers() {
+        Command::fpwr(station, reg).send(md, b).await?;
     }
     request_state(md, station, 0x03).await
 }

@@ -119,7 +119,27 @@ pub struct MailboxGeometry {
     pub inp: (u16, u16),
 }
 
+/// The 8-byte SyncManager register image (0x0800 + 8·n): start address,
+/// length, control byte, activate (enable bit) as ETG.1000.4 lays it out.
+pub fn sm_register(start: u16, len: u16, control: u8, enable: bool) -> [u8; 8] {
+    let mut b = [0u8; 8];
+    b[0..2].copy_from_slice(&start.to_le_bytes());
+    b[2..4].copy_from_slice(&len.to_le_bytes());
+    b[4] = control;
+    b[6] = u8::from(enable);
+    b
+}
+
 impl MailboxGeometry {
+    /// SM0 (master to slave, control 0x26) and SM1 (slave to master, 0x22)
+    /// register images for this mailbox, with their register addresses.
+    pub fn sm_registers(&self) -> [(u16, [u8; 8]); 2] {
+        [
+            (0x0800, sm_register(self.out.0, self.out.1, 0x26, true)),
+            (0x0808, sm_register(self.inp.0, self.inp.1, 0x22, true)),
+        ]
+    }
+
     /// The PAM-199-P-ETC's bootstrap mailbox (BOOT state).
     pub fn bootstrap() -> Self {
         Self::bootstrap_of(&pam_199_p_etc::DEVICE.layout())
