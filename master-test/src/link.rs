@@ -125,6 +125,7 @@ impl Link {
                 let mut delayed: Vec<(Instant, Vec<u8>)> = Vec::new();
                 let mut reordered: Option<(Instant, Vec<u8>)> = None;
                 let mut was_down = false;
+                let mut last_frame = Instant::now();
                 while !stop2.load(Ordering::Acquire) && !tx.should_exit() {
                     tx.replace_waker(&waker);
                     let mut sent = false;
@@ -153,13 +154,13 @@ impl Link {
                         match fate {
                             Fate::DropBefore | Fate::LinkDown => {
                                 // The slaves keep running on their own.
-                                let _ = lock(&chain).poll(now);
+                                let _ = lock(&chain).service(now);
                                 continue;
                             }
                             Fate::Corrupt => {
                                 let mut c = lock(&chain);
                                 c.corrupted_frame();
-                                let _ = c.poll(now);
+                                let _ = c.service(now);
                                 continue;
                             }
                             _ => {}
@@ -205,10 +206,21 @@ impl Link {
                     {
                         let _ = rx.receive_frame(&r);
                     }
-                    if !sent {
+                    if sent {
+                        last_frame = Instant::now();
+                    } else {
                         // PDI failures (injected faults) are handled by the
                         // slave and counted by the chain.
-                        let _ = lock(&chain).poll(clock.now_ns());
+                        if last_frame.elapsed() < SPIN {
+                            // A master that just sent a frame usually
+                            // sends the next one within microseconds:
+                            // waiting for it without sleeping saves the
+                            // wake-up (tens of microseconds per frame).
+                            let _ = lock(&chain).service(clock.now_ns());
+                            thread::yield_now();
+                            continue;
+                        }
+                        let _ = lock(&chain).idle(clock.now_ns());
                         let wait = if delayed.is_empty() && reordered.is_none() {
                             Duration::from_millis(1)
                         } else {
@@ -227,6 +239,10 @@ impl Link {
         })
     }
 }
+
+/// How long the link thread keeps looking for the next frame without
+/// sleeping after the last one.
+const SPIN: Duration = Duration::from_micros(200);
 
 /// Longest a reordered reply waits for the next frame.
 const REORDER_HOLD: Duration = Duration::from_millis(5);

@@ -190,7 +190,7 @@ fn cli_limits_are_refused_before_anything_runs() {
     assert!(o.contains("-10000..=10000"), "{o}");
     let runner = runner_binary().expect("pam-slave builds");
     let (o, e) = expect(&runner, &["--iface", "lo", "--count", "0"], 2);
-    assert!(e.contains("1..=512"), "{e}");
+    assert!(e.contains("1..=4096"), "{e}");
     assert!(
         !o.contains("slave") && !e.contains("Ctrl-C stops"),
         "{o}{e}"

@@ -92,6 +92,8 @@ fn a_pdi_error_in_the_mailbox_check_is_a_pdi_failure_not_code_0x0016() {
             .esc_mut()
             .set_pdi_fault(Some(PdiFault::reads(0x0800, 0x0808)));
         settle(md).await;
+        // No event and no time passing: the firmware's loop finds it.
+        let _ = bus.run_firmware();
         assert_eq!(
             status(md, s).await,
             (0x02 | ERR, 0x0001),

@@ -14,6 +14,7 @@ mod failsafe;
 mod faults;
 mod foe;
 mod generic_core;
+mod long_line;
 mod mixed_line;
 mod power_cut;
 mod sdo;

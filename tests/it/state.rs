@@ -23,6 +23,8 @@ async fn status(bus: &VirtualBus, station: u16) -> (u16, u16) {
 /// Lets the link thread poll the firmware a few times.
 async fn settle(bus: &VirtualBus) {
     crate::common::settle(&bus.maindevice).await;
+    // The simulated clock stands still: run the firmware's loop once.
+    let _ = bus.run_firmware();
 }
 
 async fn write_sm(bus: &VirtualBus, station: u16, sm: u16, start: u16, len: u16, control: u8) {

@@ -68,9 +68,9 @@ pub enum CatalogError {
         /// The names that exist.
         known: String,
     },
-    /// A line is empty, or a repetition count is not a number of 1..=512.
+    /// A line is empty, or a repetition count is not a number of 1..=4096.
     #[error(
-        "bad line '{0}': write devices separated by commas, e.g. pam,io8,pam or pam*3 (1 to 512 slaves)"
+        "bad line '{0}': write devices separated by commas, e.g. pam,io8,pam or pam*3 (1 to 4096 slaves)"
     )]
     BadLine(String),
 }
@@ -99,7 +99,7 @@ pub fn find(name: &str) -> Result<&'static DeviceEntry, CatalogError> {
 }
 
 /// Most slaves of one line.
-pub const MAX_LINE: usize = 512;
+pub const MAX_LINE: usize = 4096;
 
 /// Parses a line: `pam,io8,pam`, `pam*3`, `pam*2,io8`.
 pub fn parse_line(spec: &str) -> Result<Vec<&'static DeviceEntry>, CatalogError> {
@@ -155,7 +155,7 @@ mod tests {
         let keys: Vec<&str> = l.iter().map(|d| d.key).collect();
         assert_eq!(keys, ["pam", "pam", "io8", "pam"]);
         assert_eq!(find("IO8").unwrap().key, "io8");
-        for bad in ["", "pam,,pam", "pam*0", "pam*x", "pam*513"] {
+        for bad in ["", "pam,,pam", "pam*0", "pam*x", "pam*4097", "io8*4096,pam"] {
             assert!(parse_line(bad).is_err(), "{bad}");
         }
     }

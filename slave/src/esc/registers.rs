@@ -180,6 +180,15 @@ pub mod sm {
 /// AL event request bit for "AL control written".
 pub const AL_EVENT_AL_CONTROL: u32 = 0x0000_0001;
 
+/// AL event request bit 4, "SyncManager activation register changed"
+/// (ET1100 datasheet section II, register 0x0220; cleared when the PDI
+/// reads a SyncManager's activation register, offset 6).
+pub const AL_EVENT_SM_CHANGED: u32 = 0x0000_0010;
+
+/// AL event request bit 6, "watchdog process data expired" (cleared when
+/// the PDI reads the watchdog status 0x0440).
+pub const AL_EVENT_WATCHDOG_PD: u32 = 0x0000_0040;
+
 /// Address of FMMU block `n`, if `n` is one of the 16 possible FMMUs.
 pub const fn fmmu(n: u8) -> Option<u16> {
     if n < 16 {

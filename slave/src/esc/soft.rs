@@ -364,6 +364,7 @@ impl SoftEsc {
             let status = self.mem_u16(reg::WATCHDOG_STATUS_PD);
             if expired && status & 1 != 0 {
                 self.set_u16(reg::WATCHDOG_STATUS_PD, status & !1);
+                self.raise_al_event(reg::AL_EVENT_WATCHDOG_PD);
                 let c = self.mem_u8(reg::WATCHDOG_COUNTER_PD).saturating_add(1);
                 self.set_u8(reg::WATCHDOG_COUNTER_PD, c);
             }
@@ -380,6 +381,12 @@ impl SoftEsc {
             let c = self.mem_u8(reg::WATCHDOG_COUNTER_PDI).saturating_add(1);
             self.set_u8(reg::WATCHDOG_COUNTER_PDI, c);
         }
+    }
+
+    /// Whether the AL event request register (0x0220) holds an event for
+    /// the firmware: what makes an interrupt-driven firmware run.
+    pub fn al_event_pending(&self) -> bool {
+        self.mem_u32(reg::AL_EVENT_REQUEST) != 0
     }
 
     /// Whether the PDI watchdog has expired (DL status bit 1 clear).
@@ -938,6 +945,7 @@ impl SoftEsc {
             || old.enabled != new.enabled
         {
             self.set_sm_status(n, 0);
+            self.raise_al_event(reg::AL_EVENT_SM_CHANGED);
             // A (re)configured output SM with watchdog trigger restarts the
             // process-data watchdog: unarmed until the first output write.
             if new.enabled && new.control & smr::WATCHDOG_TRIGGER != 0 {
@@ -1129,9 +1137,20 @@ impl Esc for SoftEsc {
             (0, 0)
         };
         self.mem_get(addr, buf);
-        // Reading AL control acknowledges its event.
-        if a <= u32::from(reg::AL_CONTROL) && u32::from(reg::AL_CONTROL) < b {
+        let covers = |r: u16| a <= u32::from(r) && u32::from(r) < b;
+        // Reading AL control acknowledges its event; reading the watchdog
+        // status or an SM activation register acknowledges theirs.
+        if covers(reg::AL_CONTROL) {
             self.clear_al_event(reg::AL_EVENT_AL_CONTROL);
+        }
+        if covers(reg::WATCHDOG_STATUS_PD) {
+            self.clear_al_event(reg::AL_EVENT_WATCHDOG_PD);
+        }
+        if (0..SM_COUNT as u8)
+            .filter_map(reg::sm)
+            .any(|base| covers(base + smr::ACTIVATE))
+        {
+            self.clear_al_event(reg::AL_EVENT_SM_CHANGED);
         }
         for n in 0..SM_COUNT {
             if touched & (1 << n) != 0 {
@@ -1188,11 +1207,18 @@ impl Esc for SoftEsc {
             self.refresh_address();
             return Ok(());
         }
-        let (complete, _touched) = self.pdi_sm_checks(a, b, true)?;
+        let (complete, touched) = self.pdi_sm_checks(a, b, true)?;
         if let Some(dst) = self.mem.get_mut(a as usize..b as usize) {
             dst.copy_from_slice(data);
         }
         for n in 0..SM_COUNT {
+            // Writing a buffer the master reads acknowledges its read
+            // event (ET1100 0x0805 bit 1, "cleared by writing from PDI").
+            if touched & (1 << n) != 0 {
+                self.clear_al_event(reg::al_event_sm(n as u8));
+                let st = self.sm_status(n) & !smr::STATUS_READ_EVENT;
+                self.set_sm_status(n, st);
+            }
             if complete & (1 << n) != 0 {
                 let is_mbx = self.sms.get(n).is_some_and(SmConfig::is_mailbox);
                 if is_mbx {
@@ -1688,6 +1714,57 @@ mod tests {
             1,
             "fresh outputs re-arm"
         );
+    }
+
+    #[test]
+    fn pd_watchdog_expiry_raises_al_event_6_until_the_pdi_reads_0x0440() {
+        let mut e = esc();
+        configure_process_data(&mut e);
+        let _ = e.read_u32(reg::AL_EVENT_REQUEST);
+        let (mut f, _) = frame(&[(Command::Lrw, 0, &[1, 2, 0, 0])]);
+        e.process_frame(&mut f);
+        e.update_watchdogs(0);
+        let ev = |e: &mut SoftEsc| e.read_u32(reg::AL_EVENT_REQUEST).unwrap();
+        assert_eq!(ev(&mut e) & reg::AL_EVENT_WATCHDOG_PD, 0);
+        e.update_watchdogs(100_000_000);
+        assert_ne!(ev(&mut e) & reg::AL_EVENT_WATCHDOG_PD, 0, "expired");
+        assert!(e.al_event_pending());
+        e.read_u16(reg::WATCHDOG_STATUS_PD).unwrap();
+        assert_eq!(ev(&mut e) & reg::AL_EVENT_WATCHDOG_PD, 0, "acknowledged");
+    }
+
+    #[test]
+    fn sm_reconfiguration_raises_al_event_4_until_the_pdi_reads_an_activation_register() {
+        let mut e = esc();
+        let ev = |e: &mut SoftEsc| e.read_u32(reg::AL_EVENT_REQUEST).unwrap();
+        assert_eq!(ev(&mut e), 0, "a fresh ESC has no event");
+        assert!(!e.al_event_pending());
+        configure_mailbox(&mut e);
+        assert_ne!(ev(&mut e) & reg::AL_EVENT_SM_CHANGED, 0);
+        // Reading SM0's start address does not acknowledge it...
+        e.read_u16(0x0800).unwrap();
+        assert_ne!(ev(&mut e) & reg::AL_EVENT_SM_CHANGED, 0);
+        // ...reading the whole SM block (activation at offset 6) does.
+        let mut sm = [0u8; 8];
+        e.read(0x0800, &mut sm).unwrap();
+        assert_eq!(ev(&mut e) & reg::AL_EVENT_SM_CHANGED, 0);
+        // Writing the same configuration again is no change.
+        configure_mailbox(&mut e);
+        assert_eq!(ev(&mut e) & reg::AL_EVENT_SM_CHANGED, 0);
+    }
+
+    #[test]
+    fn pdi_writing_an_input_buffer_acknowledges_its_read_event() {
+        let mut e = esc();
+        configure_process_data(&mut e);
+        let (mut f, _) = frame(&[(Command::Lrd, 2, &[0, 0])]);
+        e.process_frame(&mut f);
+        let sm3 = reg::al_event_sm(3);
+        assert_ne!(e.read_u32(reg::AL_EVENT_REQUEST).unwrap() & sm3, 0);
+        assert_ne!(e.mem_u8(0x081D) & smr::STATUS_READ_EVENT, 0);
+        e.write(0x1180, &[5, 6]).unwrap();
+        assert_eq!(e.read_u32(reg::AL_EVENT_REQUEST).unwrap() & sm3, 0);
+        assert_eq!(e.mem_u8(0x081D) & smr::STATUS_READ_EVENT, 0);
     }
 
     #[test]

@@ -184,7 +184,33 @@ pub struct Chain {
     addresses: Vec<(u16, usize)>,
     /// Each slave's address generation when `addresses` was built.
     addr_gens: Vec<u32>,
+    /// Slaves a datagram of the current frame reached (each once).
+    touched: Vec<usize>,
+    /// Whether a broadcast or logical datagram reached every slave.
+    touched_all: bool,
+    /// Per slave: the frame number it was last added to `touched` in.
+    touched_in: Vec<u64>,
+    /// The next slave of the round-robin sweep.
+    sweep_next: usize,
+    /// Time up to which the sweep has run.
+    swept_until: u64,
+    /// Firmware runs so far.
+    runs: u64,
 }
+
+/// Shortest time in which the sweep of [`Chain::service`] reaches every
+/// slave of a line: each firmware runs at least this often even when the
+/// master does not address it (watchdog supervision, the application's
+/// own timing).
+pub const SWEEP_MIN_NS: u64 = 1_000_000;
+
+/// Slaves run by one [`Chain::idle`] pass besides those that are due.
+pub const IDLE_BATCH: usize = 64;
+
+/// Sweep time added per slave of the line: a line of `n` slaves is swept
+/// every `max(SWEEP_MIN_NS, n × SWEEP_PER_SLAVE_NS)`, so the sweep costs
+/// a bounded share of a core at any length (1024 slaves: every 10.2 ms).
+pub const SWEEP_PER_SLAVE_NS: u64 = 10_000;
 
 impl core::fmt::Debug for Chain {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
@@ -240,7 +266,14 @@ impl Chain {
             pdi_failures: 0,
             addresses: Vec::new(),
             addr_gens: Vec::new(),
+            touched: Vec::new(),
+            touched_all: false,
+            touched_in: Vec::new(),
+            sweep_next: 0,
+            swept_until: 0,
+            runs: 0,
         };
+        chain.touched_in = vec![u64::MAX; chain.slaves.len()];
         chain.reindex();
         chain
     }
@@ -261,15 +294,140 @@ impl Chain {
     }
 
     /// Passes one Ethernet frame through the line (as the frame travels
-    /// down the line and back), then lets each slave's firmware run at
-    /// `now_ns`.
+    /// down the line and back), then runs the firmware that has something
+    /// to do at `now_ns` ([`Chain::service`]).
     pub fn process(&mut self, frame: &mut [u8], now_ns: u64) -> FrameOutcome {
         let outcome = self.process_frame(frame);
-        self.frames += 1;
         // A PDI failure is counted and handled by the slave (fail-safe);
         // the frame has already been answered by the ESCs.
-        let _ = self.poll(now_ns);
+        let _ = self.service(now_ns);
         outcome
+    }
+
+    /// Runs the firmware of the slaves that need it at `now_ns`, as an
+    /// event-driven firmware on silicon does: every slave the last frame
+    /// reached whose ESC raised an AL event (AL control written, a
+    /// SyncManager buffer written or read) runs now, and a round-robin
+    /// sweep runs every slave at least every `max(SWEEP_MIN_NS,
+    /// n × SWEEP_PER_SLAVE_NS)` for what has no event (SM watchdog
+    /// supervision, the application's own timing). The cost is
+    /// proportional to what the frames addressed, not to the line length
+    /// times the frame count. Returns the first PDI failure like
+    /// [`Chain::poll`].
+    pub fn service(&mut self, now_ns: u64) -> Result<(), (usize, EscError)> {
+        let mut first = None;
+        let mut moved = false;
+        if core::mem::take(&mut self.touched_all) {
+            for i in 0..self.slaves.len() {
+                if self.has_event(i) {
+                    moved |= self.poll_one(i, now_ns, &mut first);
+                }
+            }
+        } else {
+            let touched = core::mem::take(&mut self.touched);
+            for &i in &touched {
+                if self.has_event(i) {
+                    moved |= self.poll_one(i, now_ns, &mut first);
+                }
+            }
+            self.touched = touched;
+        }
+        self.touched.clear();
+        moved |= self.sweep(now_ns, &mut first);
+        if moved {
+            self.reindex();
+        }
+        first.map_or(Ok(()), Err)
+    }
+
+    /// [`Chain::service`] when the link is idle (no frame waiting): also
+    /// runs the next [`IDLE_BATCH`] slaves of the sweep whatever the time,
+    /// as a firmware's main loop keeps turning while nothing happens (with
+    /// a simulated clock that stands still, this is what lets a stalled or
+    /// repaired firmware be noticed). Lines of up to [`IDLE_BATCH`] slaves
+    /// run completely on every idle pass.
+    pub fn idle(&mut self, now_ns: u64) -> Result<(), (usize, EscError)> {
+        let serviced = self.service(now_ns);
+        let n = self.slaves.len();
+        let mut first = None;
+        let mut moved = false;
+        for _ in 0..IDLE_BATCH.min(n) {
+            let i = self.sweep_next % n;
+            self.sweep_next = (i + 1) % n;
+            moved |= self.poll_one(i, now_ns, &mut first);
+        }
+        if moved {
+            self.reindex();
+        }
+        serviced.and(first.map_or(Ok(()), Err))
+    }
+
+    /// The sweep period of this line.
+    pub fn sweep_period_ns(&self) -> u64 {
+        (self.slaves.len() as u64)
+            .saturating_mul(SWEEP_PER_SLAVE_NS)
+            .max(SWEEP_MIN_NS)
+    }
+
+    /// Runs the firmware of the slaves whose turn in the sweep has come
+    /// by `now_ns`; returns whether the firmware of one of them changed
+    /// its station alias.
+    fn sweep(&mut self, now_ns: u64, first: &mut Option<(usize, EscError)>) -> bool {
+        let n = self.slaves.len();
+        if n == 0 {
+            return false;
+        }
+        let period = self.sweep_period_ns();
+        let elapsed = now_ns.saturating_sub(self.swept_until);
+        let due = u128::from(elapsed) * n as u128 / u128::from(period);
+        let due = usize::try_from(due).unwrap_or(usize::MAX);
+        if due == 0 {
+            return false;
+        }
+        if due >= n {
+            self.swept_until = now_ns;
+        } else {
+            let step = u128::from(period) * due as u128 / n as u128;
+            self.swept_until += u64::try_from(step).unwrap_or(elapsed);
+        }
+        let mut moved = false;
+        for _ in 0..due.min(n) {
+            let i = self.sweep_next % n;
+            self.sweep_next = (i + 1) % n;
+            moved |= self.poll_one(i, now_ns, first);
+        }
+        moved
+    }
+
+    /// Whether slave `i`'s ESC holds an AL event for the firmware.
+    fn has_event(&self, i: usize) -> bool {
+        self.slaves
+            .get(i)
+            .is_some_and(|s| s.esc().al_event_pending())
+    }
+
+    /// Runs slave `i`'s firmware; records a PDI failure in `first` and
+    /// returns whether the firmware changed the slave's station alias.
+    fn poll_one(&mut self, i: usize, now_ns: u64, first: &mut Option<(usize, EscError)>) -> bool {
+        let (Some(s), Some(img)) = (self.slaves.get_mut(i), self.images.get_mut(i)) else {
+            return false;
+        };
+        self.runs += 1;
+        if let Err(e) = s.poll_with(now_ns, Some(img.as_mut())) {
+            self.pdi_failures += 1;
+            first.get_or_insert((i, e));
+        }
+        self.moved(i)
+    }
+
+    /// Records that a datagram of the current frame reached slave `i`.
+    fn touch(&mut self, i: usize) {
+        if let Some(t) = self.touched_in.get_mut(i)
+            && *t != self.frames
+        {
+            *t = self.frames;
+            self.touched.push(i);
+        }
     }
 
     /// The reference path: the frame through every ESC in turn.
@@ -301,6 +459,8 @@ impl Chain {
         if ecat.frame_type() != FrameType::Pdu {
             return FrameOutcome::Malformed;
         }
+        self.frames += 1;
+        self.touched.clear();
         let payload = ecat.payload_mut();
         let mut cursor = DatagramCursor::new();
         let mut count = 0;
@@ -350,6 +510,7 @@ impl Chain {
                     if let Some(s) = self.slaves.get_mut(i) {
                         s.esc_mut().process_datagram(dg);
                     }
+                    self.touch(i);
                     moved |= cmd.is_write() && self.moved(i);
                     k += 1;
                 }
@@ -364,6 +525,7 @@ impl Chain {
                 if let Some(s) = self.slaves.get_mut(pos) {
                     dg.set_adp(0);
                     s.esc_mut().process_datagram(dg);
+                    self.touch(pos);
                 }
                 dg.set_adp(adp0.wrapping_add(n as u16));
                 if cmd.is_write() && self.moved(pos) {
@@ -376,6 +538,7 @@ impl Chain {
                 for s in &mut self.slaves {
                     s.esc_mut().process_datagram(dg);
                 }
+                self.touched_all = true;
                 if cmd.is_write() {
                     self.refresh_index();
                 }
@@ -383,25 +546,27 @@ impl Chain {
         }
     }
 
-    /// Runs every slave's firmware once. Every slave runs even when one
+    /// Runs every slave's firmware once (what [`Chain::service`] does for
+    /// the slaves that need it). Every slave runs even when one
     /// fails; the first PDI failure (slave position, error) is returned
     /// and every failure is counted ([`Chain::pdi_failures`]).
     pub fn poll(&mut self, now_ns: u64) -> Result<(), (usize, EscError)> {
         let mut first = None;
-        for (i, (s, img)) in self
-            .slaves
-            .iter_mut()
-            .zip(self.images.iter_mut())
-            .enumerate()
-        {
-            if let Err(e) = s.poll_with(now_ns, Some(img.as_mut())) {
-                self.pdi_failures += 1;
-                first.get_or_insert((i, e));
-            }
+        let mut moved = false;
+        for i in 0..self.slaves.len() {
+            moved |= self.poll_one(i, now_ns, &mut first);
         }
         // The firmware may have changed an alias through its PDI.
-        self.refresh_index();
+        if moved {
+            self.reindex();
+        }
         first.map_or(Ok(()), Err)
+    }
+
+    /// How many times a slave's firmware ran since the chain was built
+    /// ([`Chain::poll`] counts one per slave).
+    pub fn firmware_runs(&self) -> u64 {
+        self.runs
     }
 
     /// A frame with a bad checksum reached the line (bit flip, runt): the
@@ -634,6 +799,74 @@ mod tests {
         line.process_frame(f);
         let wkc = u16::from_le_bytes([f[read.end], f[read.end + 1]]);
         assert_eq!(wkc, 1, "FPRD by the reloaded alias answered on the line");
+    }
+
+    fn one_datagram(cmd: Command, address: u32, data: &[u8]) -> Vec<u8> {
+        let mut buf = vec![0u8; 200];
+        let mut fb = FrameBuilder::new(&mut buf, [0x10; 6]).unwrap();
+        fb.push(cmd, address, data).unwrap();
+        let len = fb.finish();
+        buf.truncate(len);
+        buf
+    }
+
+    fn al_status(line: &Chain, i: usize) -> u16 {
+        let m = line.slaves()[i].esc().raw_memory();
+        u16::from_le_bytes([m[0x0130], m[0x0131]])
+    }
+
+    #[test]
+    fn a_frame_runs_only_the_firmware_whose_esc_raised_an_event() {
+        let mut line = crate::testing::line(8);
+        line.service(0).unwrap();
+        assert_eq!(line.firmware_runs(), 0, "nothing due at time 0");
+        // A read of slave 2's AL status: no event, no firmware run.
+        let at = |pos: u16, ado: u16| u32::from(0u16.wrapping_sub(pos)) | (u32::from(ado) << 16);
+        let mut f = one_datagram(Command::Aprd, at(2, 0x0130), &[0, 0]);
+        line.process(&mut f, 0);
+        assert_eq!(line.firmware_runs(), 0);
+        // PRE-OP requested on slave 3 without mailbox SMs (AL control
+        // event): only it runs, and refuses with the error flag.
+        let mut f = one_datagram(Command::Apwr, at(3, 0x0120), &[0x02, 0]);
+        line.process(&mut f, 0);
+        assert_eq!(line.firmware_runs(), 1);
+        assert_eq!(al_status(&line, 3), 0x0011, "INIT + error");
+        assert!(
+            (0..8)
+                .filter(|&i| i != 3)
+                .all(|i| al_status(&line, i) == 0x0001)
+        );
+        // A broadcast INIT + acknowledge: every slave runs once.
+        let mut f = one_datagram(Command::Bwr, 0x0120 << 16, &[0x11, 0]);
+        line.process(&mut f, 0);
+        assert_eq!(line.firmware_runs(), 9);
+        assert!((0..8).all(|i| al_status(&line, i) == 0x0001));
+    }
+
+    #[test]
+    fn the_sweep_runs_every_firmware_once_per_period_spread_over_it() {
+        let n = 200;
+        let mut line = crate::testing::line(n);
+        assert_eq!(line.sweep_period_ns(), 2_000_000, "200 x 10 us");
+        line.service(0).unwrap();
+        line.service(1_000_000).unwrap();
+        assert_eq!(
+            line.firmware_runs(),
+            100,
+            "half the line after half the period"
+        );
+        line.service(1_500_000).unwrap();
+        assert_eq!(line.firmware_runs(), 150);
+        line.service(2_000_000).unwrap();
+        assert_eq!(line.firmware_runs(), 200, "each slave once");
+        // A long pause runs each slave once, not once per missed period.
+        line.service(60_000_000).unwrap();
+        assert_eq!(line.firmware_runs(), 400);
+        // An idle pass runs the next 64 whatever the time.
+        line.idle(60_000_000).unwrap();
+        assert_eq!(line.firmware_runs(), 464);
+        // Short lines keep the 1 ms minimum.
+        assert_eq!(crate::testing::line(3).sweep_period_ns(), SWEEP_MIN_NS);
     }
 
     proptest! {

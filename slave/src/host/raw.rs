@@ -80,7 +80,7 @@ pub struct RunStats {
 }
 
 /// Most slaves one runner serves.
-pub const MAX_LINE: usize = 512;
+pub const MAX_LINE: usize = 4096;
 
 /// How long a reordered reply is held (it then follows later replies).
 const REORDER_HOLD: Duration = Duration::from_millis(2);
@@ -177,7 +177,7 @@ pub fn run(
                     if fate == Fate::Corrupt {
                         chain.corrupted_frame();
                     }
-                    let _ = chain.poll(now);
+                    let _ = chain.service(now);
                     persist_parameters(&chain, &mut states)?;
                     continue;
                 }
@@ -204,7 +204,7 @@ pub fn run(
                     }
                 }
                 stats.answered += 1;
-                let _ = chain.poll(now);
+                let _ = chain.service(now);
                 // Before the next frame: whatever the firmware step just
                 // acknowledged (SAVE) is on stable storage before the
                 // master can read the acknowledgement.
@@ -219,7 +219,7 @@ pub fn run(
                 // The soft ESC's PDI cannot fail unless a fault is
                 // injected; the slave handles it (fail-safe) and
                 // `Chain::pdi_failures` counts it.
-                let _ = chain.poll(now);
+                let _ = chain.idle(now);
                 persist_parameters(&chain, &mut states)?;
             }
             Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
@@ -430,6 +430,6 @@ mod tests {
         let err = run(&cfg, one, &AtomicBool::new(false)).unwrap_err();
         assert!(err.to_string().contains("no-such-if0"), "{err}");
         let err = run(&cfg, Vec::new(), &AtomicBool::new(false)).unwrap_err();
-        assert!(err.to_string().contains("1 to 512"), "{err}");
+        assert!(err.to_string().contains("1 to 4096"), "{err}");
     }
 }

@@ -31,11 +31,11 @@ struct Cli {
     /// Device of every slave (see --list); default the PAM-199-P-ETC.
     #[arg(long, default_value = "pam", conflicts_with = "line")]
     device: String,
-    /// Number of slaves on the line (1..=512).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=512), conflicts_with = "line")]
+    /// Number of slaves on the line (1..=4096).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=4096), conflicts_with = "line")]
     count: u16,
     /// A mixed line, first to last: e.g. pam,io8,pam or pam*3,io8 (at
-    /// most 512 slaves).
+    /// most 4096 slaves).
     #[arg(long)]
     line: Option<String>,
     /// Write every frame, both directions, to this pcap file.
