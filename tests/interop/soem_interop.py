@@ -10,12 +10,17 @@ exits 1 on the first disagreement.
 
     soem_interop.py phase1 IFACE ESI.xml EEPROM.bin GOOD.efw BAD_CRC.efw VERSION
     soem_interop.py phase2 IFACE VERSION
+    soem_interop.py chain IFACE NAME,NAME,...
 
 phase1: discovery, SDO, SDO Information, complete access, SII, state
 machine, SM watchdog, 1000 cycles, an ended session followed by a second
 one, FoE refusals and a good FoE download in BOOT, then BOOT -> INIT.
 phase2 (after the runner restarted, i.e. a power cycle): the new firmware
 version in 0x100A on the updated slave, and OP again.
+chain: a line spread over several runners (`pam-slave --forward`): SOEM
+finds the slaves named, in that order, with SOEM's station addresses,
+reads an SDO from each, brings them all to OP and runs 200 cycles with
+its expected working counter.
 """
 
 import struct
@@ -314,6 +319,26 @@ def phase2(iface, version):
     m.close()
 
 
+def chain(iface, names):
+    want = names.split(",")
+    m, n = open_master(iface)
+    got = [s.name for s in m.slaves]
+    log(f"      SOEM finds {n} slaves: {got}")
+    check(got == want, f"the line in order: {want}")
+    addrs = [struct.unpack("<H", s._fprd(0x0010, 2, 20000))[0] for s in m.slaves]
+    check(addrs == [0x1001 + i for i in range(n)], f"station addresses {[hex(a) for a in addrs]}")
+    set_sm_watchdog(m, LONG_WATCHDOG_MS)
+    products = [s.sdo_read(0x1018, 2) for s in m.slaves]
+    check(all(len(p) == 4 for p in products), "0x1018:02 read over SDO from every runner's slaves")
+    size = m.config_map()
+    log(f"      config_map: I/O map {size} bytes, expected WKC {m.expected_wkc}")
+    check(to_op(m), "every slave of every runner in OP")
+    wkcs = cycles(m, 200, 0.0005)
+    bad = [w for w in wkcs if w != m.expected_wkc]
+    check(not bad, f"200 cycles with WKC {m.expected_wkc} ({len(bad)} others: {bad[:5]})")
+    m.close()
+
+
 def main():
     if len(sys.argv) < 3:
         print(__doc__)
@@ -323,6 +348,8 @@ def main():
         phase1(*sys.argv[2:8])
     elif sys.argv[1] == "phase2":
         phase2(*sys.argv[2:4])
+    elif sys.argv[1] == "chain":
+        chain(*sys.argv[2:4])
     else:
         print(__doc__)
         return 2

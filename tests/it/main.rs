@@ -13,6 +13,7 @@ mod consistency;
 mod failsafe;
 mod faults;
 mod foe;
+mod forward;
 mod generic_core;
 mod long_line;
 mod mixed_line;

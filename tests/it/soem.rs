@@ -17,7 +17,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
 /// A Python interpreter that can import pysoem.
-fn pysoem_python() -> Option<String> {
+pub(crate) fn pysoem_python() -> Option<String> {
     let mut candidates = Vec::new();
     if let Ok(p) = std::env::var("PAM_PYSOEM_PYTHON") {
         candidates.push(p);
@@ -63,7 +63,7 @@ fn stop_runner(mut child: Child) {
     let _ = child.wait();
 }
 
-fn run_python(py: &str, args: &[&str]) -> (bool, String) {
+pub(crate) fn run_python(py: &str, args: &[&str]) -> (bool, String) {
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/interop/soem_interop.py");
     let out = Command::new(py)
         .arg(script)

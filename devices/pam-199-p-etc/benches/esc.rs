@@ -119,7 +119,7 @@ fn cycle_frames(n: usize) -> (Vec<Vec<u8>>, u32) {
     let mut wkc = 0u32;
     let mut off = 0;
     while off < image {
-        let room = MAX_PAYLOAD - used - DATAGRAM_OVERHEAD;
+        let room = MAX_PAYLOAD.saturating_sub(used + DATAGRAM_OVERHEAD);
         if room < 64 {
             frames.push(build(&current));
             current.clear();

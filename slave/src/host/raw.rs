@@ -30,6 +30,10 @@ pub struct RunnerConfig {
     pub state_dir: Option<PathBuf>,
     /// A faulty wire in front of the line ([`super::faults`]).
     pub faults: Option<FaultConfig>,
+    /// Port 1 of the last slave: frames leave through this interface to
+    /// the next runner after this line processed them, and what comes
+    /// back goes out of `iface` to the master ([`run`]).
+    pub forward: Option<String>,
 }
 
 /// Why the runner could not run.
@@ -95,17 +99,17 @@ pub fn run(
     if slaves.is_empty() || slaves.len() > MAX_LINE {
         return Err(RunnerError::Count(slaves.len()));
     }
-    let all = pnet_datalink::interfaces();
-    let Some(iface) = all.iter().find(|i| i.name == config.iface).cloned() else {
-        return Err(RunnerError::NoSuchInterface {
-            name: config.iface.clone(),
-            available: all
-                .iter()
-                .map(|i| i.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", "),
+    let iface = find_interface(&config.iface)?;
+    let out_iface = config.forward.as_deref().map(find_interface).transpose()?;
+    if out_iface.as_ref().is_some_and(|o| o.name == iface.name) {
+        return Err(RunnerError::Io {
+            context: format!("forwarding from {} to itself", iface.name),
+            source: io::Error::new(
+                io::ErrorKind::InvalidInput,
+                "--forward needs a second interface",
+            ),
         });
-    };
+    }
     if let Some(dir) = &config.state_dir {
         std::fs::create_dir_all(dir).map_err(|source| RunnerError::Io {
             context: format!("creating state directory {}", dir.display()),
@@ -119,11 +123,23 @@ pub fn run(
         })?),
         None => None,
     };
-    let (mut tx, mut rx) = open(&iface)?;
+    let (tx, mut rx) = open(&iface)?;
     let (mut chain, mut states) = match &config.state_dir {
         Some(dir) => persistent_chain(dir, slaves)?,
         None => (Chain::with_slaves(slaves), Vec::new()),
     };
+    let out = out_iface.as_ref().map(open).transpose()?;
+    // The master-side sender, shared with the thread that relays frames
+    // coming back from the next runner.
+    let tx = std::sync::Mutex::new(tx);
+    let (mut out_tx, out_rx) = match out {
+        Some((t, r)) => (Some(t), Some(r)),
+        None => (None, None),
+    };
+    let mut port1 = PortWatch::new(out_iface.as_ref().map(|i| i.name.clone()));
+    if let Some(up) = port1.poll() {
+        set_last_port1(&mut chain, up);
+    }
     let start = Instant::now();
     let mut stats = RunStats::default();
     let mut buf = Vec::with_capacity(1600);
@@ -131,7 +147,8 @@ pub fn run(
     // Replies held back by the faulty wire: (release time, frame).
     let mut held: Vec<(Instant, Vec<u8>)> = Vec::new();
     let mut was_down = false;
-    let send = |tx: &mut Tx, frame: &[u8]| -> Result<(), RunnerError> {
+    let send = |tx: &std::sync::Mutex<Tx>, frame: &[u8]| -> Result<(), RunnerError> {
+        let mut tx = tx.lock().unwrap_or_else(|e| e.into_inner());
         match tx.send_to(frame, None) {
             Some(Err(source)) => Err(RunnerError::Io {
                 context: format!("sending on {}", iface.name),
@@ -140,101 +157,294 @@ pub fn run(
             _ => Ok(()),
         }
     };
-    while !stop.load(Ordering::Acquire) {
-        let now = u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX);
-        let t = Instant::now();
-        let mut due = Vec::new();
-        held.retain(|(at, f)| {
-            let ready = *at <= t;
-            if ready {
-                due.push(f.clone());
+    // A processed frame goes on down the line when port 1 has a link
+    // (without the "processed" mark, so the next runner takes it as a
+    // request; it marks it again), else it turns around to the master.
+    let out_name = out_iface.as_ref().map(|i| i.name.clone()).unwrap_or_default();
+    let reply =
+        |out_tx: &mut Option<Tx>, up: bool, frame: &mut [u8]| -> Result<(), RunnerError> {
+            match out_tx.as_mut().filter(|_| up) {
+                Some(o) => {
+                    if let Some(b) = frame.get_mut(6) {
+                        *b &= !0x02;
+                    }
+                    let r = o.send_to(frame, None);
+                    if let Some(b) = frame.get_mut(6) {
+                        *b |= 0x02;
+                    }
+                    match r {
+                        Some(Err(source)) => Err(RunnerError::Io {
+                            context: format!("forwarding on {out_name}"),
+                            source,
+                        }),
+                        _ => Ok(()),
+                    }
+                }
+                None => send(&tx, frame),
             }
-            !ready
+        };
+    let done = AtomicBool::new(false);
+    let mut reopened: Option<Instant> = None;
+    std::thread::scope(|scope| {
+        let relay = out_rx.zip(out_iface.as_ref()).map(|(r, out)| {
+            let (tx, done) = (&tx, &done);
+            scope.spawn(move || relay_back(r, out, tx, stop, done))
         });
-        for f in due {
-            send(&mut tx, &f)?;
+        let result = (|| -> Result<RunStats, RunnerError> {
+            while !stop.load(Ordering::Acquire) {
+                let now = u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX);
+                let t = Instant::now();
+                if let Some(up) = port1.poll() {
+                    set_last_port1(&mut chain, up);
+                }
+                let mut due = Vec::new();
+                held.retain(|(at, f)| {
+                    let ready = *at <= t;
+                    if ready {
+                        due.push(f.clone());
+                    }
+                    !ready
+                });
+                for mut f in due {
+                    reply(&mut out_tx, port1.up, &mut f)?;
+                }
+                match rx.next() {
+                    Ok(frame) => {
+                        if !is_request(frame) {
+                            stats.ignored += 1;
+                            continue;
+                        }
+                        buf.clear();
+                        buf.extend_from_slice(frame);
+                        if let Some(p) = pcap.as_mut() {
+                            let _ = p.write_frame(&buf);
+                        }
+                        let fate = faults
+                            .as_mut()
+                            .map_or(Fate::Deliver, |f| f.fate(start.elapsed()));
+                        let down = fate == Fate::LinkDown;
+                        if down && !was_down {
+                            chain.link_lost();
+                        }
+                        was_down = down;
+                        if matches!(fate, Fate::DropBefore | Fate::LinkDown | Fate::Corrupt) {
+                            if fate == Fate::Corrupt {
+                                chain.corrupted_frame();
+                            }
+                            let _ = chain.service(now);
+                            persist_parameters(&chain, &mut states)?;
+                            continue;
+                        }
+                        let request = (fate == Fate::Duplicate).then(|| buf.clone());
+                        // As on silicon, the ESCs answer the frame at once;
+                        // the firmware runs afterwards. A slow firmware step
+                        // (a flash write with fsync in FoE) delays the
+                        // mailbox answer, never the frame: masters with
+                        // short frame timeouts (SOEM: 2 ms) keep working.
+                        chain.process_frame(&mut buf);
+                        if let Some(p) = pcap.as_mut() {
+                            let _ = p.write_frame(&buf);
+                        }
+                        match fate {
+                            Fate::DropAfter => {}
+                            Fate::Delay(d) => held.push((Instant::now() + d, buf.clone())),
+                            Fate::Reorder => {
+                                held.push((Instant::now() + REORDER_HOLD, buf.clone()))
+                            }
+                            _ => {
+                                reply(&mut out_tx, port1.up, &mut buf)?;
+                                if let Some(mut again) = request {
+                                    chain.process_frame(&mut again);
+                                    reply(&mut out_tx, port1.up, &mut again)?;
+                                }
+                            }
+                        }
+                        stats.answered += 1;
+                        let _ = chain.service(now);
+                        // Before the next frame: whatever the firmware step
+                        // just acknowledged (SAVE) is on stable storage
+                        // before the master can read the acknowledgement.
+                        persist_parameters(&chain, &mut states)?;
+                    }
+                    Err(e)
+                        if matches!(
+                            e.kind(),
+                            io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock
+                        ) =>
+                    {
+                        // The soft ESC's PDI cannot fail unless a fault is
+                        // injected; the slave handles it (fail-safe) and
+                        // `Chain::pdi_failures` counts it.
+                        let _ = chain.idle(now);
+                        persist_parameters(&chain, &mut states)?;
+                    }
+                    Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                    Err(_) if link_is_down(&iface.name) => {
+                        // A pulled cable on port 0: the slaves keep running
+                        // on their own until it is back.
+                        if !was_down {
+                            chain.link_lost();
+                        }
+                        was_down = true;
+                        let _ = chain.idle(now);
+                        persist_parameters(&chain, &mut states)?;
+                        std::thread::sleep(Duration::from_millis(5));
+                    }
+                    // The link is back but the socket keeps the error of
+                    // its going down: a fresh socket (once; an error right
+                    // after that is real).
+                    Err(_) if reopened.is_none_or(|t| t.elapsed() > Duration::from_millis(50)) => {
+                        let (t, r) = open(&iface)?;
+                        *tx.lock().unwrap_or_else(|e| e.into_inner()) = t;
+                        rx = r;
+                        reopened = Some(Instant::now());
+                        was_down = false;
+                    }
+                    Err(source) => {
+                        return Err(RunnerError::Io {
+                            context: format!("receiving on {}", iface.name),
+                            source,
+                        });
+                    }
+                }
+            }
+            Ok(stats)
+        })();
+        done.store(true, Ordering::Release);
+        let relayed = relay.map(|h| h.join());
+        if let Some(p) = pcap.as_mut() {
+            let _ = p.flush();
         }
+        match (result, relayed) {
+            (Err(e), _) => Err(e),
+            (Ok(_), Some(Ok(Err(e)))) => Err(e),
+            (Ok(_), Some(Err(_))) => Err(RunnerError::Io {
+                context: format!("relaying frames back from {out_name}"),
+                source: io::Error::other("the relay thread panicked"),
+            }),
+            (Ok(stats), _) => Ok(stats),
+        }
+    })
+}
+
+/// Frames coming back from the next runner on port 1 (processed there,
+/// marked) go out of port 0 to the master unchanged, as the return path
+/// of an ESC passes them through. Runs until `stop` or `done`.
+fn relay_back(
+    mut rx: Rx,
+    out: &NetworkInterface,
+    tx: &std::sync::Mutex<Tx>,
+    stop: &AtomicBool,
+    done: &AtomicBool,
+) -> Result<(), RunnerError> {
+    let out_name = out.name.as_str();
+    let mut reopened: Option<Instant> = None;
+    while !stop.load(Ordering::Acquire) && !done.load(Ordering::Acquire) {
         match rx.next() {
             Ok(frame) => {
-                if !is_request(frame) {
-                    stats.ignored += 1;
-                    continue;
-                }
-                buf.clear();
-                buf.extend_from_slice(frame);
-                if let Some(p) = pcap.as_mut() {
-                    let _ = p.write_frame(&buf);
-                }
-                let fate = faults
-                    .as_mut()
-                    .map_or(Fate::Deliver, |f| f.fate(start.elapsed()));
-                let down = fate == Fate::LinkDown;
-                if down && !was_down {
-                    chain.link_lost();
-                }
-                was_down = down;
-                if matches!(fate, Fate::DropBefore | Fate::LinkDown | Fate::Corrupt) {
-                    if fate == Fate::Corrupt {
-                        chain.corrupted_frame();
-                    }
-                    let _ = chain.service(now);
-                    persist_parameters(&chain, &mut states)?;
-                    continue;
-                }
-                let request = (fate == Fate::Duplicate).then(|| buf.clone());
-                // As on silicon, the ESCs answer the frame at once; the
-                // firmware runs afterwards. A slow firmware step (a flash
-                // write with fsync in FoE) delays the mailbox answer, never
-                // the frame: masters with short frame timeouts (SOEM: 2 ms)
-                // keep working.
-                chain.process_frame(&mut buf);
-                if let Some(p) = pcap.as_mut() {
-                    let _ = p.write_frame(&buf);
-                }
-                match fate {
-                    Fate::DropAfter => {}
-                    Fate::Delay(d) => held.push((Instant::now() + d, buf.clone())),
-                    Fate::Reorder => held.push((Instant::now() + REORDER_HOLD, buf.clone())),
-                    _ => {
-                        send(&mut tx, &buf)?;
-                        if let Some(mut again) = request {
-                            chain.process_frame(&mut again);
-                            send(&mut tx, &again)?;
-                        }
+                let processed = frame.len() >= 16
+                    && frame.get(12..14) == Some(&[0x88, 0xA4][..])
+                    && frame.get(6).is_some_and(|b| b & 0x02 != 0);
+                if processed {
+                    let mut tx = tx.lock().unwrap_or_else(|e| e.into_inner());
+                    if let Some(Err(source)) = tx.send_to(frame, None) {
+                        return Err(RunnerError::Io {
+                            context: "relaying a returning frame to the master".into(),
+                            source,
+                        });
                     }
                 }
-                stats.answered += 1;
-                let _ = chain.service(now);
-                // Before the next frame: whatever the firmware step just
-                // acknowledged (SAVE) is on stable storage before the
-                // master can read the acknowledgement.
-                persist_parameters(&chain, &mut states)?;
             }
             Err(e)
                 if matches!(
                     e.kind(),
-                    io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock
-                ) =>
-            {
-                // The soft ESC's PDI cannot fail unless a fault is
-                // injected; the slave handles it (fail-safe) and
-                // `Chain::pdi_failures` counts it.
-                let _ = chain.idle(now);
-                persist_parameters(&chain, &mut states)?;
+                    io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock | io::ErrorKind::Interrupted
+                ) => {}
+            // The next runner's cable pulled: wait for it.
+            Err(_) if link_is_down(out_name) => std::thread::sleep(Duration::from_millis(5)),
+            // Back: a fresh socket (see `run`).
+            Err(_) if reopened.is_none_or(|t| t.elapsed() > Duration::from_millis(50)) => {
+                rx = open(out)?.1;
+                reopened = Some(Instant::now());
             }
-            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
             Err(source) => {
                 return Err(RunnerError::Io {
-                    context: format!("receiving on {}", iface.name),
+                    context: format!("receiving frames back on {out_name}"),
                     source,
                 });
             }
         }
     }
-    if let Some(p) = pcap.as_mut() {
-        let _ = p.flush();
+    Ok(())
+}
+
+/// Whether port 1 (the forwarding interface) has a link, checked every
+/// 100 ms (carrier: the interface is up and its peer too).
+struct PortWatch {
+    name: Option<String>,
+    up: bool,
+    checked: Option<Instant>,
+}
+
+impl PortWatch {
+    fn new(name: Option<String>) -> Self {
+        PortWatch {
+            name,
+            up: false,
+            checked: None,
+        }
     }
-    Ok(stats)
+
+    /// Checks the link when due; returns the new state when it changed
+    /// (or on the first check).
+    fn poll(&mut self) -> Option<bool> {
+        let name = self.name.as_ref()?;
+        if self
+            .checked
+            .is_some_and(|t| t.elapsed() < Duration::from_millis(100))
+        {
+            return None;
+        }
+        let first = self.checked.is_none();
+        self.checked = Some(Instant::now());
+        let up = pnet_datalink::interfaces()
+            .iter()
+            .find(|i| &i.name == name)
+            .is_some_and(|i| i.is_up() && i.is_running());
+        let changed = up != self.up || first;
+        self.up = up;
+        changed.then_some(up)
+    }
+}
+
+/// Whether interface `name` is down or has no carrier (or is gone).
+fn link_is_down(name: &str) -> bool {
+    !pnet_datalink::interfaces()
+        .iter()
+        .any(|i| i.name == name && i.is_up() && i.is_running())
+}
+
+/// Port 1 of the line's last slave has a link when frames go on to a next
+/// runner (DL status shows it; the loop is closed there otherwise).
+fn set_last_port1(chain: &mut Chain, up: bool) {
+    if let Some(last) = chain.slaves_mut().last_mut() {
+        last.set_port1_link(up);
+    }
+}
+
+fn find_interface(name: &str) -> Result<NetworkInterface, RunnerError> {
+    let all = pnet_datalink::interfaces();
+    all.iter()
+        .find(|i| i.name == name)
+        .cloned()
+        .ok_or_else(|| RunnerError::NoSuchInterface {
+            name: name.to_string(),
+            available: all
+                .iter()
+                .map(|i| i.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+        })
 }
 
 fn io_err(context: String) -> impl FnOnce(io::Error) -> RunnerError {
@@ -425,6 +635,7 @@ mod tests {
             pcap: None,
             state_dir: None,
             faults: None,
+            forward: None,
         };
         let one: Vec<Box<dyn LineSlave>> = vec![Box::new(crate::testing::slave())];
         let err = run(&cfg, one, &AtomicBool::new(false)).unwrap_err();

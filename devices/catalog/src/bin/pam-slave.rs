@@ -5,6 +5,7 @@
 //! pam-slave --iface veth-slave --count 2 --pcap capture.pcap
 //! pam-slave --iface veth-slave --device io8 --count 4
 //! pam-slave --iface veth-slave --line pam,io8,pam
+//! pam-slave --iface veth-a0 --line pam,io8 --forward veth-a1
 //! ```
 
 use clap::Parser;
@@ -49,6 +50,13 @@ struct Cli {
     /// (rates per frame; `down` pulls the cable at START for LENGTH).
     #[arg(long, value_name = "SPEC", value_parser = parse_faults)]
     faults: Option<ecat_slave::host::faults::FaultConfig>,
+    /// Port 1 of the last slave: pass every frame, after these slaves
+    /// processed it, out of this interface to the next runner (or real
+    /// device) and return what comes back to --iface; with no link on it
+    /// the frame turns around here. Chains runners across processes and
+    /// hosts into one line.
+    #[arg(long, value_name = "IFACE")]
+    forward: Option<String>,
 }
 
 fn main() -> ExitCode {
@@ -74,13 +82,19 @@ fn main() -> ExitCode {
         pcap: cli.pcap,
         state_dir: cli.state_dir,
         faults: cli.faults,
+        forward: cli.forward,
     };
     let names: Vec<&str> = entries
         .iter()
         .map(|d| d.description.names.type_name)
         .collect();
+    let onward = cfg
+        .forward
+        .as_ref()
+        .map(|f| format!(", then on through {f}"))
+        .unwrap_or_default();
     eprintln!(
-        "pam-slave: {} slave(s) on {}: {} (Ctrl-C stops)",
+        "pam-slave: {} slave(s) on {}: {}{onward} (Ctrl-C stops)",
         entries.len(),
         cfg.iface,
         summarize(&names)
