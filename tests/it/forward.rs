@@ -95,7 +95,14 @@ fn three_runners_chained_by_forward_are_one_line_for_ethercrab_and_soem() {
     start(
         &mut guards[0],
         &bin,
-        &["--iface", &ifs[0], "--line", "pam,io8", "--forward", &ifs[1]],
+        &[
+            "--iface",
+            &ifs[0],
+            "--line",
+            "pam,io8",
+            "--forward",
+            &ifs[1],
+        ],
     );
     std::thread::sleep(Duration::from_millis(500));
 
@@ -138,7 +145,9 @@ fn three_runners_chained_by_forward_are_one_line_for_ethercrab_and_soem() {
             for sd in [0, 3].map(|i| group.subdevice(md, i).expect("PAM")) {
                 let mut out = sd.outputs_raw_mut();
                 out[0] = 1;
-                out[1..5].copy_from_slice(&(1000 * i32::from(sd.configured_address() - 0x0FFF)).to_le_bytes());
+                out[1..5].copy_from_slice(
+                    &(1000 * i32::from(sd.configured_address() - 0x0FFF)).to_le_bytes(),
+                );
             }
             for _ in 0..20 {
                 let r = group.tx_rx(md).await.expect("cycle");
@@ -217,6 +226,10 @@ fn three_runners_chained_by_forward_are_one_line_for_ethercrab_and_soem() {
     });
     for g in &mut guards {
         let runner = g.runner.as_mut().expect("runner");
-        assert!(runner.try_wait().expect("status").is_none(), "{} still runs", g.name);
+        assert!(
+            runner.try_wait().expect("status").is_none(),
+            "{} still runs",
+            g.name
+        );
     }
 }

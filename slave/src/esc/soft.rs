@@ -113,6 +113,8 @@ pub struct SoftEsc {
     fmmus: [FmmuConfig; FMMU_COUNT],
     /// Bit n set: FMMU n enabled (fast skip in logical addressing).
     fmmu_active: u8,
+    /// Bumped whenever the FMMU configuration may have changed.
+    fmmu_gen: u32,
     /// Bit n set: SM n enabled with a non-zero length.
     sm_active: u8,
     /// Bit n set: an ECAT write completed the buffer of output SM n since the
@@ -200,6 +202,7 @@ impl SoftEsc {
             sms: [SmConfig::default(); SM_COUNT],
             fmmus: [FmmuConfig::default(); FMMU_COUNT],
             fmmu_active: 0,
+            fmmu_gen: 0,
             sm_active: 0,
             sm_written: 0,
             station: 0,
@@ -232,6 +235,7 @@ impl SoftEsc {
         self.sms = [SmConfig::default(); SM_COUNT];
         self.fmmus = [FmmuConfig::default(); FMMU_COUNT];
         self.fmmu_active = 0;
+        self.fmmu_gen = self.fmmu_gen.wrapping_add(1);
         self.sm_active = 0;
         self.sm_written = 0;
         self.wd_sm_trigger = false;
@@ -381,6 +385,23 @@ impl SoftEsc {
             let c = self.mem_u8(reg::WATCHDOG_COUNTER_PDI).saturating_add(1);
             self.set_u8(reg::WATCHDOG_COUNTER_PDI, c);
         }
+    }
+
+    /// Changes whenever the FMMU configuration may have changed (a write
+    /// to the FMMU registers, a power-on), so a line can cache which slave
+    /// a logical address reaches ([`SoftEsc::logical_windows`]).
+    pub fn fmmu_generation(&self) -> u32 {
+        self.fmmu_gen
+    }
+
+    /// The logical byte windows `[start, end)` of the enabled FMMUs: a
+    /// logical datagram outside all of them leaves this ESC untouched.
+    pub fn logical_windows(&self) -> impl Iterator<Item = (u64, u64)> + '_ {
+        self.fmmus
+            .iter()
+            .enumerate()
+            .filter(|(n, _)| self.fmmu_active & (1 << n) != 0)
+            .map(|(_, f)| (u64::from(f.logical), f.logical_end()))
     }
 
     /// Whether the AL event request register (0x0220) holds an event for
@@ -894,6 +915,7 @@ impl SoftEsc {
 
     fn reload_fmmus(&mut self) {
         self.fmmu_active = 0;
+        self.fmmu_gen = self.fmmu_gen.wrapping_add(1);
         for n in 0..FMMU_COUNT {
             let Some(base) = reg::fmmu(n as u8) else {
                 continue;

@@ -196,6 +196,17 @@ pub struct Chain {
     swept_until: u64,
     /// Firmware runs so far.
     runs: u64,
+    /// Enabled FMMU windows of every slave: (logical start, end, slave),
+    /// sorted by start.
+    windows: Vec<(u64, u64, usize)>,
+    /// Longest window in `windows`.
+    widest: u64,
+    /// Each slave's FMMU generation when `windows` was built.
+    fmmu_gens: Vec<u32>,
+    /// Whether `windows` must be rebuilt before the next logical datagram.
+    windows_stale: bool,
+    /// Scratch list of the slaves one logical datagram reaches.
+    hits: Vec<usize>,
 }
 
 /// Shortest time in which the sweep of [`Chain::service`] reaches every
@@ -272,6 +283,11 @@ impl Chain {
             sweep_next: 0,
             swept_until: 0,
             runs: 0,
+            windows: Vec::new(),
+            widest: 0,
+            fmmu_gens: Vec::new(),
+            windows_stale: true,
+            hits: Vec::new(),
         };
         chain.touched_in = vec![u64::MAX; chain.slaves.len()];
         chain.reindex();
@@ -291,6 +307,31 @@ impl Chain {
             }
         }
         self.addresses.sort_unstable();
+    }
+
+    fn reindex_windows(&mut self) {
+        self.windows.clear();
+        self.fmmu_gens.clear();
+        self.widest = 0;
+        for (i, s) in self.slaves.iter().enumerate() {
+            let esc = s.esc();
+            self.fmmu_gens.push(esc.fmmu_generation());
+            for (a, b) in esc.logical_windows() {
+                self.widest = self.widest.max(b - a);
+                self.windows.push((a, b, i));
+            }
+        }
+        self.windows.sort_unstable();
+        self.windows_stale = false;
+    }
+
+    /// Marks the FMMU index stale if slave `i`'s FMMUs changed.
+    fn check_fmmus(&mut self, i: usize) {
+        if let (Some(s), Some(g)) = (self.slaves.get(i), self.fmmu_gens.get(i))
+            && s.esc().fmmu_generation() != *g
+        {
+            self.windows_stale = true;
+        }
     }
 
     /// Passes one Ethernet frame through the line (as the frame travels
@@ -511,7 +552,10 @@ impl Chain {
                         s.esc_mut().process_datagram(dg);
                     }
                     self.touch(i);
-                    moved |= cmd.is_write() && self.moved(i);
+                    if cmd.is_write() {
+                        moved |= self.moved(i);
+                        self.check_fmmus(i);
+                    }
                     k += 1;
                 }
                 if moved {
@@ -528,12 +572,57 @@ impl Chain {
                     self.touch(pos);
                 }
                 dg.set_adp(adp0.wrapping_add(n as u16));
-                if cmd.is_write() && self.moved(pos) {
-                    self.reindex();
+                if cmd.is_write() {
+                    self.check_fmmus(pos);
+                    if self.moved(pos) {
+                        self.reindex();
+                    }
                 }
             }
+            Addressing::Logical => {
+                // Only the slaves with an FMMU window overlapping the
+                // datagram act on it, in line order.
+                if self.windows_stale {
+                    self.reindex_windows();
+                }
+                let start = u64::from(dg.logical_address());
+                let end = start + dg.data_mut().len() as u64;
+                let lo = start.saturating_sub(self.widest);
+                let first = self.windows.partition_point(|w| w.0 < lo);
+                let mut hits = core::mem::take(&mut self.hits);
+                hits.clear();
+                for &(a, b, i) in self.windows.get(first..).unwrap_or_default() {
+                    if a >= end {
+                        break;
+                    }
+                    if b > start {
+                        hits.push(i);
+                    }
+                }
+                hits.sort_unstable();
+                hits.dedup();
+                for &i in &hits {
+                    if let Some(s) = self.slaves.get_mut(i) {
+                        s.esc_mut().process_datagram(dg);
+                    }
+                    self.touch(i);
+                }
+                // An FMMU may map registers, even the FMMUs' own.
+                if cmd.is_write() {
+                    for &i in &hits {
+                        self.check_fmmus(i);
+                        if self.moved(i) {
+                            self.windows_stale = true;
+                        }
+                    }
+                    if hits.iter().any(|&i| self.moved(i)) {
+                        self.reindex();
+                    }
+                }
+                self.hits = hits;
+            }
             Addressing::None => {}
-            // Broadcast, logical, ARMW, FRMW: every slave in line order.
+            // Broadcast, ARMW, FRMW: every slave in line order.
             _ => {
                 for s in &mut self.slaves {
                     s.esc_mut().process_datagram(dg);
@@ -541,6 +630,9 @@ impl Chain {
                 self.touched_all = true;
                 if cmd.is_write() {
                     self.refresh_index();
+                    for i in 0..n {
+                        self.check_fmmus(i);
+                    }
                 }
             }
         }
@@ -606,6 +698,7 @@ impl Chain {
         let version = decision.version.as_str().to_string();
         slave.set_firmware_version(&version);
         self.reindex();
+        self.windows_stale = true;
         Some(version)
     }
 

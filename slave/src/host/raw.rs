@@ -160,29 +160,31 @@ pub fn run(
     // A processed frame goes on down the line when port 1 has a link
     // (without the "processed" mark, so the next runner takes it as a
     // request; it marks it again), else it turns around to the master.
-    let out_name = out_iface.as_ref().map(|i| i.name.clone()).unwrap_or_default();
-    let reply =
-        |out_tx: &mut Option<Tx>, up: bool, frame: &mut [u8]| -> Result<(), RunnerError> {
-            match out_tx.as_mut().filter(|_| up) {
-                Some(o) => {
-                    if let Some(b) = frame.get_mut(6) {
-                        *b &= !0x02;
-                    }
-                    let r = o.send_to(frame, None);
-                    if let Some(b) = frame.get_mut(6) {
-                        *b |= 0x02;
-                    }
-                    match r {
-                        Some(Err(source)) => Err(RunnerError::Io {
-                            context: format!("forwarding on {out_name}"),
-                            source,
-                        }),
-                        _ => Ok(()),
-                    }
+    let out_name = out_iface
+        .as_ref()
+        .map(|i| i.name.clone())
+        .unwrap_or_default();
+    let reply = |out_tx: &mut Option<Tx>, up: bool, frame: &mut [u8]| -> Result<(), RunnerError> {
+        match out_tx.as_mut().filter(|_| up) {
+            Some(o) => {
+                if let Some(b) = frame.get_mut(6) {
+                    *b &= !0x02;
                 }
-                None => send(&tx, frame),
+                let r = o.send_to(frame, None);
+                if let Some(b) = frame.get_mut(6) {
+                    *b |= 0x02;
+                }
+                match r {
+                    Some(Err(source)) => Err(RunnerError::Io {
+                        context: format!("forwarding on {out_name}"),
+                        source,
+                    }),
+                    _ => Ok(()),
+                }
             }
-        };
+            None => send(&tx, frame),
+        }
+    };
     let done = AtomicBool::new(false);
     let mut reopened: Option<Instant> = None;
     std::thread::scope(|scope| {
@@ -327,6 +329,51 @@ pub fn run(
     })
 }
 
+/// The floor of [`run`] for latency measurements: answers every EtherCAT
+/// request on `iface` at once, unchanged but marked as processed (source
+/// MAC bit 1), through the same socket path and loop as the runner but
+/// without any slave. What a benchmark measures against it is what the
+/// kernel and the socket cost without EtherCAT work. Runs until `stop`.
+pub fn reflect(iface: &str, stop: &AtomicBool) -> Result<RunStats, RunnerError> {
+    let nic = find_interface(iface)?;
+    let (mut tx, mut rx) = open(&nic)?;
+    let mut stats = RunStats::default();
+    let mut buf = Vec::with_capacity(1600);
+    while !stop.load(Ordering::Acquire) {
+        match rx.next() {
+            Ok(frame) if is_request(frame) => {
+                buf.clear();
+                buf.extend_from_slice(frame);
+                if let Some(b) = buf.get_mut(6) {
+                    *b |= 0x02;
+                }
+                if let Some(Err(source)) = tx.send_to(&buf, None) {
+                    return Err(RunnerError::Io {
+                        context: format!("sending on {iface}"),
+                        source,
+                    });
+                }
+                stats.answered += 1;
+            }
+            Ok(_) => stats.ignored += 1,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    io::ErrorKind::TimedOut
+                        | io::ErrorKind::WouldBlock
+                        | io::ErrorKind::Interrupted
+                ) => {}
+            Err(source) => {
+                return Err(RunnerError::Io {
+                    context: format!("receiving on {iface}"),
+                    source,
+                });
+            }
+        }
+    }
+    Ok(stats)
+}
+
 /// Frames coming back from the next runner on port 1 (processed there,
 /// marked) go out of port 0 to the master unchanged, as the return path
 /// of an ESC passes them through. Runs until `stop` or `done`.
@@ -358,7 +405,9 @@ fn relay_back(
             Err(e)
                 if matches!(
                     e.kind(),
-                    io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock | io::ErrorKind::Interrupted
+                    io::ErrorKind::TimedOut
+                        | io::ErrorKind::WouldBlock
+                        | io::ErrorKind::Interrupted
                 ) => {}
             // The next runner's cable pulled: wait for it.
             Err(_) if link_is_down(out_name) => std::thread::sleep(Duration::from_millis(5)),

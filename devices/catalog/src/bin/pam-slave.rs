@@ -57,6 +57,12 @@ struct Cli {
     /// hosts into one line.
     #[arg(long, value_name = "IFACE")]
     forward: Option<String>,
+    /// Benchmark floor: no slaves, answer every EtherCAT frame unchanged
+    /// (marked as processed) through the same socket path, to measure
+    /// what the kernel costs without EtherCAT work (see the latency
+    /// bench).
+    #[arg(long, conflicts_with_all = ["line", "forward", "faults", "pcap", "state_dir"])]
+    reflect: bool,
 }
 
 fn main() -> ExitCode {
@@ -76,6 +82,22 @@ fn main() -> ExitCode {
     let flag = stop.clone();
     if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::Release)) {
         eprintln!("warning: cannot install the Ctrl-C handler: {e}");
+    }
+    if cli.reflect {
+        eprintln!(
+            "pam-slave: reflecting EtherCAT frames on {} (no slaves; Ctrl-C stops)",
+            cli.iface
+        );
+        return match ecat_slave::host::raw::reflect(&cli.iface, &stop) {
+            Ok(stats) => {
+                eprintln!("pam-slave: reflected {} EtherCAT frames", stats.answered);
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("pam-slave: error: {e}");
+                ExitCode::from(3)
+            }
+        };
     }
     let cfg = RunnerConfig {
         iface: cli.iface,

@@ -1,0 +1,312 @@
+//! Round-trip latency of the raw-socket runner against its floor, in the
+//! same run: a veth pair into a network namespace this bench creates, a
+//! fixed cyclic frame (LRW over the whole process image of PAM-sized
+//! slaves, 5 output + 14 input bytes each, plus a BRD of the AL status, as
+//! ethercrab's `tx_rx` sends it) sent from the host end and timed until
+//! its answer arrives, 20 000 times each:
+//!
+//! * `floor`: `pam-slave --reflect` on the namespace end, the same socket
+//!   path and loop with no slave (what the kernel and the socket cost);
+//! * `runner/1`, `runner/8`, `runner/64`: `pam-slave --count N`, its ESCs
+//!   configured like a master does (station address, SM2/SM3, FMMUs), so
+//!   every LRW is really processed (the bench checks the working counter).
+//!
+//! It prints p50, p99, p99.9 and max per case and the ratio runner/floor
+//! at p50 and p99. Needs root and iproute2 (the namespace is removed at
+//! the end); builds `pam-slave` in release mode first.
+//!
+//! Run: `cargo bench -p master-test --bench latency` (`-- --frames N` for
+//! another count).
+
+use pnet_datalink::{Channel, Config, DataLinkReceiver, DataLinkSender};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+const OUT: u16 = 5;
+const IN: u16 = 14;
+
+fn ip(args: &[&str]) {
+    let ok = Command::new("ip")
+        .args(args)
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(
+        ok,
+        "ip {} failed (the bench needs root and iproute2)",
+        args.join(" ")
+    );
+}
+
+/// The namespace and the process in it; removed on drop.
+struct Namespace {
+    name: String,
+    child: Option<Child>,
+}
+
+impl Namespace {
+    fn start(&mut self, bin: &str, args: &[&str]) {
+        self.stop();
+        let child = Command::new("ip")
+            .args(["netns", "exec", &self.name, bin])
+            .args(args)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("start pam-slave");
+        self.child = Some(child);
+        std::thread::sleep(Duration::from_millis(400));
+    }
+
+    fn stop(&mut self) {
+        if let Some(mut c) = self.child.take() {
+            let _ = Command::new("kill")
+                .args(["-INT", &c.id().to_string()])
+                .status();
+            let _ = c.wait();
+        }
+    }
+}
+
+impl Drop for Namespace {
+    fn drop(&mut self) {
+        self.stop();
+        let _ = Command::new("ip")
+            .args(["netns", "del", &self.name])
+            .status();
+    }
+}
+
+/// An EtherCAT frame from the master (source 10:10:10:10:10:10) holding
+/// the datagrams (command, address, data).
+fn frame(datagrams: &[(u8, u32, Vec<u8>)]) -> Vec<u8> {
+    let mut f = vec![0xFF; 6];
+    f.extend_from_slice(&[0x10; 6]);
+    f.extend_from_slice(&[0x88, 0xA4]);
+    let len: usize = datagrams.iter().map(|d| 12 + d.2.len()).sum();
+    f.extend_from_slice(&((len as u16) | 0x1000).to_le_bytes());
+    for (k, (cmd, addr, data)) in datagrams.iter().enumerate() {
+        f.push(*cmd);
+        f.push(k as u8);
+        f.extend_from_slice(&addr.to_le_bytes());
+        let more = if k + 1 < datagrams.len() {
+            0x8000u16
+        } else {
+            0
+        };
+        f.extend_from_slice(&((data.len() as u16) | more).to_le_bytes());
+        f.extend_from_slice(&[0, 0]);
+        f.extend_from_slice(data);
+        f.extend_from_slice(&[0, 0]);
+    }
+    while f.len() < 60 {
+        f.push(0);
+    }
+    f
+}
+
+/// Configuration frames for slave `i` (APWR: station address, SM2, SM3,
+/// FMMU0 outputs, FMMU1 inputs).
+fn config_frame(i: u16) -> Vec<u8> {
+    let adp = u32::from(0u16.wrapping_sub(i));
+    let at = |ado: u32| adp | (ado << 16);
+    let log_out = u32::from(i) * u32::from(OUT + IN);
+    let fmmu = |logical: u32, len: u16, phys: u16, ty: u8| {
+        let mut f = vec![0u8; 16];
+        f[0..4].copy_from_slice(&logical.to_le_bytes());
+        f[4..6].copy_from_slice(&len.to_le_bytes());
+        f[7] = 7;
+        f[8..10].copy_from_slice(&phys.to_le_bytes());
+        f[11] = ty;
+        f[12] = 1;
+        f
+    };
+    frame(&[
+        (0x02, at(0x0010), (0x1000 + i).to_le_bytes().to_vec()),
+        (
+            0x02,
+            at(0x0810),
+            vec![0x00, 0x11, OUT as u8, 0, 0x64, 0, 1, 0],
+        ),
+        (
+            0x02,
+            at(0x0818),
+            vec![0x80, 0x11, IN as u8, 0, 0x20, 0, 1, 0],
+        ),
+        (0x02, at(0x0600), fmmu(log_out, OUT, 0x1100, 2)),
+        (
+            0x02,
+            at(0x0610),
+            fmmu(log_out + u32::from(OUT), IN, 0x1180, 1),
+        ),
+    ])
+}
+
+/// The cyclic frame of `n` slaves: LRW over the image, BRD AL status.
+fn cycle_frame(n: usize) -> Vec<u8> {
+    let image = n * usize::from(OUT + IN);
+    frame(&[
+        (0x0C, 0, vec![0x5A; image]),
+        (0x07, 0x0130 << 16, vec![0, 0]),
+    ])
+}
+
+/// Working counter of datagram `k` in a returned frame.
+fn wkc(f: &[u8], k: usize) -> u16 {
+    let mut off = 16;
+    let mut at = 0;
+    loop {
+        let len = usize::from(u16::from_le_bytes([f[off + 6], f[off + 7]]) & 0x07FF);
+        let end = off + 10 + len;
+        if at == k {
+            return u16::from_le_bytes([f[end], f[end + 1]]);
+        }
+        off = end + 2;
+        at += 1;
+    }
+}
+
+struct Master {
+    tx: Box<dyn DataLinkSender>,
+    rx: Box<dyn DataLinkReceiver>,
+}
+
+impl Master {
+    /// Sends `f` and waits for the processed frame; returns it and the
+    /// round-trip time.
+    fn exchange(&mut self, f: &[u8]) -> (Vec<u8>, Duration) {
+        let t0 = Instant::now();
+        self.tx.send_to(f, None).expect("send").expect("sent");
+        loop {
+            let got = self.rx.next().expect("receive");
+            let answer = got.len() >= 16
+                && got[12..14] == [0x88, 0xA4]
+                && got[6] & 0x02 != 0
+                && got[17] == f[17];
+            if answer {
+                return (got.to_vec(), t0.elapsed());
+            }
+            assert!(
+                t0.elapsed() < Duration::from_secs(2),
+                "no answer within 2 s"
+            );
+        }
+    }
+}
+
+fn percentile(sorted: &[Duration], p: f64) -> Duration {
+    let i = ((sorted.len() as f64 - 1.0) * p).round() as usize;
+    sorted[i]
+}
+
+fn us(d: Duration) -> f64 {
+    d.as_nanos() as f64 / 1000.0
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    if args.iter().any(|a| a == "--list") {
+        return;
+    }
+    let frames: usize = args
+        .iter()
+        .position(|a| a == "--frames")
+        .and_then(|i| args.get(i + 1))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(20_000);
+    let ok = Command::new(env!("CARGO"))
+        .args([
+            "build",
+            "-q",
+            "--release",
+            "-p",
+            "device-catalog",
+            "--bin",
+            "pam-slave",
+        ])
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(ok, "cargo build of pam-slave");
+    let bin = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/release/pam-slave").to_string();
+
+    let pid = std::process::id();
+    let mut ns = Namespace {
+        name: format!("lat{pid}"),
+        child: None,
+    };
+    ip(&["netns", "add", &ns.name]);
+    let host = format!("lt{pid}m");
+    let slave = format!("lt{pid}s");
+    ip(&[
+        "link", "add", &host, "type", "veth", "peer", "name", &slave, "netns", &ns.name,
+    ]);
+    ip(&["link", "set", &host, "up"]);
+    ip(&["-n", &ns.name, "link", "set", &slave, "up"]);
+    let nic = pnet_datalink::interfaces()
+        .into_iter()
+        .find(|i| i.name == host)
+        .expect("host end");
+    let cfg = Config {
+        read_timeout: Some(Duration::from_millis(10)),
+        promiscuous: true,
+        ..Config::default()
+    };
+    let Ok(Channel::Ethernet(tx, rx)) = pnet_datalink::channel(&nic, cfg) else {
+        panic!("raw socket on {host}");
+    };
+    let mut m = Master { tx, rx };
+
+    println!("{frames} round trips per case over a veth pair; times in microseconds");
+    println!("| case | p50 | p99 | p99.9 | max | p50 / floor | p99 / floor |");
+    println!("|---|---|---|---|---|---|---|");
+    let mut floor: Option<(Duration, Duration)> = None;
+    for (name, n) in [
+        ("floor", 1usize),
+        ("runner/1", 1),
+        ("runner/8", 8),
+        ("runner/64", 64),
+    ] {
+        if name == "floor" {
+            ns.start(&bin, &["--iface", &slave, "--reflect"]);
+        } else {
+            ns.start(&bin, &["--iface", &slave, "--count", &n.to_string()]);
+            for i in 0..n as u16 {
+                let (r, _) = m.exchange(&config_frame(i));
+                assert_eq!(wkc(&r, 0), 1, "slave {i} configured");
+            }
+        }
+        let f = cycle_frame(n);
+        let mut times = Vec::with_capacity(frames);
+        for k in 0..frames + 1000 {
+            let (r, t) = m.exchange(&f);
+            if name != "floor" {
+                assert_eq!(usize::from(wkc(&r, 0)), 3 * n, "LRW reached every slave");
+                assert_eq!(usize::from(wkc(&r, 1)), n, "BRD reached every slave");
+            }
+            // The first 1000 warm up the caches and the scheduler.
+            if k >= 1000 {
+                times.push(t);
+            }
+        }
+        times.sort_unstable();
+        let (p50, p99) = (percentile(&times, 0.5), percentile(&times, 0.99));
+        let p999 = percentile(&times, 0.999);
+        let max = *times.last().expect("samples");
+        let (r50, r99) = match floor {
+            Some((f50, f99)) => (
+                format!("{:.2}", us(p50) / us(f50)),
+                format!("{:.2}", us(p99) / us(f99)),
+            ),
+            None => {
+                floor = Some((p50, p99));
+                ("1".into(), "1".into())
+            }
+        };
+        println!(
+            "| {name} | {:.1} | {:.1} | {:.1} | {:.1} | {r50} | {r99} |",
+            us(p50),
+            us(p99),
+            us(p999),
+            us(max)
+        );
+    }
+}
