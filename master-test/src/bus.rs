@@ -25,6 +25,12 @@ impl Bus {
     /// The virtual line `spec` (`pam`, `pam,io8,pam`, ...) with an optional
     /// capture.
     pub fn virtual_line(spec: &str, pcap: Option<&std::path::Path>) -> Result<Self, BusError> {
+        let n = device_catalog::parse_line(spec)
+            .map_err(BusError::Line)?
+            .len();
+        if n > MAX_SUBDEVICES {
+            return Err(BusError::LineTooLong(n));
+        }
         Ok(Bus::Virtual(VirtualBus::line_with(
             spec,
             Clock::real(),

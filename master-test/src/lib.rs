@@ -67,6 +67,12 @@ pub enum BusError {
     /// The line named an unknown device.
     #[error("{0}")]
     Line(device_catalog::CatalogError),
+    /// A line longer than the tools' group ([`MAX_SUBDEVICES`]).
+    #[error(
+        "a line of {0} slaves: the commissioning tool drives at most {MAX_SUBDEVICES}; longer \
+         lines run in tests through VirtualBus::init_long (up to {LONG_LINE}) or on pam-slave"
+    )]
+    LineTooLong(usize),
 }
 
 /// A line of `n` PAM-199-P-ETC slaves in their power-on state.

@@ -179,6 +179,8 @@ fn cli_limits_are_refused_before_anything_runs() {
         (&["demo", "--cycles", "4000000000"][..], "3600000"),
         (&["demo", "--slaves", "0"][..], "1..=64"),
         (&["demo", "--slaves", "65"][..], "1..=64"),
+        (&["demo", "--line", "io8*65"][..], "at most 64"),
+        (&["--line", "pam*4097", "scan"][..], "1 to 4096"),
     ] {
         let (o, e) = expect(&mt, args, 2);
         assert!(e.contains(needle), "{args:?}: {e}");
