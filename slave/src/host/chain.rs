@@ -182,6 +182,10 @@ pub struct Chain {
     pdi_failures: u64,
     /// (station address or alias, slave position), sorted.
     addresses: Vec<(u16, usize)>,
+    /// For every 16-bit address, the position in `addresses` of its first
+    /// entry (`u32::MAX`: nobody answers to it): one lookup per datagram
+    /// instead of a binary search.
+    first_of: Vec<u32>,
     /// Each slave's address generation when `addresses` was built.
     addr_gens: Vec<u32>,
     /// Slaves a datagram of the current frame reached (each once).
@@ -276,6 +280,7 @@ impl Chain {
             frames: 0,
             pdi_failures: 0,
             addresses: Vec::new(),
+            first_of: vec![u32::MAX; 1 << 16],
             addr_gens: Vec::new(),
             touched: Vec::new(),
             touched_all: false,
@@ -295,6 +300,11 @@ impl Chain {
     }
 
     fn reindex(&mut self) {
+        for &(a, _) in &self.addresses {
+            if let Some(f) = self.first_of.get_mut(usize::from(a)) {
+                *f = u32::MAX;
+            }
+        }
         self.addresses.clear();
         self.addr_gens.clear();
         for (i, s) in self.slaves.iter().enumerate() {
@@ -307,6 +317,11 @@ impl Chain {
             }
         }
         self.addresses.sort_unstable();
+        for (k, &(a, _)) in self.addresses.iter().enumerate().rev() {
+            if let Some(f) = self.first_of.get_mut(usize::from(a)) {
+                *f = k as u32;
+            }
+        }
     }
 
     fn reindex_windows(&mut self) {
@@ -541,7 +556,10 @@ impl Chain {
             Addressing::Configured if cmd != Command::Frmw => {
                 let adp = dg.adp();
                 // Every slave answering to this address, in line order.
-                let first = self.addresses.partition_point(|(a, _)| *a < adp);
+                let first = self
+                    .first_of
+                    .get(usize::from(adp))
+                    .map_or(usize::MAX, |&k| k as usize);
                 let mut k = first;
                 let mut moved = false;
                 while let Some(&(a, i)) = self.addresses.get(k) {
