@@ -92,7 +92,10 @@ fn a_pdi_error_in_the_mailbox_check_is_a_pdi_failure_not_code_0x0016() {
             .esc_mut()
             .set_pdi_fault(Some(PdiFault::reads(0x0800, 0x0808)));
         settle(md).await;
-        // No event and no time passing: the firmware's loop finds it.
+        // No AL event leads to the SM registers: the firmware's full pass
+        // (at most FULL_PASS_NS after the last) finds the failure.
+        bus.clock
+            .advance(Duration::from_nanos(ecat_slave::device::FULL_PASS_NS));
         let _ = bus.run_firmware();
         assert_eq!(
             status(md, s).await,

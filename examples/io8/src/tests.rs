@@ -312,3 +312,41 @@ fn other_writes_are_stored_as_the_core_checked_them() {
     };
     assert_eq!(app.sdo_download(&mut store, &download), Ok(Write::Store));
 }
+
+/// PDI transfers (each one an SPI transaction on a real ESC) of one pass
+/// of the firmware loop: the loop reads the AL event request first and
+/// touches only what it flags.
+#[test]
+fn an_idle_pass_is_one_pdi_transfer_and_a_cycle_in_op_three() {
+    let mut m = Master::new();
+    let pdi = |m: &Master| m.slave.slave().esc().pdi_accesses();
+    let layout = DEVICE.layout();
+    m.sync_manager(0, layout.mbx_out.0, layout.mbx_out.1);
+    m.sync_manager(1, layout.mbx_in.0, layout.mbx_in.1);
+    assert_eq!(m.request(AlState::PreOp).state, AlState::PreOp);
+    m.poll(1);
+    let before = pdi(&m);
+    m.poll(1);
+    assert_eq!(pdi(&m) - before, 1, "PRE-OP, nothing flagged: 0x0220 only");
+    m.sync_manager(2, layout.pd_out, 1);
+    m.sync_manager(3, layout.pd_in, 1);
+    assert_eq!(m.request(AlState::SafeOp).state, AlState::SafeOp);
+    m.cycle(0, 1);
+    assert_eq!(m.request(AlState::Op).state, AlState::Op);
+    m.poll(1);
+    let before = pdi(&m);
+    m.poll(1);
+    assert_eq!(pdi(&m) - before, 2, "OP, nothing flagged: 0x0220 + inputs");
+    // A cycle: the master writes the outputs and reads the inputs.
+    let before = pdi(&m);
+    m.cycle(0x5A, 1);
+    assert_eq!(pdi(&m) - before, 3, "OP cycle: 0x0220 + outputs + inputs");
+    assert!(
+        m.slave.slave().app().board().output(2),
+        "0x5A bit 1 reached"
+    );
+    // The backstop: a full pass at least every FULL_PASS_NS.
+    let before = pdi(&m);
+    m.poll(ecat_slave::device::FULL_PASS_NS / MS);
+    assert!(pdi(&m) - before > 3, "full pass after 100 ms");
+}

@@ -59,5 +59,5 @@ pub use description::{
     MemoryLayout, PdoSet, ProcessData,
 };
 pub use sii_image::mapping_entries;
-pub use slave::{SM_CONTROL, Slave};
+pub use slave::{FULL_PASS_NS, SM_CONTROL, Slave};
 pub use soft::SoftSlave;

@@ -25,6 +25,12 @@ use super::description::{DeviceDescription, MAX_MAILBOX, MemoryLayout};
 /// mailbox out, SM1 mailbox in, SM2 outputs (watchdog), SM3 inputs.
 pub const SM_CONTROL: [u8; 4] = [0x26, 0x22, 0x64, 0x20];
 
+/// Longest time between two full passes of the firmware loop (every
+/// register checked, events or not): the backstop for what no AL event
+/// reports, such as a PDI that fails on a register the events never lead
+/// to.
+pub const FULL_PASS_NS: u64 = 100_000_000;
+
 /// Most changes one SDO download hands to the application.
 const MAX_CHANGES: usize = complete::MAX_ENTRIES;
 
@@ -46,6 +52,14 @@ pub struct Slave<E: Esc, A: Application> {
     emergencies_enabled: bool,
     pdi_failures: u32,
     now_ns: u64,
+    /// Time of the last full pass (every register checked).
+    full_pass_ns: Option<u64>,
+    /// The master read SM1 and there was nothing more to send: its read
+    /// event stays in 0x0220 (only a PDI write acknowledges it) and is
+    /// ignored until the firmware writes SM1 again.
+    sm1_quiet: bool,
+    /// Responses written to SM1 so far (wrapping).
+    sm1_writes: u32,
 }
 
 impl<E: Esc, A: Application> core::fmt::Debug for Slave<E, A> {
@@ -230,6 +244,9 @@ impl<E: Esc, A: Application> Slave<E, A> {
             emergencies_enabled: true,
             pdi_failures: 0,
             now_ns: 0,
+            full_pass_ns: None,
+            sm1_quiet: false,
+            sm1_writes: 0,
         }
     }
 
@@ -251,6 +268,8 @@ impl<E: Esc, A: Application> Slave<E, A> {
         self.emergencies = Emergencies::default();
         self.pdi_failures = 0;
         self.now_ns = 0;
+        self.full_pass_ns = None;
+        self.sm1_quiet = false;
     }
 
     /// Uses another memory layout (standard mailbox size); it must match
@@ -393,7 +412,34 @@ impl<E: Esc, A: Application> Slave<E, A> {
         mut images: Option<&mut (dyn ImageStore + 's)>,
     ) -> Result<(), EscError> {
         self.now_ns = now_ns;
+        // Event-driven, as the SSC: the AL event request register first,
+        // and only what it flags. Without an event, nothing queued to send
+        // and no full pass due, a pass is one PDI read (plus the inputs in
+        // SAFE-OP/OP) and the application's tick.
         let events = self.esc.read_u32(reg::AL_EVENT_REQUEST)?;
+        let sm1 = reg::al_event_sm(1);
+        let relevant = if self.sm1_quiet {
+            events & !sm1
+        } else {
+            events
+        };
+        let mailbox_state = matches!(
+            self.al.state,
+            AlState::PreOp | AlState::SafeOp | AlState::Op | AlState::Boot
+        );
+        let queued = self.pending.is_some()
+            || (mailbox_state && self.emergencies_enabled && !self.emergencies.is_empty());
+        let due = self
+            .full_pass_ns
+            .is_none_or(|t| now_ns.saturating_sub(t) >= FULL_PASS_NS);
+        // The process-data SyncManagers' events need only the process
+        // data exchanged.
+        let process_data = reg::al_event_sm(2) | reg::al_event_sm(3);
+        if relevant & !process_data == 0 && !queued && !due {
+            return self.light_pass(events);
+        }
+        self.full_pass_ns = Some(now_ns);
+        let sm1_writes = self.sm1_writes;
         if events & reg::AL_EVENT_AL_CONTROL != 0 {
             let control = self.esc.read_u16(reg::AL_CONTROL)?;
             let before = self.al.state;
@@ -418,7 +464,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
                 }
             }
         }
-        self.supervise()?;
+        self.supervise(events)?;
         if matches!(
             self.al.state,
             AlState::PreOp | AlState::SafeOp | AlState::Op | AlState::Boot
@@ -429,23 +475,45 @@ impl<E: Esc, A: Application> Slave<E, A> {
         if pd {
             self.read_outputs(events)?;
         }
-        let outputs_valid = self.al.state == AlState::Op;
+        self.run_app();
+        if pd {
+            self.write_inputs()?;
+        }
+        // SM1's read event with nothing written in answer: ignore it until
+        // the next response.
+        self.sm1_quiet = events & sm1 != 0 && self.sm1_writes == sm1_writes;
+        Ok(())
+    }
+
+    /// A pass with nothing flagged but process data: in SAFE-OP/OP the
+    /// outputs the master wrote (SM2 event), the application's tick, the
+    /// inputs; else the tick alone.
+    fn light_pass(&mut self, events: u32) -> Result<(), EscError> {
+        let pd = matches!(self.al.state, AlState::SafeOp | AlState::Op);
+        if pd {
+            self.read_outputs(events)?;
+        }
+        self.run_app();
+        if pd {
+            self.write_inputs()?;
+        }
+        Ok(())
+    }
+
+    /// The application's tick, then the error register.
+    fn run_app(&mut self) {
         let state = self.al.state;
         {
             let mut tick = Tick {
                 od: A::Values::view_mut(&mut self.store),
-                now_ns,
-                outputs_valid,
+                now_ns: self.now_ns,
+                outputs_valid: state == AlState::Op,
                 state,
                 emergencies: &mut self.emergencies,
             };
             self.app.tick(&mut tick);
         }
         self.update_error_register();
-        if pd {
-            self.write_inputs()?;
-        }
-        Ok(())
     }
 
     /// Changes state on the device's own account (error indication set).
@@ -471,7 +539,11 @@ impl<E: Esc, A: Application> Slave<E, A> {
     /// watchdog in OP (-> SAFE-OP, 0x001B), a changed mailbox SM above INIT
     /// (-> INIT, 0x0016 / 0x0015 in BOOT) and a changed process-data SM in
     /// SAFE-OP/OP (-> PRE-OP, 0x001D / 0x001E).
-    fn supervise(&mut self) -> Result<(), EscError> {
+    fn supervise(&mut self, events: u32) -> Result<(), EscError> {
+        if events & reg::AL_EVENT_WATCHDOG_PD != 0 && self.al.state != AlState::Op {
+            // Acknowledge (the check below reads it in OP).
+            self.esc.read_u16(reg::WATCHDOG_STATUS_PD)?;
+        }
         if self.al.state == AlState::Op {
             let time = self.esc.read_u16(reg::WATCHDOG_TIME_PD)?;
             let status = self.esc.read_u16(reg::WATCHDOG_STATUS_PD)?;
@@ -624,6 +696,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
             }
             if let Some(f) = frame.get(..n) {
                 self.esc.write(inp.0, f)?;
+                self.sm1_writes = self.sm1_writes.wrapping_add(1);
             }
             self.last_sent = Some((len, frame));
         }
@@ -649,6 +722,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
             let copy = *frame;
             if let Some(f) = copy.get(..n) {
                 self.esc.write(inp.0, f)?;
+                self.sm1_writes = self.sm1_writes.wrapping_add(1);
             }
         }
         self.esc.write(

@@ -48,6 +48,8 @@ struct SmConfig {
     len: u16,
     control: u8,
     enabled: bool,
+    /// The activation register as written (enable, repeat request, ...).
+    activate: u8,
 }
 
 impl SmConfig {
@@ -115,6 +117,8 @@ pub struct SoftEsc {
     fmmu_active: u8,
     /// Bumped whenever the FMMU configuration may have changed.
     fmmu_gen: u32,
+    /// PDI reads and writes since power-on (what an SPI bus would carry).
+    pdi_accesses: u64,
     /// Bit n set: SM n enabled with a non-zero length.
     sm_active: u8,
     /// Bit n set: an ECAT write completed the buffer of output SM n since the
@@ -203,6 +207,7 @@ impl SoftEsc {
             fmmus: [FmmuConfig::default(); FMMU_COUNT],
             fmmu_active: 0,
             fmmu_gen: 0,
+            pdi_accesses: 0,
             sm_active: 0,
             sm_written: 0,
             station: 0,
@@ -385,6 +390,12 @@ impl SoftEsc {
             let c = self.mem_u8(reg::WATCHDOG_COUNTER_PDI).saturating_add(1);
             self.set_u8(reg::WATCHDOG_COUNTER_PDI, c);
         }
+    }
+
+    /// PDI accesses (reads and writes, of any length) since the ESC was
+    /// created: each one is a transaction on an SPI PDI.
+    pub fn pdi_accesses(&self) -> u64 {
+        self.pdi_accesses
     }
 
     /// Changes whenever the FMMU configuration may have changed (a write
@@ -949,6 +960,7 @@ impl SoftEsc {
             len: self.mem_u16(base + smr::LENGTH),
             control: self.mem_u8(base + smr::CONTROL),
             enabled: self.mem_u8(base + smr::ACTIVATE) & smr::ACTIVATE_ENABLE != 0,
+            activate: self.mem_u8(base + smr::ACTIVATE),
         };
         let Some(slot) = self.sms.get_mut(n) else {
             return;
@@ -960,6 +972,11 @@ impl SoftEsc {
         } else {
             self.sm_active &= !(1 << n);
         }
+        // A changed activation register (enable, repeat request) is an
+        // event for the firmware; so is any reconfiguration.
+        if old != new {
+            self.raise_al_event(reg::AL_EVENT_SM_CHANGED);
+        }
         // (Re)configuring or enabling a SyncManager resets its buffer state.
         if old.start != new.start
             || old.len != new.len
@@ -967,7 +984,6 @@ impl SoftEsc {
             || old.enabled != new.enabled
         {
             self.set_sm_status(n, 0);
-            self.raise_al_event(reg::AL_EVENT_SM_CHANGED);
             // A (re)configured output SM with watchdog trigger restarts the
             // process-data watchdog: unarmed until the first output write.
             if new.enabled && new.control & smr::WATCHDOG_TRIGGER != 0 {
@@ -1142,6 +1158,7 @@ impl SoftEsc {
 impl Esc for SoftEsc {
     fn read(&mut self, addr: u16, buf: &mut [u8]) -> Result<(), EscError> {
         self.pdi_touched = true;
+        self.pdi_accesses += 1;
         let a = u32::from(addr);
         let b = a + buf.len() as u32;
         if self.pdi_fault.is_some_and(|f| f.hits(a, b, false)) {
@@ -1194,6 +1211,7 @@ impl Esc for SoftEsc {
 
     fn write(&mut self, addr: u16, data: &[u8]) -> Result<(), EscError> {
         self.pdi_touched = true;
+        self.pdi_accesses += 1;
         let a = u32::from(addr);
         let b = a + data.len() as u32;
         if self.pdi_fault.is_some_and(|f| f.hits(a, b, true)) {
