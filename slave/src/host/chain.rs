@@ -955,6 +955,46 @@ mod tests {
     }
 
     #[test]
+    fn a_logical_write_that_reprograms_an_fmmu_moves_logical_addressing_at_once() {
+        let mut line = crate::testing::line(2);
+        // Slave 1's FMMU0: logical 0x100.. written into its own FMMU1
+        // registers (0x0610, 16 bytes).
+        let mut f0 = [0u8; 16];
+        f0[0..4].copy_from_slice(&0x100u32.to_le_bytes());
+        f0[4..6].copy_from_slice(&16u16.to_le_bytes());
+        f0[7] = 7;
+        f0[8..10].copy_from_slice(&0x0610u16.to_le_bytes());
+        f0[11] = 2;
+        f0[12] = 1;
+        let at1 = u32::from(0u16.wrapping_sub(1)) | (0x0600 << 16);
+        let mut f = one_datagram(Command::Apwr, at1, &f0);
+        line.process_frame(&mut f);
+        // Through it, FMMU1 := logical 0x200.. -> physical 0x1100, write.
+        let mut f1 = [0u8; 16];
+        f1[0..4].copy_from_slice(&0x200u32.to_le_bytes());
+        f1[4..6].copy_from_slice(&4u16.to_le_bytes());
+        f1[7] = 7;
+        f1[8..10].copy_from_slice(&0x1100u16.to_le_bytes());
+        f1[11] = 2;
+        f1[12] = 1;
+        let mut f = one_datagram(Command::Lwr, 0x100, &f1);
+        line.process_frame(&mut f);
+        // The new window answers in the very next frame.
+        let mut f = one_datagram(Command::Lwr, 0x200, &[1, 2, 3, 4]);
+        line.process_frame(&mut f);
+        let wkc = u16::from_le_bytes([f[f.len() - 2], f[f.len() - 1]]);
+        assert_eq!(wkc, 1, "slave 1 took the write through its new FMMU1");
+        assert_eq!(
+            &line.slaves()[1].esc().raw_memory()[0x1100..0x1104],
+            &[1, 2, 3, 4]
+        );
+        assert_eq!(
+            &line.slaves()[0].esc().raw_memory()[0x1100..0x1104],
+            &[0; 4]
+        );
+    }
+
+    #[test]
     fn the_sweep_runs_every_firmware_once_per_period_spread_over_it() {
         let n = 200;
         let mut line = crate::testing::line(n);
