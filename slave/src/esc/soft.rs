@@ -752,12 +752,20 @@ impl SoftEsc {
         let mem_end = (b as usize).min(MEM_SIZE);
         let from = (a as usize).min(mem_end);
         let src = self.mem.get(from..mem_end).unwrap_or(&[]);
-        for (i, d) in out.iter_mut().enumerate() {
-            let v = src.get(i).copied().unwrap_or(0);
-            *d = match mode {
-                ReadMode::Copy => v,
-                ReadMode::Or => *d | v,
-            };
+        match mode {
+            ReadMode::Copy => {
+                for (d, v) in out.iter_mut().zip(src) {
+                    *d = *v;
+                }
+                for d in out.iter_mut().skip(src.len()) {
+                    *d = 0;
+                }
+            }
+            ReadMode::Or => {
+                for (d, v) in out.iter_mut().zip(src) {
+                    *d |= *v;
+                }
+            }
         }
         while complete != 0 {
             let n = complete.trailing_zeros() as usize;
