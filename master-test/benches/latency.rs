@@ -18,6 +18,8 @@
 //! Run: `cargo bench -p master-test --bench latency` (`-- --frames N` for
 //! another count).
 
+use ecat_slave::wire::builder::FrameBuilder;
+use ecat_slave::wire::ecat::Command as Ecat;
 use pnet_datalink::{Channel, Config, DataLinkReceiver, DataLinkSender};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -77,36 +79,28 @@ impl Drop for Namespace {
 }
 
 /// An EtherCAT frame from the master (source 10:10:10:10:10:10) holding
-/// the datagrams (command, address, data).
-fn frame(datagrams: &[(u8, u32, Vec<u8>)]) -> Vec<u8> {
-    let mut f = vec![0xFF; 6];
-    f.extend_from_slice(&[0x10; 6]);
-    f.extend_from_slice(&[0x88, 0xA4]);
-    let len: usize = datagrams.iter().map(|d| 12 + d.2.len()).sum();
-    f.extend_from_slice(&((len as u16) | 0x1000).to_le_bytes());
-    for (k, (cmd, addr, data)) in datagrams.iter().enumerate() {
-        f.push(*cmd);
-        f.push(k as u8);
-        f.extend_from_slice(&addr.to_le_bytes());
-        let more = if k + 1 < datagrams.len() {
-            0x8000u16
-        } else {
-            0
-        };
-        f.extend_from_slice(&((data.len() as u16) | more).to_le_bytes());
-        f.extend_from_slice(&[0, 0]);
-        f.extend_from_slice(data);
-        f.extend_from_slice(&[0, 0]);
-    }
-    while f.len() < 60 {
-        f.push(0);
-    }
-    f
+/// the datagrams (command, address, data), and where each datagram's data
+/// ends (its working counter follows).
+fn frame(datagrams: &[(Ecat, u32, Vec<u8>)]) -> (Vec<u8>, Vec<usize>) {
+    let mut buf = vec![0u8; 1600];
+    let mut b = FrameBuilder::new(&mut buf, [0x10; 6]).expect("buffer");
+    let ends = datagrams
+        .iter()
+        .map(|(cmd, addr, data)| b.push(*cmd, *addr, data).expect("fits").end)
+        .collect();
+    let len = b.finish();
+    buf.truncate(len.max(60));
+    (buf, ends)
+}
+
+/// Working counter of the datagram whose data ends at `end`.
+fn wkc(f: &[u8], end: usize) -> u16 {
+    u16::from_le_bytes([f[end], f[end + 1]])
 }
 
 /// Configuration frames for slave `i` (APWR: station address, SM2, SM3,
 /// FMMU0 outputs, FMMU1 inputs).
-fn config_frame(i: u16) -> Vec<u8> {
+fn config_frame(i: u16) -> (Vec<u8>, Vec<usize>) {
     let adp = u32::from(0u16.wrapping_sub(i));
     let at = |ado: u32| adp | (ado << 16);
     let log_out = u32::from(i) * u32::from(OUT + IN);
@@ -121,20 +115,20 @@ fn config_frame(i: u16) -> Vec<u8> {
         f
     };
     frame(&[
-        (0x02, at(0x0010), (0x1000 + i).to_le_bytes().to_vec()),
+        (Ecat::Apwr, at(0x0010), (0x1000 + i).to_le_bytes().to_vec()),
         (
-            0x02,
+            Ecat::Apwr,
             at(0x0810),
             vec![0x00, 0x11, OUT as u8, 0, 0x64, 0, 1, 0],
         ),
         (
-            0x02,
+            Ecat::Apwr,
             at(0x0818),
             vec![0x80, 0x11, IN as u8, 0, 0x20, 0, 1, 0],
         ),
-        (0x02, at(0x0600), fmmu(log_out, OUT, 0x1100, 2)),
+        (Ecat::Apwr, at(0x0600), fmmu(log_out, OUT, 0x1100, 2)),
         (
-            0x02,
+            Ecat::Apwr,
             at(0x0610),
             fmmu(log_out + u32::from(OUT), IN, 0x1180, 1),
         ),
@@ -142,27 +136,12 @@ fn config_frame(i: u16) -> Vec<u8> {
 }
 
 /// The cyclic frame of `n` slaves: LRW over the image, BRD AL status.
-fn cycle_frame(n: usize) -> Vec<u8> {
+fn cycle_frame(n: usize) -> (Vec<u8>, Vec<usize>) {
     let image = n * usize::from(OUT + IN);
     frame(&[
-        (0x0C, 0, vec![0x5A; image]),
-        (0x07, 0x0130 << 16, vec![0, 0]),
+        (Ecat::Lrw, 0, vec![0x5A; image]),
+        (Ecat::Brd, 0x0130 << 16, vec![0, 0]),
     ])
-}
-
-/// Working counter of datagram `k` in a returned frame.
-fn wkc(f: &[u8], k: usize) -> u16 {
-    let mut off = 16;
-    let mut at = 0;
-    loop {
-        let len = usize::from(u16::from_le_bytes([f[off + 6], f[off + 7]]) & 0x07FF);
-        let end = off + 10 + len;
-        if at == k {
-            return u16::from_le_bytes([f[end], f[end + 1]]);
-        }
-        off = end + 2;
-        at += 1;
-    }
 }
 
 struct Master {
@@ -270,17 +249,25 @@ fn main() {
         } else {
             ns.start(&bin, &["--iface", &slave, "--count", &n.to_string()]);
             for i in 0..n as u16 {
-                let (r, _) = m.exchange(&config_frame(i));
-                assert_eq!(wkc(&r, 0), 1, "slave {i} configured");
+                let (f, ends) = config_frame(i);
+                let (r, _) = m.exchange(&f);
+                assert!(
+                    ends.iter().all(|&e| wkc(&r, e) == 1),
+                    "slave {i} configured"
+                );
             }
         }
-        let f = cycle_frame(n);
+        let (f, ends) = cycle_frame(n);
         let mut times = Vec::with_capacity(frames);
         for k in 0..frames + 1000 {
             let (r, t) = m.exchange(&f);
             if name != "floor" {
-                assert_eq!(usize::from(wkc(&r, 0)), 3 * n, "LRW reached every slave");
-                assert_eq!(usize::from(wkc(&r, 1)), n, "BRD reached every slave");
+                assert_eq!(
+                    usize::from(wkc(&r, ends[0])),
+                    3 * n,
+                    "LRW reached every slave"
+                );
+                assert_eq!(usize::from(wkc(&r, ends[1])), n, "BRD reached every slave");
             }
             // The first 1000 warm up the caches and the scheduler.
             if k >= 1000 {

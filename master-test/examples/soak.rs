@@ -88,6 +88,21 @@ struct Report {
     left_op: u64,
 }
 
+/// Discovery, SAFE-OP and the OP request on a clean wire (the slaves reach
+/// OP once outputs flow).
+async fn request_op(bus: &VirtualBus) -> master_test::Group<ethercrab::subdevice_group::Op> {
+    let md = &*bus.maindevice;
+    bus.init()
+        .await
+        .expect("bring-up on a clean wire")
+        .into_safe_op(md)
+        .await
+        .expect("SAFE-OP")
+        .request_into_op(md)
+        .await
+        .expect("request OP")
+}
+
 /// Heap allocations while the line of `n` slaves, brought to OP by
 /// ethercrab, serves 5 000 cyclic frames (LRW over the image + BRD AL
 /// status) after 1 000 of warm-up: the per-frame work of the virtual link
@@ -102,14 +117,7 @@ fn steady_state_allocations(n: usize) -> (u64, (u16, u16)) {
     let bus = VirtualBus::with_clock(n, clock.clone()).expect("bus");
     let image = smol::block_on(async {
         let md = &*bus.maindevice;
-        let group = bus.init().await.expect("bring-up");
-        let group = group
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("request OP");
+        let group = request_op(&bus).await;
         for _ in 0..100 {
             clock.advance(Duration::from_millis(1));
             group.tx_rx(md).await.expect("cycle on a clean wire");
@@ -183,14 +191,7 @@ fn main() -> ExitCode {
     let started = Instant::now();
     let (r, live_warm, live_end, allocs) = smol::block_on(async {
         let md = &*bus.maindevice;
-        let group = bus.init().await.expect("bring-up on a clean wire");
-        let group = group
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("request OP");
+        let group = request_op(&bus).await;
         let stations: Vec<u16> = group.iter(md).map(|sd| sd.configured_address()).collect();
         for _ in 0..500 {
             clock.advance(Duration::from_millis(1));

@@ -311,12 +311,8 @@ impl RawLink {
                         });
                     }
                     if let Ok(frame) = net_rx.next() {
-                        // EtherCAT frames a slave processed (source MAC
-                        // with the locally administered bit set).
-                        let ours = frame.len() >= 16
-                            && frame.get(12..14) == Some(&[0x88, 0xA4][..])
-                            && frame.get(6).is_some_and(|b| b & 0x02 != 0);
-                        if ours {
+                        // EtherCAT frames a slave processed.
+                        if ecat_slave::host::raw::is_processed(frame) {
                             let _ = rx.receive_frame(frame);
                         }
                     }

@@ -389,10 +389,7 @@ fn relay_back(
     while !stop.load(Ordering::Acquire) && !done.load(Ordering::Acquire) {
         match rx.next() {
             Ok(frame) => {
-                let processed = frame.len() >= 16
-                    && frame.get(12..14) == Some(&[0x88, 0xA4][..])
-                    && frame.get(6).is_some_and(|b| b & 0x02 != 0);
-                if processed {
+                if is_processed(frame) {
                     let mut tx = tx.lock().unwrap_or_else(|e| e.into_inner());
                     if let Some(Err(source)) = tx.send_to(frame, None) {
                         return Err(RunnerError::Io {
@@ -598,9 +595,17 @@ fn open(iface: &NetworkInterface) -> Result<(Tx, Rx), RunnerError> {
 /// Whether `frame` is an EtherCAT frame from a master (not yet processed
 /// by any slave).
 pub fn is_request(frame: &[u8]) -> bool {
-    frame.len() >= 16
-        && frame.get(12..14) == Some(&[0x88, 0xA4][..])
-        && frame.get(6).is_some_and(|b| b & 0x02 == 0)
+    is_ethercat(frame) && frame.get(6).is_some_and(|b| b & 0x02 == 0)
+}
+
+/// Whether `frame` is an EtherCAT frame a slave has processed (source MAC
+/// with the locally administered bit set): a reply on its way back.
+pub fn is_processed(frame: &[u8]) -> bool {
+    is_ethercat(frame) && frame.get(6).is_some_and(|b| b & 0x02 != 0)
+}
+
+fn is_ethercat(frame: &[u8]) -> bool {
+    frame.len() >= 16 && frame.get(12..14) == Some(&[0x88, 0xA4][..])
 }
 
 #[cfg(test)]
