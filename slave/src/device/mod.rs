@@ -60,4 +60,4 @@ pub use description::{
 };
 pub use sii_image::mapping_entries;
 pub use slave::{FULL_PASS_NS, SM_CONTROL, Slave};
-pub use soft::SoftSlave;
+pub use soft::{SoftPdi, SoftSlave};

@@ -416,7 +416,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
         // and only what it flags. Without an event, nothing queued to send
         // and no full pass due, a pass is one PDI read (plus the inputs in
         // SAFE-OP/OP) and the application's tick.
-        let events = self.esc.read_u32(reg::AL_EVENT_REQUEST)?;
+        let events = self.esc.al_event()?;
         let sm1 = reg::al_event_sm(1);
         let relevant = if self.sm1_quiet {
             events & !sm1

@@ -2,8 +2,8 @@
 //! frames itself, for simulated lines (the virtual link, the raw-socket
 //! runner) and tests.
 
-use crate::esc::EscError;
 use crate::esc::soft::{FrameOutcome, SoftEsc};
+use crate::esc::{Esc, EscError};
 use crate::firmware::ImageStore;
 use crate::led::LedPattern;
 
@@ -11,15 +11,43 @@ use super::application::Application;
 use super::description::MemoryLayout;
 use super::slave::Slave;
 
-/// A device on the software ESC: takes EtherCAT frames.
-pub struct SoftSlave<A: Application> {
-    inner: Slave<SoftEsc, A>,
+/// How a software slave's firmware reaches its software ESC: directly
+/// ([`SoftEsc`] itself, the default), or through a PDI driver and an
+/// emulated chip interface in front of the software ESC (an SPI driver
+/// talking to a byte-level emulation of an ET1100 or a LAN9252), so the
+/// frames a master sends are served by firmware that runs exactly the PDI
+/// path it would run on a board.
+pub trait SoftPdi: Esc {
+    /// The software ESC behind the PDI (frames, watchdogs, links).
+    fn soft_esc(&self) -> &SoftEsc;
+    /// The software ESC behind the PDI, mutably.
+    fn soft_esc_mut(&mut self) -> &mut SoftEsc;
+    /// A power cycle of the board: the ESC's registers restart (and a PDI
+    /// with state of its own, such as an emulated chip, resets it).
+    fn power_on(&mut self) {
+        self.soft_esc_mut().power_on();
+    }
+}
+
+impl SoftPdi for SoftEsc {
+    fn soft_esc(&self) -> &SoftEsc {
+        self
+    }
+    fn soft_esc_mut(&mut self) -> &mut SoftEsc {
+        self
+    }
+}
+
+/// A device on the software ESC: takes EtherCAT frames. `P` is the PDI
+/// path of its firmware (see [`SoftPdi`]).
+pub struct SoftSlave<A: Application, P: SoftPdi = SoftEsc> {
+    inner: Slave<P, A>,
     port1_link: bool,
     stalled: bool,
     now_ns: u64,
 }
 
-impl<A: Application> core::fmt::Debug for SoftSlave<A> {
+impl<A: Application, P: SoftPdi> core::fmt::Debug for SoftSlave<A, P> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         self.inner.fmt(f)
     }
@@ -35,13 +63,7 @@ impl<A: Application> SoftSlave<A> {
     /// `app` in its power-on state on a software ESC serving the device's
     /// SII image.
     pub fn new(app: A) -> Self {
-        let sii = A::DESCRIPTION.sii_image();
-        SoftSlave {
-            inner: Slave::new(SoftEsc::new(&sii), app),
-            port1_link: false,
-            stalled: false,
-            now_ns: 0,
-        }
+        Self::with_pdi(app, |esc| esc)
     }
 
     /// A slave whose standard mailboxes have another layout (the SII it
@@ -57,19 +79,34 @@ impl<A: Application> SoftSlave<A> {
             now_ns: 0,
         }
     }
+}
+
+impl<A: Application, P: SoftPdi> SoftSlave<A, P> {
+    /// `app` in its power-on state, its firmware reaching the software ESC
+    /// (serving the device's SII image) through the PDI `wrap` builds
+    /// around it.
+    pub fn with_pdi(app: A, wrap: impl FnOnce(SoftEsc) -> P) -> Self {
+        let sii = A::DESCRIPTION.sii_image();
+        SoftSlave {
+            inner: Slave::new(wrap(SoftEsc::new(&sii)), app),
+            port1_link: false,
+            stalled: false,
+            now_ns: 0,
+        }
+    }
 
     /// A power cycle: ESC registers and firmware restart; the EEPROM (SII)
     /// and the application's non-volatile storage keep what they hold.
     pub fn power_cycle(&mut self) {
         self.inner.esc_mut().power_on();
-        self.inner.esc_mut().set_port1_link(self.port1_link);
+        self.inner.esc_mut().soft_esc_mut().set_port1_link(self.port1_link);
         self.inner.restart();
         self.stalled = false;
     }
 
     /// Passes an Ethernet frame through the ESC (in place).
     pub fn process_frame(&mut self, frame: &mut [u8]) -> FrameOutcome {
-        self.inner.esc_mut().process_frame(frame)
+        self.inner.esc_mut().soft_esc_mut().process_frame(frame)
     }
 
     /// Runs the ESC's watchdogs and then the firmware once. A PDI failure
@@ -90,16 +127,16 @@ impl<A: Application> SoftSlave<A> {
         now_ns: u64,
         images: Option<&mut (dyn ImageStore + 's)>,
     ) -> Result<(), EscError> {
-        self.inner.esc_mut().update_watchdogs(now_ns);
+        self.inner.esc_mut().soft_esc_mut().update_watchdogs(now_ns);
         if self.stalled {
-            if self.inner.esc().pdi_watchdog_expired() {
+            if self.inner.esc().soft_esc().pdi_watchdog_expired() {
                 self.inner.app_mut().pdi_watchdog_expired();
             }
             return Ok(());
         }
         let result = self.inner.poll_with(now_ns, images);
         // Stamp the firmware's PDI accesses with the time they happened.
-        self.inner.esc_mut().update_watchdogs(now_ns);
+        self.inner.esc_mut().soft_esc_mut().update_watchdogs(now_ns);
         self.now_ns = now_ns;
         result
     }
@@ -119,7 +156,7 @@ impl<A: Application> SoftSlave<A> {
     /// RUN and ERR LED patterns now.
     pub fn led_patterns(&self) -> (LedPattern, LedPattern) {
         self.inner
-            .led_patterns(self.inner.esc().pdi_watchdog_expired())
+            .led_patterns(self.inner.esc().soft_esc().pdi_watchdog_expired())
     }
 
     /// Whether RUN and ERR are lit at the last poll's time.
@@ -132,16 +169,16 @@ impl<A: Application> SoftSlave<A> {
     /// Sets whether port 1 has a link (every slave but the last).
     pub fn set_port1_link(&mut self, link: bool) {
         self.port1_link = link;
-        self.inner.esc_mut().set_port1_link(link);
+        self.inner.esc_mut().soft_esc_mut().set_port1_link(link);
     }
 
     /// The firmware.
-    pub fn slave(&self) -> &Slave<SoftEsc, A> {
+    pub fn slave(&self) -> &Slave<P, A> {
         &self.inner
     }
 
     /// The firmware, mutably.
-    pub fn slave_mut(&mut self) -> &mut Slave<SoftEsc, A> {
+    pub fn slave_mut(&mut self) -> &mut Slave<P, A> {
         &mut self.inner
     }
 }

@@ -70,4 +70,15 @@ pub trait Esc {
     fn write_u16(&mut self, addr: u16, value: u16) -> Result<(), EscError> {
         self.write(addr, &value.to_le_bytes())
     }
+
+    /// The AL event request register (0x0220..0x0223), the first thing
+    /// the firmware loop reads on every pass. The default reads it as a
+    /// register; a PDI that gets it more cheaply overrides this (an
+    /// ET1100-family SPI slave returns 0x0220/0x0221 during the address
+    /// phase of every access, so a bare address phase is enough; such a
+    /// PDI may return only the low 16 bits, which hold AL control, the
+    /// watchdog and the events of SyncManagers 0..7).
+    fn al_event(&mut self) -> Result<u32, EscError> {
+        self.read_u32(registers::AL_EVENT_REQUEST)
+    }
 }

@@ -17,7 +17,7 @@
 use std::any::Any;
 
 use crate::al::AlStatus;
-use crate::device::{Application, DeviceDescription, SoftSlave};
+use crate::device::{Application, DeviceDescription, SoftPdi, SoftSlave};
 use crate::esc::EscError;
 use crate::esc::soft::{FrameOutcome, SoftEsc};
 use crate::firmware::{self, FirmwareVersion, ImageStore, StoreError};
@@ -103,7 +103,7 @@ pub trait LineSlave: Send {
     fn as_any_mut(&mut self) -> &mut dyn Any;
 }
 
-impl<A: Application + Send + 'static> LineSlave for SoftSlave<A> {
+impl<A: Application + Send + 'static, P: SoftPdi + Send + 'static> LineSlave for SoftSlave<A, P> {
     fn description(&self) -> &'static DeviceDescription {
         A::DESCRIPTION
     }
@@ -111,10 +111,10 @@ impl<A: Application + Send + 'static> LineSlave for SoftSlave<A> {
         SoftSlave::process_frame(self, frame)
     }
     fn esc(&self) -> &SoftEsc {
-        self.slave().esc()
+        self.slave().esc().soft_esc()
     }
     fn esc_mut(&mut self) -> &mut SoftEsc {
-        self.slave_mut().esc_mut()
+        self.slave_mut().esc_mut().soft_esc_mut()
     }
     fn poll_with(
         &mut self,

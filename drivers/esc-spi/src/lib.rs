@@ -1,0 +1,31 @@
+//! # ecat-esc-spi: SPI PDI drivers for real EtherCAT slave controllers
+//!
+//! Drivers that implement the `ecat-slave` core's PDI trait
+//! ([`ecat_slave::esc::Esc`]) on an `embedded-hal` 1.0
+//! [`SpiDevice`](embedded_hal::spi::SpiDevice), so a firmware built on the
+//! core runs on a microcontroller next to a real ESC chip:
+//!
+//! - [`et1100`]: the Beckhoff ET1100/ET1200 SPI slave interface (also the
+//!   ASIX AX58100 and the LAN9253 in "Beckhoff SPI" mode): 2- and 3-byte
+//!   addressing, read with a wait-state byte, the AL event request
+//!   returned in every address phase.
+//! - [`lan9252`]: the Microchip LAN9252 SPI interface: instructions, ESC
+//!   registers through ECAT_CSR_CMD/ECAT_CSR_DATA, process RAM through the
+//!   read/write FIFOs, byte test, reset and ready checks.
+//!
+//! `#![no_std]`, no allocation. Protocol facts and their sources are in
+//! `docs/SPI-NOTES.md` of the repository.
+#![no_std]
+#![forbid(unsafe_code)]
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
+)]
+
+pub mod et1100;
+pub mod lan9252;
