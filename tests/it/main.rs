@@ -21,5 +21,6 @@ mod power_cut;
 mod sdo;
 mod sii;
 mod soem;
+mod spi_pdi;
 mod state;
 mod veth;

@@ -32,11 +32,11 @@ pub(crate) fn pysoem_python() -> Option<String> {
     })
 }
 
-fn start_runner(ns: &str, bin: &Path, iface: &str, state: &Path, pcap: &Path) -> Child {
+fn start_runner(ns: &str, bin: &Path, line: &str, iface: &str, state: &Path, pcap: &Path) -> Child {
     let child = Command::new("ip")
         .args(["netns", "exec", ns])
         .arg(bin)
-        .args(["--iface", iface, "--count", "8", "--state-dir"])
+        .args(["--iface", iface, "--line", line, "--state-dir"])
         .arg(state)
         .arg("--pcap")
         .arg(pcap)
@@ -78,9 +78,9 @@ pub(crate) fn run_python(py: &str, args: &[&str]) -> (bool, String) {
     (out.status.success(), text)
 }
 
-/// Appends to `target/interop-logs/soem.log` (which `.ci/run` prints after
+/// Appends to `target/interop-logs/<log>` (which `.ci/run` prints after
 /// the tests: cargo shows a passing test's output only with --nocapture).
-fn keep_log(text: &str) {
+fn keep_log(log: &str, text: &str) {
     use std::io::Write as _;
     let dir = PathBuf::from(concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -90,7 +90,7 @@ fn keep_log(text: &str) {
         && let Ok(mut f) = std::fs::OpenOptions::new()
             .create(true)
             .append(true)
-            .open(dir.join("soem.log"))
+            .open(dir.join(log))
     {
         let _ = f.write_all(text.as_bytes());
     }
@@ -126,28 +126,33 @@ impl Drop for TempDir {
     }
 }
 
-#[test]
-fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
+/// SOEM's phases 1 and 2 (see the script) against a runner serving the
+/// 8-PAM line `line`; returns the directory holding phase 1's capture
+/// (`phase1.pcap`), or `None` when the test had to be skipped.
+fn soem_phases(tag: &str, line: &str, log: &str) -> Option<TempDir> {
     let Some(py) = pysoem_python() else {
-        return skip(
+        skip(
             "no Python with pysoem (pip install pysoem, or set PAM_PYSOEM_PYTHON); .ci/run installs it",
         );
+        return None;
     };
     let Some(bin) = runner_binary() else {
-        return skip("pam-slave binary not built next to the test binary");
+        skip("pam-slave binary not built next to the test binary");
+        return None;
     };
     let _serial = crate::common::NET_TESTS
         .lock()
         .unwrap_or_else(|e| e.into_inner());
-    let (mut guard, host_if, slave_if) = match setup("s") {
+    let (mut guard, host_if, slave_if) = match setup(tag) {
         Ok(x) => x,
         Err(e) => {
-            return skip(&format!(
+            skip(&format!(
                 "cannot create a network namespace and veth pair here ({e}); needs root and iproute2"
             ));
+            return None;
         }
     };
-    let dir = TempDir(std::env::temp_dir().join(format!("pam-soem-{}", std::process::id())));
+    let dir = TempDir(std::env::temp_dir().join(format!("pam-soem-{tag}-{}", std::process::id())));
     std::fs::create_dir_all(&dir.0).expect("temp dir");
     let file = |n: &str| dir.0.join(n);
     let esi = ecat_esi::generate(&pam_199_p_etc::DEVICE).expect("ESI");
@@ -165,11 +170,26 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
     std::fs::write(file("bad.efw"), &bad).expect("image");
     let state = file("state");
     let s = |p: PathBuf| p.to_string_lossy().into_owned();
+    let _ = std::fs::remove_file(
+        PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../target/interop-logs"
+        ))
+        .join(log),
+    );
+    keep_log(log, &format!("=== pam-slave --line {line} ===\n"));
 
     // Phase 1: everything up to the firmware download and BOOT -> INIT.
-    let runner = start_runner(&guard.name, &bin, &slave_if, &state, &file("phase1.pcap"));
+    let runner = start_runner(
+        &guard.name,
+        &bin,
+        line,
+        &slave_if,
+        &state,
+        &file("phase1.pcap"),
+    );
     guard.runner = Some(runner);
-    let (ok, log) = run_python(
+    let (ok, out) = run_python(
         &py,
         &[
             "phase1",
@@ -181,23 +201,44 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
             "11",
         ],
     );
-    let _ = std::fs::remove_file(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../target/interop-logs/soem.log"
-    ));
-    keep_log(&format!("--- SOEM phase 1 ---\n{log}"));
-    eprintln!("--- SOEM phase 1 ---\n{log}");
+    keep_log(log, &format!("--- SOEM phase 1 ---\n{out}"));
+    eprintln!("--- SOEM phase 1 ({line}) ---\n{out}");
     stop_runner(guard.runner.take().expect("runner"));
-    assert!(ok, "SOEM phase 1 failed (log above)");
+    assert!(ok, "SOEM phase 1 on {line} failed (log above)");
 
     // The runner restarts on the same state directory: a power cycle.
-    let runner = start_runner(&guard.name, &bin, &slave_if, &state, &file("phase2.pcap"));
+    let runner = start_runner(
+        &guard.name,
+        &bin,
+        line,
+        &slave_if,
+        &state,
+        &file("phase2.pcap"),
+    );
     guard.runner = Some(runner);
-    let (ok, log) = run_python(&py, &["phase2", &host_if, "11"]);
-    keep_log(&format!("--- SOEM phase 2 ---\n{log}"));
-    eprintln!("--- SOEM phase 2 ---\n{log}");
+    let (ok, out) = run_python(&py, &["phase2", &host_if, "11"]);
+    keep_log(log, &format!("--- SOEM phase 2 ---\n{out}"));
+    eprintln!("--- SOEM phase 2 ({line}) ---\n{out}");
     stop_runner(guard.runner.take().expect("runner"));
-    assert!(ok, "SOEM phase 2 failed (log above)");
+    assert!(ok, "SOEM phase 2 on {line} failed (log above)");
+    Some(dir)
+}
+
+/// The same SOEM phases with every PAM's firmware talking to its ESC
+/// through an SPI driver and an emulated chip: four on the ET1100 driver,
+/// four on the LAN9252 driver (the FoE update goes to the eighth, a
+/// LAN9252 one).
+#[test]
+fn soem_drives_8_slaves_whose_firmware_runs_on_the_et1100_and_lan9252_spi_drivers() {
+    soem_phases("q", "pam@et1100*4,pam@lan9252*4", "soem-spi.log");
+}
+
+#[test]
+fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
+    let Some(dir) = soem_phases("s", "pam*8", "soem.log") else {
+        return;
+    };
+    let file = |n: &str| dir.0.join(n);
 
     // tshark decodes every abort SOEM provoked as an SDO abort with its
     // code, and the FoE refusals with theirs.
@@ -211,7 +252,10 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
         "ecat_mailbox.coe.abortcode",
     )
     .expect("tshark reads the runner's capture");
-    keep_log(&format!("tshark: SDO abort codes {aborts:#010x?}\n"));
+    keep_log(
+        "soem.log",
+        &format!("tshark: SDO abort codes {aborts:#010x?}\n"),
+    );
     eprintln!("tshark: SDO abort codes {aborts:#010x?}");
     for code in [
         0x0609_0031,
@@ -231,7 +275,10 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
         "ecat_mailbox.foe_errcode",
     )
     .expect("tshark FoE");
-    keep_log(&format!("tshark: FoE error codes {foe_errors:#06x?}\n"));
+    keep_log(
+        "soem.log",
+        &format!("tshark: FoE error codes {foe_errors:#06x?}\n"),
+    );
     eprintln!("tshark: FoE error codes {foe_errors:#06x?}");
     assert!(
         foe_errors.contains(&0x800A),

@@ -99,7 +99,10 @@ impl<A: Application, P: SoftPdi> SoftSlave<A, P> {
     /// and the application's non-volatile storage keep what they hold.
     pub fn power_cycle(&mut self) {
         self.inner.esc_mut().power_on();
-        self.inner.esc_mut().soft_esc_mut().set_port1_link(self.port1_link);
+        self.inner
+            .esc_mut()
+            .soft_esc_mut()
+            .set_port1_link(self.port1_link);
         self.inner.restart();
         self.stalled = false;
     }

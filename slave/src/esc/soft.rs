@@ -269,6 +269,11 @@ impl SoftEsc {
         self.set_u16(reg::WATCHDOG_TIME_PDI, 1000);
         self.set_u16(reg::WATCHDOG_TIME_PD, 1000);
         self.set_u16(reg::WATCHDOG_STATUS_PD, 0x0001);
+        // Every AL event reaches the IRQ line but the SM8-15 ones and the
+        // reserved bits 4..7 of the first byte: the ET1100's reset value of
+        // the AL event mask (ET1100 Section II, register 0x0204: 0x00FFFF0F).
+        // Only the IRQ output uses it; 0x0220 shows every event regardless.
+        self.set_u32(reg::AL_EVENT_MASK, 0x00FF_FF0F);
         // 8-byte EEPROM reads.
         self.set_u16(reg::SII_CONTROL, 0x0040);
         self.set_port1_link(false);
