@@ -41,7 +41,10 @@ MANIFEST=$FW/Cargo.toml
 HARNESS=$FW/harness.c
 CC=${CC:-gcc}
 CFLAGS=(-Os -std=c11 -no-pie -Wl,--gc-sections)
-DEVICES=(base io8 pam)
+DEVICES=(base io8 pam io8-et1100)
+# Cargo features of each build ("io8-et1100": the IO8 with the ET1100 SPI
+# driver of drivers/esc-spi instead of the board's C spi_read/spi_write).
+declare -A FEATURES=([base]="" [io8]="io8" [pam]="pam" [io8-et1100]="io8 spi-et1100")
 
 run() {
     printf '+ %s\n' "$*"
@@ -61,7 +64,7 @@ HOST=$(rustc -vV | sed -n 's/^host: //p')
 echo "== Build (host target $HOST; profile.release of $MANIFEST: opt-level \"s\", lto, panic = \"abort\", codegen-units = 1)"
 for dev in "${DEVICES[@]}"; do
     features=()
-    [ "$dev" = base ] || features=(--features "$dev")
+    [ -z "${FEATURES[$dev]}" ] || features=(--features "${FEATURES[$dev]}")
     run cargo build --release --manifest-path "$MANIFEST" "${features[@]}" ||
         fail "cargo build of the $dev firmware failed"
     run cp "$OUT/release/libecat_firmware.a" "$OUT/libfw-$dev.a"
@@ -117,11 +120,17 @@ row() { # label text ro relro data bss eh
         "$1" "$2" "$3" "$4" "$5" "$6" $(($2 + $3 + $4 + $5)) $(($5 + $6)) "$7"
 }
 row "harness alone (base)" "${TEXT[base]}" "${RO[base]}" "${RELRO[base]}" "${DATA[base]}" "${BSS[base]}" "${EH[base]}"
-for dev in io8 pam; do
+for dev in io8 pam io8-et1100; do
     row "$dev firmware" \
         $((TEXT[$dev] - TEXT[base])) $((RO[$dev] - RO[base])) $((RELRO[$dev] - RELRO[base])) \
         $((DATA[$dev] - DATA[base])) $((BSS[$dev] - BSS[base])) $((EH[$dev] - EH[base]))
 done
+# The ET1100 driver's own size: the same IO8 firmware with the driver
+# minus with the board's C PDI functions (the C side's byte-level SPI
+# model is in the harness, not in these figures).
+row "ET1100 driver added" \
+    $((${TEXT[io8-et1100]} - ${TEXT[io8]})) $((${RO[io8-et1100]} - ${RO[io8]})) $((${RELRO[io8-et1100]} - ${RELRO[io8]})) \
+    $((${DATA[io8-et1100]} - ${DATA[io8]})) $((${BSS[io8-et1100]} - ${BSS[io8]})) $((${EH[io8-et1100]} - ${EH[io8]}))
 cat <<'EOF'
     text: machine code (.text .init .fini .plt). rodata: constants without
     pointers (strings, jump tables, panic locations). .data.rel.ro: constant

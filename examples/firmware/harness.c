@@ -118,6 +118,83 @@ int32_t spi_write(uint16_t addr, const uint8_t *data, size_t len)
 }
 
 /* ------------------------------------------------------------------ */
+/* The ET1100 SPI slave interface at byte level (the spi-et1100 build): */
+/* address phase 2 bytes (A[12:5], A[4:0] << 3 | CMD) or 3 with CMD 110 */
+/* (then A[15:13] << 5 | CMD << 2), MISO = 0x0220, 0x0221 (, 0x0222)    */
+/* during it; CMD 010 read, 011 read after one wait-state byte, 100     */
+/* write, 000 NOP (docs/SPI-NOTES.md A.1-A.4). Data bytes go to         */
+/* spi_read / spi_write one by one, as the ESC auto-increments.         */
+/* ------------------------------------------------------------------ */
+
+static struct {
+    size_t n;               /* bytes clocked in this cycle */
+    unsigned hdr0, addr, cmd, hlen, ext;
+    int err;
+} cyc;
+static unsigned long spi_cycles;
+
+void spi_begin(void)
+{
+    memset(&cyc, 0, sizeof cyc);
+    spi_cycles++;
+}
+
+static uint8_t spi_byte(uint8_t mosi)
+{
+    size_t i = cyc.n++;
+    if (i == 0) {
+        cyc.hdr0 = mosi;
+        return esc[AL_EVENT];
+    }
+    if (i == 1) {
+        cyc.addr = cyc.hdr0 << 5 | (unsigned)(mosi >> 3);
+        if ((mosi & 7) == 6) {
+            cyc.ext = 1;
+        } else {
+            cyc.cmd = mosi & 7;
+            cyc.hlen = 2;
+        }
+        return esc[AL_EVENT + 1];
+    }
+    if (cyc.ext && i == 2) {
+        cyc.addr |= (unsigned)(mosi >> 5) << 13;
+        cyc.cmd = (mosi >> 2) & 7;
+        cyc.hlen = 3;
+        return esc[AL_EVENT + 2];
+    }
+    size_t d = i - cyc.hlen;
+    uint8_t b = 0;
+    switch (cyc.cmd) {
+    case 3:
+        if (d == 0)
+            return 0xFF; /* the wait-state byte */
+        d--;
+        /* fall through */
+    case 2:
+        if (spi_read((uint16_t)(cyc.addr + d), &b, 1))
+            cyc.err = 1;
+        return b;
+    case 4:
+        if (spi_write((uint16_t)(cyc.addr + d), &mosi, 1))
+            cyc.err = 1;
+        return 0;
+    default:
+        return 0;
+    }
+}
+
+void spi_transfer(const uint8_t *mosi, uint8_t *miso, size_t len)
+{
+    for (size_t i = 0; i < len; i++) {
+        uint8_t in = spi_byte(mosi ? mosi[i] : 0x00);
+        if (miso)
+            miso[i] = in;
+    }
+}
+
+int32_t spi_end(void) { return cyc.err ? -1 : 0; }
+
+/* ------------------------------------------------------------------ */
 /* Board: IO8 GPIO, PAM power stage, EEPROM, image flash               */
 /* ------------------------------------------------------------------ */
 
@@ -789,6 +866,9 @@ int main(void)
         }
     }
 
+    if (spi_cycles)
+        printf("harness: %lu SPI cycles at byte level (ET1100 protocol; the reads and writes "
+               "below are per byte)\n", spi_cycles);
     printf("harness: %lu polls, %lu SPI reads, %lu SPI writes; mailbox %lu requests, %lu responses, "
            "%lu SDO uploads, %lu downloads, %lu aborts, %lu SDO Info requests, %lu emergencies, "
            "%lu mailbox errors, %lu FoE packets; EEPROM writes %lu, flash erases %lu, "

@@ -32,7 +32,17 @@ pub(crate) fn pysoem_python() -> Option<String> {
     })
 }
 
-fn start_runner(ns: &str, bin: &Path, line: &str, iface: &str, state: &Path, pcap: &Path) -> Child {
+/// Starts the runner; its stderr goes to `log`.
+fn start_runner(
+    ns: &str,
+    bin: &Path,
+    line: &str,
+    iface: &str,
+    state: &Path,
+    pcap: &Path,
+    log: &Path,
+) -> Child {
+    let stderr = std::fs::File::create(log).expect("runner log file");
     let child = Command::new("ip")
         .args(["netns", "exec", ns])
         .arg(bin)
@@ -41,7 +51,7 @@ fn start_runner(ns: &str, bin: &Path, line: &str, iface: &str, state: &Path, pca
         .arg("--pcap")
         .arg(pcap)
         .stdout(Stdio::null())
-        .stderr(Stdio::inherit())
+        .stderr(stderr)
         .spawn()
         .expect("start pam-slave in the namespace");
     std::thread::sleep(Duration::from_millis(400));
@@ -187,6 +197,7 @@ fn soem_phases(tag: &str, line: &str, log: &str) -> Option<TempDir> {
         &slave_if,
         &state,
         &file("phase1.pcap"),
+        &file("runner1.log"),
     );
     guard.runner = Some(runner);
     let (ok, out) = run_python(
@@ -214,6 +225,7 @@ fn soem_phases(tag: &str, line: &str, log: &str) -> Option<TempDir> {
         &slave_if,
         &state,
         &file("phase2.pcap"),
+        &file("runner2.log"),
     );
     guard.runner = Some(runner);
     let (ok, out) = run_python(&py, &["phase2", &host_if, "11"]);
@@ -221,6 +233,23 @@ fn soem_phases(tag: &str, line: &str, log: &str) -> Option<TempDir> {
     eprintln!("--- SOEM phase 2 ({line}) ---\n{out}");
     stop_runner(guard.runner.take().expect("runner"));
     assert!(ok, "SOEM phase 2 on {line} failed (log above)");
+    for run in ["runner1.log", "runner2.log"] {
+        let text = std::fs::read_to_string(file(run)).unwrap_or_default();
+        keep_log(log, &format!("--- {run} ---\n{text}"));
+        eprintln!("--- {run} ---\n{text}");
+        assert!(
+            text.contains("stopped after"),
+            "the runner stopped cleanly: {text}"
+        );
+        // Slaves on an SPI PDI: the emulated chips saw only well-formed
+        // SPI and refused nothing.
+        if line.contains('@') {
+            assert!(
+                text.contains(" transactions, 0 protocol errors, 0 refused accesses"),
+                "SPI wires clean: {text}"
+            );
+        }
+    }
     Some(dir)
 }
 

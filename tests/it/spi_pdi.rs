@@ -9,41 +9,20 @@
 
 use crate::common::{abort_code, status};
 use device_catalog::{Et1100Pdi, Lan9252Pdi};
-use ecat_slave::device::{Application, SoftPdi, SoftSlave};
+use ecat_slave::device::SoftSlave;
 use ecat_slave::host::chain::LineSlave;
 use io8_example::Io8;
 use master_test::VirtualBus;
 use master_test::foe::{self, enter_boot, request_state};
 use master_test::link::{Clock, lock};
 use master_test::mailbox::{MailboxClient, MailboxGeometry};
-use pam_199_p_etc::Pam;
 use std::time::Duration;
 
 /// SPI statistics of slave `s`'s emulated chip: (SEL cycles, protocol
 /// errors, refused accesses).
 fn chip_stats(s: &dyn LineSlave) -> (u64, u64, u64) {
-    fn of<A: Application + Send + 'static, P: SoftPdi + 'static>(
-        s: &dyn LineSlave,
-    ) -> Option<&SoftSlave<A, P>> {
-        s.as_any().downcast_ref::<SoftSlave<A, P>>()
-    }
-    if let Some(p) = of::<Pam, Et1100Pdi>(s).map(|x| x.slave().esc()) {
-        let c = p.chip();
-        return (c.transactions(), c.protocol_errors(), c.refused_accesses());
-    }
-    if let Some(p) = of::<Io8, Et1100Pdi>(s).map(|x| x.slave().esc()) {
-        let c = p.chip();
-        return (c.transactions(), c.protocol_errors(), c.refused_accesses());
-    }
-    if let Some(p) = of::<Pam, Lan9252Pdi>(s).map(|x| x.slave().esc()) {
-        let c = p.chip();
-        return (c.transactions(), c.protocol_errors(), c.refused_accesses());
-    }
-    if let Some(p) = of::<Io8, Lan9252Pdi>(s).map(|x| x.slave().esc()) {
-        let c = p.chip();
-        return (c.transactions(), c.protocol_errors(), c.refused_accesses());
-    }
-    panic!("not a slave on an SPI PDI");
+    let st = s.spi_stats().expect("a slave on an SPI PDI");
+    (st.transactions, st.protocol_errors, st.refused_accesses)
 }
 
 #[test]

@@ -12,7 +12,7 @@ use ecat_esc_spi::et1100::{Et1100Config, Et1100Spi};
 use ecat_esc_spi::lan9252::Lan9252Spi;
 use ecat_esc_spi_emu::et1100::Et1100Emu;
 use ecat_esc_spi_emu::lan9252::Lan9252Emu;
-use ecat_slave::device::SoftPdi;
+use ecat_slave::device::{SoftPdi, SpiStats};
 use ecat_slave::esc::soft::SoftEsc;
 use ecat_slave::esc::{Esc, EscError};
 
@@ -67,6 +67,14 @@ impl SoftPdi for Et1100Pdi {
     }
     fn power_on(&mut self) {
         self.driver.spi_mut().reset();
+    }
+    fn spi_stats(&self) -> Option<SpiStats> {
+        let c = self.chip();
+        Some(SpiStats {
+            transactions: c.transactions(),
+            protocol_errors: c.protocol_errors(),
+            refused_accesses: c.refused_accesses(),
+        })
     }
 }
 
@@ -135,5 +143,13 @@ impl SoftPdi for Lan9252Pdi {
         self.driver.spi_mut().reset();
         self.ready = false;
         let _ = self.ensure_ready();
+    }
+    fn spi_stats(&self) -> Option<SpiStats> {
+        let c = self.chip();
+        Some(SpiStats {
+            transactions: c.transactions(),
+            protocol_errors: c.protocol_errors(),
+            refused_accesses: c.refused_accesses(),
+        })
     }
 }

@@ -67,7 +67,7 @@
 #![forbid(unsafe_code)]
 
 use ecat_esc_spi::lan9252::{ChipId, Lan9252Error, Lan9252Spi};
-use ecat_slave::device::Slave;
+use ecat_slave::device::{PollSchedule, Slave};
 use ecat_slave::esc::EscError;
 use ecat_slave::hal::{MemNv, NvStorage};
 use ecat_slave::params::STORAGE_SIZE;
@@ -130,7 +130,7 @@ impl<I: InputPin, O: OutputPin> Board for PinBoard<I, O> {
 pub struct Node<S: SpiDevice, Q: InputPin, B: Board, N: NvStorage = MemNv<STORAGE_SIZE>> {
     slave: Slave<Lan9252Spi<S>, Io8<B, N>>,
     irq: Q,
-    last_pass_ns: Option<u64>,
+    schedule: PollSchedule,
     passes: u32,
 }
 
@@ -144,7 +144,7 @@ impl<S: SpiDevice, Q: InputPin, B: Board, N: NvStorage> Node<S, Q, B, N> {
         let node = Node {
             slave: Slave::new(esc, Io8::new(board, nv)),
             irq,
-            last_pass_ns: None,
+            schedule: PollSchedule::new(IDLE_POLL_NS),
             passes: 0,
         };
         Ok((node, id))
@@ -160,13 +160,9 @@ impl<S: SpiDevice, Q: InputPin, B: Board, N: NvStorage> Node<S, Q, B, N> {
         // The IRQ pin: an unreadable pin counts as asserted (poll rather
         // than miss an event).
         let asserted = self.irq.is_low().unwrap_or(true);
-        let idle_due = self
-            .last_pass_ns
-            .is_none_or(|t| now_ns.saturating_sub(t) >= IDLE_POLL_NS);
-        if !asserted && !idle_due {
+        if !self.schedule.due(asserted, now_ns) {
             return Ok(false);
         }
-        self.last_pass_ns = Some(now_ns);
         self.passes = self.passes.wrapping_add(1);
         self.slave.poll(now_ns).map(|()| true)
     }

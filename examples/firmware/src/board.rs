@@ -39,6 +39,62 @@ impl Esc for SpiEsc {
     }
 }
 
+/// The ESC bus at byte level (`spi_begin` / `spi_transfer` / `spi_end` of
+/// the C side) as an `embedded-hal` SPI device with chip select, for the
+/// ET1100 driver of `ecat-esc-spi` (`--features spi-et1100`).
+#[cfg(feature = "spi-et1100")]
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FfiSpi;
+
+#[cfg(feature = "spi-et1100")]
+impl embedded_hal::spi::ErrorType for FfiSpi {
+    type Error = embedded_hal::spi::ErrorKind;
+}
+
+#[cfg(feature = "spi-et1100")]
+impl embedded_hal::spi::SpiDevice for FfiSpi {
+    fn transaction(
+        &mut self,
+        operations: &mut [embedded_hal::spi::Operation<'_, u8>],
+    ) -> Result<(), Self::Error> {
+        use core::ptr::{null, null_mut};
+        use embedded_hal::spi::Operation;
+        ffi::spi_begin();
+        for op in operations {
+            // SAFETY (FFI calls with pointers): each pointer comes from a
+            // live slice of at least the length passed (or is null, which
+            // the C side treats as "send 0x00" / "drop"); the C side keeps
+            // no pointer after the call.
+            unsafe {
+                match op {
+                    Operation::Read(r) => ffi::spi_transfer(null(), r.as_mut_ptr(), r.len()),
+                    Operation::Write(w) => ffi::spi_transfer(w.as_ptr(), null_mut(), w.len()),
+                    Operation::Transfer(r, w) => {
+                        let n = r.len().min(w.len());
+                        ffi::spi_transfer(w.as_ptr(), r.as_mut_ptr(), n);
+                        if let Some(rest) = r.get_mut(n..) {
+                            ffi::spi_transfer(null(), rest.as_mut_ptr(), rest.len());
+                        }
+                        if let Some(rest) = w.get(n..) {
+                            ffi::spi_transfer(rest.as_ptr(), null_mut(), rest.len());
+                        }
+                    }
+                    Operation::TransferInPlace(b) => {
+                        let p = b.as_mut_ptr();
+                        ffi::spi_transfer(p, p, b.len());
+                    }
+                    Operation::DelayNs(_) => {}
+                }
+            }
+        }
+        if ffi::spi_end() == 0 {
+            Ok(())
+        } else {
+            Err(embedded_hal::spi::ErrorKind::Other)
+        }
+    }
+}
+
 /// The parameter EEPROM (`nv_read` / `nv_write`), [`STORAGE_SIZE`] bytes.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct EepromNv;

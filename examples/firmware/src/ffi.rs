@@ -19,6 +19,16 @@ unsafe extern "C" {
     /// Writes `len` bytes from `data` into ESC memory at `addr` (SPI write).
     pub fn spi_write(addr: u16, data: *const u8, len: usize) -> i32;
 
+    /// SPI bus, byte level (the `spi-et1100` build): chip select asserted.
+    pub safe fn spi_begin();
+    /// Clocks `len` bytes: sends `mosi[i]` (0x00 when `mosi` is null) and
+    /// stores what comes back in `miso[i]` (dropped when `miso` is null).
+    /// `mosi` and `miso` may be the same buffer (byte i is sent before
+    /// byte i is stored).
+    pub fn spi_transfer(mosi: *const u8, miso: *mut u8, len: usize);
+    /// Chip select released; 0, or negative when the access failed.
+    pub safe fn spi_end() -> i32;
+
     /// IO8: the input pins (bit n: input n + 1 high).
     pub safe fn board_inputs() -> u8;
     /// IO8: drives the output pins (bit n: output n + 1 on).

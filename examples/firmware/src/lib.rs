@@ -69,7 +69,24 @@ mod device {
     use ecat_slave::device::{Application, MemoryLayout, Slave};
 
     use crate::FwLayout;
-    use crate::board::SpiEsc;
+
+    /// The ESC: the board's C SPI functions, or the ET1100 driver.
+    #[cfg(not(feature = "spi-et1100"))]
+    pub type Pdi = crate::board::SpiEsc;
+    /// The ESC: the board's C SPI functions, or the ET1100 driver.
+    #[cfg(feature = "spi-et1100")]
+    pub type Pdi = ecat_esc_spi::et1100::Et1100Spi<crate::board::FfiSpi>;
+
+    fn pdi() -> Pdi {
+        #[cfg(not(feature = "spi-et1100"))]
+        {
+            crate::board::SpiEsc
+        }
+        #[cfg(feature = "spi-et1100")]
+        {
+            ecat_esc_spi::et1100::Et1100Spi::new(crate::board::FfiSpi, Default::default())
+        }
+    }
 
     #[cfg(feature = "io8")]
     pub use crate::board::io8::App;
@@ -78,7 +95,7 @@ mod device {
 
     /// The whole firmware state: ESC handle, application, dictionary,
     /// mailbox servers, process images.
-    pub type Firmware = Slave<SpiEsc, App>;
+    pub type Firmware = Slave<Pdi, App>;
 
     const LAYOUT: MemoryLayout = <App as Application>::DESCRIPTION.layout();
 
@@ -96,7 +113,7 @@ mod device {
     };
 
     pub fn new() -> Firmware {
-        Slave::new(SpiEsc, crate::board::new_app())
+        Slave::new(pdi(), crate::board::new_app())
     }
 }
 

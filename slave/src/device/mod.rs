@@ -49,6 +49,7 @@
 
 mod application;
 mod description;
+mod schedule;
 mod sii_image;
 mod slave;
 mod soft;
@@ -58,6 +59,7 @@ pub use description::{
     CoeServices, DeviceDescription, DeviceNames, EscConfig, Identity, MAX_MAILBOX, MailboxConfig,
     MemoryLayout, PdoSet, ProcessData,
 };
+pub use schedule::PollSchedule;
 pub use sii_image::mapping_entries;
 pub use slave::{FULL_PASS_NS, SM_CONTROL, Slave};
-pub use soft::{SoftPdi, SoftSlave};
+pub use soft::{SoftPdi, SoftSlave, SpiStats};

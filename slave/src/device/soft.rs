@@ -11,6 +11,29 @@ use super::application::Application;
 use super::description::MemoryLayout;
 use super::slave::Slave;
 
+/// Counters of a PDI path with an SPI wire (a driver in front of an
+/// emulated chip): what a logic analyser on the bus would count.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SpiStats {
+    /// Chip-select cycles.
+    pub transactions: u64,
+    /// Cycles the chip found malformed (bad command, unterminated read, ...).
+    pub protocol_errors: u64,
+    /// Accesses the ESC behind the chip refused (SyncManager rules, range).
+    pub refused_accesses: u64,
+}
+
+impl SpiStats {
+    /// The sum of two counters (e.g. over the slaves of a line).
+    pub fn add(self, other: SpiStats) -> SpiStats {
+        SpiStats {
+            transactions: self.transactions.saturating_add(other.transactions),
+            protocol_errors: self.protocol_errors.saturating_add(other.protocol_errors),
+            refused_accesses: self.refused_accesses.saturating_add(other.refused_accesses),
+        }
+    }
+}
+
 /// How a software slave's firmware reaches its software ESC: directly
 /// ([`SoftEsc`] itself, the default), or through a PDI driver and an
 /// emulated chip interface in front of the software ESC (an SPI driver
@@ -26,6 +49,10 @@ pub trait SoftPdi: Esc {
     /// with state of its own, such as an emulated chip, resets it).
     fn power_on(&mut self) {
         self.soft_esc_mut().power_on();
+    }
+    /// The SPI wire's counters, for a path that has one.
+    fn spi_stats(&self) -> Option<SpiStats> {
+        None
     }
 }
 

@@ -17,7 +17,7 @@
 use std::any::Any;
 
 use crate::al::AlStatus;
-use crate::device::{Application, DeviceDescription, SoftPdi, SoftSlave};
+use crate::device::{Application, DeviceDescription, SoftPdi, SoftSlave, SpiStats};
 use crate::esc::EscError;
 use crate::esc::soft::{FrameOutcome, SoftEsc};
 use crate::firmware::{self, FirmwareVersion, ImageStore, StoreError};
@@ -83,6 +83,11 @@ pub trait LineSlave: Send {
     fn leds(&self) -> (bool, bool);
     /// Simulates the firmware stalling.
     fn set_stalled(&mut self, stalled: bool);
+    /// The SPI wire's counters when the firmware reaches its ESC through
+    /// an SPI driver and an emulated chip ([`SoftPdi::spi_stats`]).
+    fn spi_stats(&self) -> Option<SpiStats> {
+        None
+    }
     /// Switches emergencies on or off.
     fn set_emergencies(&mut self, enabled: bool);
     /// Emergencies waiting for the master.
@@ -112,6 +117,9 @@ impl<A: Application + Send + 'static, P: SoftPdi + Send + 'static> LineSlave for
     }
     fn esc(&self) -> &SoftEsc {
         self.slave().esc().soft_esc()
+    }
+    fn spi_stats(&self) -> Option<SpiStats> {
+        self.slave().esc().spi_stats()
     }
     fn esc_mut(&mut self) -> &mut SoftEsc {
         self.slave_mut().esc_mut().soft_esc_mut()

@@ -81,6 +81,9 @@ pub struct RunStats {
     pub answered: u64,
     /// Frames ignored (other EtherTypes, our own replies).
     pub ignored: u64,
+    /// The SPI wires' counters summed over the slaves whose firmware runs
+    /// through an SPI driver and an emulated chip (`None`: no such slave).
+    pub spi: Option<crate::device::SpiStats>,
 }
 
 /// Most slaves one runner serves.
@@ -310,6 +313,11 @@ pub fn run(
                     }
                 }
             }
+            stats.spi = chain
+                .slaves()
+                .iter()
+                .filter_map(|s| s.spi_stats())
+                .reduce(crate::device::SpiStats::add);
             Ok(stats)
         })();
         done.store(true, Ordering::Release);

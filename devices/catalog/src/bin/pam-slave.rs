@@ -36,7 +36,8 @@ struct Cli {
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=4096), conflicts_with = "line")]
     count: u16,
     /// A mixed line, first to last: e.g. pam,io8,pam or pam*3,io8 (at
-    /// most 4096 slaves).
+    /// most 4096 slaves); `pam@et1100`, `io8@lan9252` run a slave's
+    /// firmware through that SPI driver and an emulated chip.
     #[arg(long)]
     line: Option<String>,
     /// Write every frame, both directions, to this pcap file.
@@ -106,9 +107,12 @@ fn main() -> ExitCode {
         faults: cli.faults,
         forward: cli.forward,
     };
-    let names: Vec<&str> = entries
+    let names: Vec<String> = entries
         .iter()
-        .map(|d| d.description.names.type_name)
+        .map(|d| match d.pdi {
+            device_catalog::Pdi::Direct => d.description.names.type_name.to_string(),
+            pdi => format!("{}@{}", d.description.names.type_name, pdi.name()),
+        })
         .collect();
     let onward = cfg
         .forward
@@ -127,6 +131,12 @@ fn main() -> ExitCode {
                 "pam-slave: stopped after {} EtherCAT frames ({} other frames ignored)",
                 stats.answered, stats.ignored
             );
+            if let Some(spi) = stats.spi {
+                eprintln!(
+                    "pam-slave: SPI PDI wires: {} transactions, {} protocol errors, {} refused accesses",
+                    spi.transactions, spi.protocol_errors, spi.refused_accesses
+                );
+            }
             ExitCode::SUCCESS
         }
         Err(e) => {
@@ -146,7 +156,7 @@ fn parse_faults(s: &str) -> Result<ecat_slave::host::faults::FaultConfig, String
 }
 
 /// `PAM-199-P-ETC x2, IO8` for a line.
-fn summarize(names: &[&str]) -> String {
+fn summarize(names: &[String]) -> String {
     let mut out: Vec<String> = Vec::new();
     let mut i = 0;
     while i < names.len() {

@@ -61,7 +61,9 @@ struct Cli {
     /// devices`); also the identity `firmware pack` writes. Default: pam.
     #[arg(long, global = true, value_name = "NAME")]
     device: Option<String>,
-    /// The virtual bus as a line of devices: `pam,io8,pam`, `pam*4`.
+    /// The virtual bus as a line of devices: `pam,io8,pam`, `pam*4`;
+    /// `pam@et1100`, `io8@lan9252` put a slave's firmware behind that SPI
+    /// driver and an emulated chip.
     #[arg(long, global = true, value_name = "SPEC", conflicts_with = "device")]
     line: Option<String>,
     /// The slave to talk to, by position (0 = first after the master).
