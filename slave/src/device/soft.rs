@@ -25,7 +25,7 @@ pub struct SpiStats {
 
 impl SpiStats {
     /// The sum of two counters (e.g. over the slaves of a line).
-    pub fn add(self, other: SpiStats) -> SpiStats {
+    pub fn sum(self, other: SpiStats) -> SpiStats {
         SpiStats {
             transactions: self.transactions.saturating_add(other.transactions),
             protocol_errors: self.protocol_errors.saturating_add(other.protocol_errors),

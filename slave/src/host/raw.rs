@@ -317,7 +317,7 @@ pub fn run(
                 .slaves()
                 .iter()
                 .filter_map(|s| s.spi_stats())
-                .reduce(crate::device::SpiStats::add);
+                .reduce(crate::device::SpiStats::sum);
             Ok(stats)
         })();
         done.store(true, Ordering::Release);
