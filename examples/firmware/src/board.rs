@@ -42,16 +42,16 @@ impl Esc for SpiEsc {
 /// The ESC bus at byte level (`spi_begin` / `spi_transfer` / `spi_end` of
 /// the C side) as an `embedded-hal` SPI device with chip select, for the
 /// ET1100 driver of `ecat-esc-spi` (`--features spi-et1100`).
-#[cfg(feature = "spi-et1100")]
+#[cfg(any(feature = "spi-et1100", feature = "spi-lan9252"))]
 #[derive(Debug, Clone, Copy, Default)]
 pub struct FfiSpi;
 
-#[cfg(feature = "spi-et1100")]
+#[cfg(any(feature = "spi-et1100", feature = "spi-lan9252"))]
 impl embedded_hal::spi::ErrorType for FfiSpi {
     type Error = embedded_hal::spi::ErrorKind;
 }
 
-#[cfg(feature = "spi-et1100")]
+#[cfg(any(feature = "spi-et1100", feature = "spi-lan9252"))]
 impl embedded_hal::spi::SpiDevice for FfiSpi {
     fn transaction(
         &mut self,

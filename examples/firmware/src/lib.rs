@@ -70,21 +70,32 @@ mod device {
 
     use crate::FwLayout;
 
-    /// The ESC: the board's C SPI functions, or the ET1100 driver.
-    #[cfg(not(feature = "spi-et1100"))]
+    /// The ESC: the board's C SPI functions, or an SPI driver.
+    #[cfg(not(any(feature = "spi-et1100", feature = "spi-lan9252")))]
     pub type Pdi = crate::board::SpiEsc;
-    /// The ESC: the board's C SPI functions, or the ET1100 driver.
+    /// The ESC: the board's C SPI functions, or an SPI driver.
     #[cfg(feature = "spi-et1100")]
     pub type Pdi = ecat_esc_spi::et1100::Et1100Spi<crate::board::FfiSpi>;
+    /// The ESC: the board's C SPI functions, or an SPI driver.
+    #[cfg(all(feature = "spi-lan9252", not(feature = "spi-et1100")))]
+    pub type Pdi = ecat_esc_spi::lan9252::Lan9252Spi<crate::board::FfiSpi>;
 
     fn pdi() -> Pdi {
-        #[cfg(not(feature = "spi-et1100"))]
+        #[cfg(not(any(feature = "spi-et1100", feature = "spi-lan9252")))]
         {
             crate::board::SpiEsc
         }
         #[cfg(feature = "spi-et1100")]
         {
             ecat_esc_spi::et1100::Et1100Spi::new(crate::board::FfiSpi, Default::default())
+        }
+        #[cfg(all(feature = "spi-lan9252", not(feature = "spi-et1100")))]
+        {
+            // The start-up checks (byte test, ready) as a board runs them
+            // before the firmware; their result is the first poll's.
+            let mut esc = ecat_esc_spi::lan9252::Lan9252Spi::new(crate::board::FfiSpi);
+            let _ = esc.init();
+            esc
         }
     }
 
