@@ -168,14 +168,24 @@ impl VirtualBus {
         let pcap = pcap
             .map(ecat_slave::host::pcap::PcapWriter::create)
             .transpose()?;
-        Self::on_shared(Arc::new(Mutex::new(chain)), clock, pcap, None)
+        Self::on_shared(Arc::new(Mutex::new(chain)), clock, pcap, None, 0)
+    }
+
+    /// A bus over `chain` whose master sets up Distributed Clocks at init
+    /// as ethercrab does on real lines: receive times latched (BWR 0x0900)
+    /// and read, system time offsets and transmission delays written, then
+    /// `iterations` FRMWs of the reference clock's system time (static
+    /// drift compensation; ethercrab's default is 10 000). The other
+    /// constructors set 0 iterations.
+    pub fn with_dc(chain: Chain, clock: Clock, iterations: u32) -> Result<Self, BusError> {
+        Self::on_shared(Arc::new(Mutex::new(chain)), clock, None, None, iterations)
     }
 
     /// A bus over `chain` whose wire injects `faults` (see
     /// [`link::FaultConfig`]); the master uses [`fault_timeouts`].
     pub fn with_faults(chain: Chain, clock: Clock, faults: FaultConfig) -> Result<Self, BusError> {
         let f = Arc::new(Mutex::new(FaultInjector::new(faults)));
-        Self::on_shared(Arc::new(Mutex::new(chain)), clock, None, Some(f))
+        Self::on_shared(Arc::new(Mutex::new(chain)), clock, None, Some(f), 0)
     }
 
     /// What the faulty wire injected so far (zeros without faults).
@@ -191,7 +201,7 @@ impl VirtualBus {
     /// one master program stops and the next one starts). The slaves keep
     /// their state; both links may run.
     pub fn next_session(&self) -> Result<Self, BusError> {
-        Self::on_shared(self.chain.clone(), self.clock.clone(), None, None)
+        Self::on_shared(self.chain.clone(), self.clock.clone(), None, None, 0)
     }
 
     fn on_shared(
@@ -199,6 +209,7 @@ impl VirtualBus {
         clock: Clock,
         pcap: Option<ecat_slave::host::pcap::PcapWriter<std::io::BufWriter<std::fs::File>>>,
         faults: Option<SharedFaults>,
+        dc_static_sync_iterations: u32,
     ) -> Result<Self, BusError> {
         // Each bus owns its storage for the life of the process; tests
         // create a handful, so leaking is the simple, safe choice.
@@ -213,7 +224,7 @@ impl VirtualBus {
             pdu_loop,
             t,
             MainDeviceConfig {
-                dc_static_sync_iterations: 0,
+                dc_static_sync_iterations,
                 retry_behaviour,
             },
         ));

@@ -10,6 +10,7 @@ mod coe;
 mod common;
 mod conformance;
 mod consistency;
+mod dc;
 mod failsafe;
 mod faults;
 mod foe;

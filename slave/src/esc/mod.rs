@@ -7,6 +7,7 @@
 //! support code. This layer knows nothing of CoE, the object dictionary or
 //! the amplifier.
 
+pub mod dc;
 pub mod registers;
 pub mod soft;
 

@@ -111,6 +111,23 @@ pub const SM_LEN: u16 = 8;
 pub const DC_RECEIVE_TIME_PORT0: u16 = 0x0900;
 /// Last DC register (SYNC1 cycle time, 4 bytes at 0x09A4).
 pub const DC_SYNC1_CYCLE_TIME: u16 = 0x09A4;
+/// DC system time (u64; ECAT read: local time + offset; ECAT write: a
+/// distributed reference time for the drift control).
+pub const DC_SYSTEM_TIME: u16 = 0x0910;
+/// DC receive time of the ECAT processing unit (u64, local time).
+pub const DC_RECEIVE_TIME_PU: u16 = 0x0918;
+/// DC system time offset (u64, local time → system time).
+pub const DC_SYSTEM_TIME_OFFSET: u16 = 0x0920;
+/// DC system time (transmission) delay (u32, ns).
+pub const DC_SYSTEM_TIME_DELAY: u16 = 0x0928;
+/// DC system time difference (u32: bit 31 sign, 30..0 magnitude).
+pub const DC_SYSTEM_TIME_DIFF: u16 = 0x092C;
+/// DC speed counter start (u16).
+pub const DC_SPEED_COUNTER_START: u16 = 0x0930;
+/// DC system time difference filter depth (low nibble).
+pub const DC_TIME_FILTER_DEPTH: u16 = 0x0934;
+/// DC speed counter filter depth (low nibble).
+pub const DC_SPEED_FILTER_DEPTH: u16 = 0x0935;
 /// Digital I/O output data (4 bytes).
 pub const DIGITAL_OUTPUT: u16 = 0x0F00;
 /// Start of process RAM.

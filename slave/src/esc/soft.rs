@@ -9,6 +9,7 @@
 //! access that wraps past 0xFFFF or is refused by a SyncManager leaves memory
 //! untouched and does not count in the working counter.
 
+use super::dc::{self, DcClock};
 use super::registers::{self as reg, sm as smr};
 use super::{Esc, EscError};
 use crate::wire::ecat::{Command, Datagram, DatagramCursor, EcatFrame, FrameType};
@@ -144,6 +145,12 @@ pub struct SoftEsc {
     /// Counts changes of the station address or alias (lets a line keep
     /// its address index current).
     addr_gen: u32,
+    /// The Distributed Clocks unit's oscillator and drift control.
+    dc: DcClock,
+    /// Injected time at which the current frame passes port 0 (and comes
+    /// back through port 1, when port 1 is open), for the DC unit.
+    dc_port0_ns: u64,
+    dc_port1_ns: Option<u64>,
 }
 
 /// A PDI failure injected into the software ESC: PDI accesses that touch
@@ -219,6 +226,9 @@ impl SoftEsc {
             wd_restart: false,
             pdi_fault: None,
             addr_gen: 0,
+            dc: DcClock::default(),
+            dc_port0_ns: 0,
+            dc_port1_ns: None,
         };
         let n = sii.len().min(SII_SIZE);
         if let (Some(dst), Some(src)) = (esc.sii.get_mut(..n), sii.get(..n)) {
@@ -254,8 +264,16 @@ impl SoftEsc {
         self.set_u8(reg::RAM_SIZE, ((MEM_SIZE - 0x1000) / 1024) as u8);
         // Ports 0 and 1 MII, ports 2 and 3 not implemented.
         self.set_u8(reg::PORT_DESCRIPTOR, 0x0F);
-        // Bit-oriented FMMUs, no DC, LRW and read/write commands supported.
-        self.set_u16(reg::FEATURES, 0x0000);
+        // Bit-oriented FMMUs, LRW and read/write commands supported; DC
+        // receive times and a 64-bit system time (bits 2 and 3), but no
+        // SYNC/LATCH unit yet (bit 8 "enhanced DC sync" clear), so masters
+        // use it as a clock only (ETG.1000.4 Table 31).
+        self.set_u16(reg::FEATURES, 0x000C);
+        self.dc.power_on(self.dc_port0_ns);
+        // DC control loop defaults (ET1100 Section II, 0x0930-0x0935).
+        self.set_u16(reg::DC_SPEED_COUNTER_START, 0x1000);
+        self.set_u8(reg::DC_TIME_FILTER_DEPTH, 4);
+        self.set_u8(reg::DC_SPEED_FILTER_DEPTH, 12);
         let alias = self.sii_word(4);
         self.set_u16(reg::STATION_ALIAS, alias);
         self.refresh_address();
@@ -360,6 +378,9 @@ impl SoftEsc {
     /// expires after 0x0410 base ticks: DL status bit 1 clears and 0x0443
     /// counts. A time of 0 disables a watchdog.
     pub fn update_watchdogs(&mut self, now_ns: u64) {
+        // Frames processed after this without their own times (a single
+        // ESC, not on a line) pass the DC unit at this time.
+        self.dc_port0_ns = self.dc_port0_ns.max(now_ns);
         let base = self.watchdog_base_ns();
         if core::mem::take(&mut self.wd_restart) {
             if self.wd_sm_armed_at.is_some() {
@@ -395,6 +416,77 @@ impl SoftEsc {
             let c = self.mem_u8(reg::WATCHDOG_COUNTER_PDI).saturating_add(1);
             self.set_u8(reg::WATCHDOG_COUNTER_PDI, c);
         }
+    }
+
+    /// The injected times at which the next datagrams pass this ESC's
+    /// port 0 (on the way down the line) and port 1 (on the way back;
+    /// `None` when port 1 is closed): what the DC unit latches as receive
+    /// times and reads its clock at. A line sets them per slave from its
+    /// position and hop delay.
+    pub fn set_frame_times(&mut self, port0_ns: u64, port1_ns: Option<u64>) {
+        self.dc_port0_ns = port0_ns;
+        self.dc_port1_ns = port1_ns;
+    }
+
+    /// Makes this ESC's oscillator run `error_ppb` parts per billion fast
+    /// (negative: slow) from the current frame time on.
+    pub fn set_dc_oscillator(&mut self, error_ppb: i64) {
+        self.dc.set_error_ppb(error_ppb, self.dc_port0_ns);
+    }
+
+    /// The DC unit's clock (oscillator error, drift correction).
+    pub fn dc_clock(&self) -> &DcClock {
+        &self.dc
+    }
+
+    /// The DC local time at injected time `t_ns`.
+    pub fn dc_local_time(&self, t_ns: u64) -> u64 {
+        self.dc.local(t_ns)
+    }
+
+    /// The DC system time (local time + 0x0920 offset) at injected time
+    /// `t_ns`, what a read of 0x0910 at that time returns.
+    pub fn dc_system_time(&self, t_ns: u64) -> u64 {
+        self.dc
+            .local(t_ns)
+            .wrapping_add(self.mem_u64(reg::DC_SYSTEM_TIME_OFFSET))
+    }
+
+    /// The last system time difference (0x092C) as a signed ns value
+    /// (own − received).
+    pub fn dc_difference(&self) -> i64 {
+        dc::difference_of_register(self.mem_u32(reg::DC_SYSTEM_TIME_DIFF))
+    }
+
+    /// ECAT write to 0x0900: every port's receive time latched (local
+    /// time of the frame at the port), and the processing unit's.
+    fn dc_latch(&mut self) {
+        let t0 = self.dc.local(self.dc_port0_ns);
+        self.set_u32(reg::DC_RECEIVE_TIME_PORT0, t0 as u32);
+        if let Some(t1) = self.dc_port1_ns {
+            let t1 = self.dc.local(t1);
+            self.set_u32(reg::DC_RECEIVE_TIME_PORT0 + 4, t1 as u32);
+        }
+        self.set_u64(reg::DC_RECEIVE_TIME_PU, t0);
+    }
+
+    /// ECAT write of a system time (`len` 4 or 8 bytes at 0x0910): the
+    /// drift control compares it, plus the transmission delay, with this
+    /// ESC's own system time (ET1100 Section I, "Propagation delay /
+    /// drift compensation"; a 32-bit write compares the low 32 bits).
+    fn dc_receive(&mut self, received: u64, len: usize) {
+        let t = self.dc_port0_ns;
+        let own = self.dc_system_time(t);
+        let delay = u64::from(self.mem_u32(reg::DC_SYSTEM_TIME_DELAY));
+        let reference = received.wrapping_add(delay);
+        let diff = if len >= 8 {
+            own.wrapping_sub(reference) as i64
+        } else {
+            i64::from((own as u32).wrapping_sub(reference as u32) as i32)
+        };
+        let depth = self.mem_u8(reg::DC_TIME_FILTER_DEPTH) & 0x0F;
+        let filtered = self.dc.receive(diff, depth, t);
+        self.set_u32(reg::DC_SYSTEM_TIME_DIFF, dc::difference_register(filtered));
     }
 
     /// PDI accesses (reads and writes, of any length) since the ESC was
@@ -727,6 +819,12 @@ impl SoftEsc {
         if b > 0x1_0000 {
             return false;
         }
+        // The system time is the clock now, not a stored value.
+        let st = u32::from(reg::DC_SYSTEM_TIME);
+        if a < st + 8 && st < b {
+            let now = self.dc_system_time(self.dc_port0_ns);
+            self.set_u64(reg::DC_SYSTEM_TIME, now);
+        }
         // SyncManager checks, on the part in process RAM only: as on
         // silicon, SyncManagers map process RAM, and one a master
         // configured over the registers must not hide them (the master
@@ -872,6 +970,10 @@ impl SoftEsc {
         let mut touched_fmmu = 0u16;
         let mut sii_command = false;
         let mut al_control = false;
+        let mut dc_latch = false;
+        let mut dc_reset = false;
+        // System time received (0x0910..0x0917): value and bytes written.
+        let mut dc_received: Option<(u64, usize)> = None;
         for (i, &v) in data.iter().enumerate() {
             let Some(a) = addr.checked_add(i as u16) else {
                 break;
@@ -912,12 +1014,40 @@ impl SoftEsc {
                         touched_sm |= 1 << ((a - reg::SM_BASE) / reg::SM_LEN);
                     }
                 }
-                0x0900..=0x09FF | 0x0F00..=0x0F03 => self.set_u8(a, v),
+                // Receive times: a write to port 0's latches them all.
+                0x0900..=0x0903 => dc_latch = true,
+                // Receive times of ports 1-3 and of the processing unit,
+                // the system time difference: read-only.
+                0x0904..=0x090F | 0x0918..=0x091F | 0x092C..=0x092F => {}
+                0x0910..=0x0917 => {
+                    let (value, n) = dc_received.unwrap_or((0, 0));
+                    let shift = 8 * u32::from(a - reg::DC_SYSTEM_TIME);
+                    dc_received = Some((value | u64::from(v) << shift, n + 1));
+                }
+                // Speed counter start: a write resets the drift control
+                // (ETG.1020 §22.2.4: masters write 0x0934 then 0x0930 to
+                // reset the loop after blanking the DC registers).
+                0x0930..=0x0931 => {
+                    self.set_u8(a, v);
+                    dc_reset = true;
+                }
+                0x0932..=0x0933 => {}
+                0x0920..=0x092B | 0x0934..=0x09FF | 0x0F00..=0x0F03 => self.set_u8(a, v),
                 _ => {}
             }
         }
         if al_control {
             self.raise_al_event(reg::AL_EVENT_AL_CONTROL);
+        }
+        if dc_latch {
+            self.dc_latch();
+        }
+        if let Some((value, n)) = dc_received {
+            self.dc_receive(value, n);
+        }
+        if dc_reset {
+            self.dc.reset_control(self.dc_port0_ns);
+            self.set_u32(reg::DC_SYSTEM_TIME_DIFF, 0);
         }
         if touched_fmmu != 0 {
             self.reload_fmmus();
@@ -1115,6 +1245,19 @@ impl SoftEsc {
         let mut b = [0u8; 4];
         self.mem_get(addr, &mut b);
         u32::from_le_bytes(b)
+    }
+
+    fn mem_u64(&self, addr: u16) -> u64 {
+        let mut b = [0u8; 8];
+        self.mem_get(addr, &mut b);
+        u64::from_le_bytes(b)
+    }
+
+    fn set_u64(&mut self, addr: u16, v: u64) {
+        let a = usize::from(addr);
+        if let Some(m) = self.mem.get_mut(a..a + 8) {
+            m.copy_from_slice(&v.to_le_bytes());
+        }
     }
 
     fn set_u8(&mut self, addr: u16, v: u8) {

@@ -219,6 +219,38 @@ pub struct Chain {
     windows_stale: bool,
     /// Scratch list of the slaves one logical datagram reaches.
     hits: Vec<usize>,
+    /// Injected time of the frame being processed (it enters slave 0).
+    frame_ns: u64,
+    /// How long a frame takes from one slave's port 0 to the next one's
+    /// (and back), for the DC receive times.
+    hop_ns: u64,
+}
+
+/// Default [`Chain::set_hop_delay_ns`]: a frame's delay through one slave
+/// and its cable, of the order of an ESC with MII ports (a few hundred ns;
+/// EBUS ESCs forward faster).
+pub const DEFAULT_HOP_NS: u64 = 500;
+
+/// Hands datagram `dg` to slave `i` of `n`, telling its DC unit when the
+/// frame passes its ports: port 0 at `t + i·hop` on the way down, port 1
+/// at `t + (2(n−1) − i)·hop` on the way back (the last slave turns the
+/// frame around; its port 1 is closed).
+fn pass(
+    s: &mut dyn LineSlave,
+    i: usize,
+    n: usize,
+    (t, hop): (u64, u64),
+    dg: &mut Datagram<&mut [u8]>,
+) {
+    let i64_ = i as u64;
+    let p0 = t.saturating_add(i64_.saturating_mul(hop));
+    let p1 = (i + 1 < n).then(|| {
+        let hops = (2 * (n as u64 - 1)).saturating_sub(i64_);
+        t.saturating_add(hops.saturating_mul(hop))
+    });
+    let esc = s.esc_mut();
+    esc.set_frame_times(p0, p1);
+    esc.process_datagram(dg);
 }
 
 /// Shortest time in which the sweep of [`Chain::service`] reaches every
@@ -301,6 +333,8 @@ impl Chain {
             fmmu_gens: Vec::new(),
             windows_stale: true,
             hits: Vec::new(),
+            frame_ns: 0,
+            hop_ns: DEFAULT_HOP_NS,
         };
         chain.touched_in = vec![u64::MAX; chain.slaves.len()];
         chain.reindex();
@@ -361,6 +395,7 @@ impl Chain {
     /// down the line and back), then runs the firmware that has something
     /// to do at `now_ns` ([`Chain::service`]).
     pub fn process(&mut self, frame: &mut [u8], now_ns: u64) -> FrameOutcome {
+        self.frame_ns = now_ns;
         let outcome = self.process_frame(frame);
         // A PDI failure is counted and handled by the slave (fail-safe);
         // the frame has already been answered by the ESCs.
@@ -558,8 +593,16 @@ impl Chain {
         }
     }
 
+    /// Sets the delay a frame takes from one slave to the next (and back),
+    /// which the DC units see in their receive times (default
+    /// [`DEFAULT_HOP_NS`]).
+    pub fn set_hop_delay_ns(&mut self, hop_ns: u64) {
+        self.hop_ns = hop_ns;
+    }
+
     fn dispatch(&mut self, dg: &mut Datagram<&mut [u8]>, n: usize) {
         let cmd = dg.command();
+        let time = (self.frame_ns, self.hop_ns);
         match cmd.addressing() {
             Addressing::Configured if cmd != Command::Frmw => {
                 let adp = dg.adp();
@@ -575,7 +618,7 @@ impl Chain {
                         break;
                     }
                     if let Some(s) = self.slaves.get_mut(i) {
-                        s.esc_mut().process_datagram(dg);
+                        pass(s.as_mut(), i, n, time, dg);
                     }
                     self.touch(i);
                     if cmd.is_write() {
@@ -594,7 +637,7 @@ impl Chain {
                 let pos = usize::from(0u16.wrapping_sub(adp0));
                 if let Some(s) = self.slaves.get_mut(pos) {
                     dg.set_adp(0);
-                    s.esc_mut().process_datagram(dg);
+                    pass(s.as_mut(), pos, n, time, dg);
                     self.touch(pos);
                 }
                 dg.set_adp(adp0.wrapping_add(n as u16));
@@ -629,7 +672,7 @@ impl Chain {
                 hits.dedup();
                 for &i in &hits {
                     if let Some(s) = self.slaves.get_mut(i) {
-                        s.esc_mut().process_datagram(dg);
+                        pass(s.as_mut(), i, n, time, dg);
                     }
                     self.touch(i);
                 }
@@ -650,8 +693,8 @@ impl Chain {
             Addressing::None => {}
             // Broadcast, ARMW, FRMW: every slave in line order.
             _ => {
-                for s in &mut self.slaves {
-                    s.esc_mut().process_datagram(dg);
+                for (i, s) in self.slaves.iter_mut().enumerate() {
+                    pass(s.as_mut(), i, n, time, dg);
                 }
                 self.touched_all = true;
                 if cmd.is_write() {
