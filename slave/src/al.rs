@@ -99,6 +99,10 @@ pub enum AlStatusCode {
     InvalidInputMapping,
     /// 0x0025 invalid output mapping.
     InvalidOutputMapping,
+    /// 0x0030 invalid DC SYNC configuration.
+    InvalidDcSyncConfig,
+    /// 0x0035 invalid DC sync cycle time.
+    InvalidDcCycleTime,
     /// Any other code.
     Other(u16),
 }
@@ -124,6 +128,8 @@ impl AlStatusCode {
             AlStatusCode::WaitingForInit => 0x0021,
             AlStatusCode::InvalidInputMapping => 0x0024,
             AlStatusCode::InvalidOutputMapping => 0x0025,
+            AlStatusCode::InvalidDcSyncConfig => 0x0030,
+            AlStatusCode::InvalidDcCycleTime => 0x0035,
             AlStatusCode::Other(c) => c,
         }
     }
@@ -150,6 +156,8 @@ impl AlStatusCode {
             AlStatusCode::WaitingForInit => "waiting for INIT",
             AlStatusCode::InvalidInputMapping => "invalid input mapping",
             AlStatusCode::InvalidOutputMapping => "invalid output mapping",
+            AlStatusCode::InvalidDcSyncConfig => "invalid DC SYNC configuration",
+            AlStatusCode::InvalidDcCycleTime => "invalid DC sync cycle time",
             AlStatusCode::Other(_) => "other AL status code",
         }
     }
@@ -174,6 +182,8 @@ impl AlStatusCode {
             0x0021 => AlStatusCode::WaitingForInit,
             0x0024 => AlStatusCode::InvalidInputMapping,
             0x0025 => AlStatusCode::InvalidOutputMapping,
+            0x0030 => AlStatusCode::InvalidDcSyncConfig,
+            0x0035 => AlStatusCode::InvalidDcCycleTime,
             c => AlStatusCode::Other(c),
         }
     }

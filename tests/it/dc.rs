@@ -15,15 +15,16 @@ use std::time::Duration;
 const ERRORS_PPB: [i64; 8] = [0, 20_000, -15_000, 35_000, -25_000, 10_000, -5_000, 30_000];
 
 /// After convergence, the worst |system time of slave i − reference| at
-/// one instant, ns. Measured: 0-1 ns after ethercrab's 10 000 static
-/// FRMWs and after 200 cyclic ones (the drift control works on whole-ns
-/// local times and corrects through its rate only, so it dithers by a few
-/// ns: ≤ 10 ns in the `esc::dc` unit tests with a 1 ms period and the
-/// filter off). The bound leaves room for a loaded machine's irregular
-/// distribution period without hiding a loop that does not converge: the
+/// one instant, ns: 100 ns, the synchronicity DC systems are specified for
+/// ("well below 1 µs", typically < 100 ns between slaves). Measured: 0-1 ns
+/// on 8 slaves after ethercrab's 10 000 static FRMWs and after 200 cyclic
+/// ones; up to 27 ns on 64 slaves after 2 000 static FRMWs and 300 cycles
+/// (the drift control works on whole-ns local times and corrects through
+/// its rate only, so it dithers by a few ns: ≤ 10 ns in the `esc::dc` unit
+/// tests). The bound cannot hide a loop that does not converge: the
 /// differences before compensation are 100 ns to µs, and a 10 ppm
 /// oscillator change drifts 2 µs in 200 ms.
-const SYNC_BOUND_NS: i64 = 50;
+const SYNC_BOUND_NS: i64 = 100;
 
 fn line() -> Chain {
     let entries = device_catalog::parse_line("io8*8").expect("line");
@@ -159,5 +160,216 @@ fn without_the_distribution_a_warming_oscillator_drifts_away_and_with_it_stays_i
             "slave 3 back in step: {} ns",
             back[3]
         );
+    });
+}
+
+/// A line of `n` IO8s with oscillators from [`ERRORS_PPB`] (repeated).
+fn line_of(n: usize) -> Chain {
+    let entries = device_catalog::parse_line(&format!("io8*{n}")).expect("line");
+    let mut chain = Chain::with_slaves(device_catalog::slaves(&entries));
+    for (i, s) in chain.slaves_mut().iter_mut().enumerate() {
+        s.esc_mut()
+            .set_dc_oscillator(ERRORS_PPB[i % ERRORS_PPB.len()]);
+    }
+    chain
+}
+
+/// The firmware of slave `i` (an IO8 on the direct PDI).
+fn firmware(
+    chain: &Chain,
+    i: usize,
+) -> &ecat_slave::device::Slave<ecat_slave::esc::soft::SoftEsc, io8_example::Io8> {
+    chain.slave::<io8_example::Io8>(i).expect("an IO8").slave()
+}
+
+/// ethercrab's DC mode as its `dc` example runs it: static drift
+/// compensation at init, SYNC0 on every slave, `configure_dc_sync` with a
+/// 1 ms cycle starting 20 ms ahead, SAFE-OP, OP with `tx_rx_dc`, then 300
+/// cycles. Every slave's firmware runs DC-synchronous, its SYNC0 unit
+/// pulses at the start time plus whole cycles (in system time, which all
+/// slaves share to within `SYNC_BOUND_NS`), as often as the elapsed time
+/// says, and the firmware sees the pulses.
+async fn dc_sync0_line(n: usize) {
+    use ethercrab::DcSync;
+    use ethercrab::subdevice_group::{CycleInfo, DcConfiguration, TxRxResponse};
+    let bus = VirtualBus::with_dc(line_of(n), Clock::real(), 10_000).expect("bus");
+    let md = &*bus.maindevice;
+    let mut group = bus.init().await.expect("init with DC");
+    for mut sd in group.iter_mut(md) {
+        sd.set_dc_sync(DcSync::Sync0);
+    }
+    let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
+    for _ in 0..50 {
+        group.tx_rx_sync_system_time(md).await.expect("sync");
+    }
+    let period = Duration::from_millis(1);
+    let group = group
+        .configure_dc_sync(
+            md,
+            DcConfiguration {
+                start_delay: Duration::from_millis(20),
+                sync0_period: period,
+                sync0_shift: period / 2,
+            },
+        )
+        .await
+        .expect("configure DC sync");
+    let start: u64 = ethercrab::Command::fprd(0x1000, reg::DC_START_TIME)
+        .receive(md)
+        .await
+        .expect("0x0990");
+    let group = group.into_safe_op(md).await.expect("SAFE-OP in DC mode");
+    let group = group.request_into_op(md).await.expect("OP requested");
+    let mut op = false;
+    for _ in 0..2_000 {
+        let now = std::time::Instant::now();
+        let response @ TxRxResponse {
+            extra: CycleInfo {
+                next_cycle_wait, ..
+            },
+            ..
+        } = group.tx_rx_dc(md).await.expect("tx_rx_dc");
+        if response.all_op() {
+            op = true;
+            break;
+        }
+        smol::Timer::at(now + next_cycle_wait).await;
+    }
+    assert!(op, "{n} slaves reach OP in DC mode");
+    let t_op = bus.clock.now_ns();
+    let pulses_at_op: Vec<u64> = lock(&bus.chain)
+        .slaves()
+        .iter()
+        .map(|s| s.esc().sync0_pulses())
+        .collect();
+    for _ in 0..300 {
+        let now = std::time::Instant::now();
+        let TxRxResponse {
+            extra: CycleInfo {
+                next_cycle_wait, ..
+            },
+            ..
+        } = group.tx_rx_dc(md).await.expect("tx_rx_dc");
+        smol::Timer::at(now + next_cycle_wait).await;
+    }
+    let t_end = bus.clock.now_ns();
+    let chain = lock(&bus.chain);
+    let cycle = period.as_nanos() as u64;
+    // Pulses due between OP and the end, in the reference's system time
+    // (SYNC0 starts at `start`, which may come after OP was reached).
+    let reference = chain.slaves()[0].esc();
+    let (sys_op, sys_end) = (
+        reference.dc_system_time(t_op),
+        reference.dc_system_time(t_end),
+    );
+    let due_by = |sys: u64| {
+        if sys < start {
+            0
+        } else {
+            (sys - start) / cycle + 1
+        }
+    };
+    let expected = due_by(sys_end) - due_by(sys_op);
+    let mut missed = 0;
+    for (i, s) in chain.slaves().iter().enumerate() {
+        let esc = s.esc();
+        let last = esc.sync0_last().expect("SYNC0 pulsed");
+        assert_eq!(
+            (last - start) % cycle,
+            0,
+            "slave {i}: pulses at start + k x cycle"
+        );
+        let pulses = esc.sync0_pulses() - pulses_at_op[i];
+        assert!(
+            pulses.abs_diff(expected) <= 2,
+            "slave {i}: {pulses} SYNC0 pulses in {} us, {expected} expected",
+            (t_end - t_op) / 1000
+        );
+        let fw = firmware(&chain, i);
+        assert_eq!(
+            fw.sync_mode(),
+            ecat_slave::device::SyncMode::DcSync0,
+            "slave {i}"
+        );
+        assert!(fw.sync0_events() > 0, "slave {i}: the firmware saw SYNC0");
+        missed += fw.sm_event_missed();
+    }
+    // All slaves pulse at the same system time: same start and cycle, and
+    // their system times agree (the static and cyclic drift compensation).
+    let lasts: Vec<u64> = chain
+        .slaves()
+        .iter()
+        .map(|s| s.esc().sync0_last().unwrap_or(0))
+        .collect();
+    let t = bus.clock.now_ns();
+    let spread = spread(&chain, t);
+    eprintln!(
+        "{n} slaves in DC mode: start {start}, {expected} cycles, SM events missed {missed}, \
+         system time spread {:?} ns",
+        (spread.iter().min(), spread.iter().max())
+    );
+    assert!(
+        lasts.iter().all(|&l| l.abs_diff(lasts[0]) <= cycle),
+        "every slave's last pulse within one cycle: {lasts:?}"
+    );
+    for (i, d) in spread.iter().enumerate() {
+        assert!(
+            d.abs() <= SYNC_BOUND_NS,
+            "slave {i}: {d} ns off the reference"
+        );
+    }
+}
+
+#[test]
+fn ethercrab_runs_1_slave_dc_synchronous_on_sync0() {
+    smol::block_on(dc_sync0_line(1));
+}
+
+#[test]
+fn ethercrab_runs_8_slaves_dc_synchronous_on_sync0() {
+    smol::block_on(dc_sync0_line(8));
+}
+
+#[test]
+fn ethercrab_runs_64_slaves_dc_synchronous_on_sync0() {
+    smol::block_on(dc_sync0_line(64));
+}
+
+/// PRE-OP→SAFE-OP with a DC configuration the firmware cannot run:
+/// (activation, SYNC0 cycle ns, AL status code expected).
+#[test]
+fn a_wrong_dc_configuration_is_refused_at_safe_op_with_the_code_masters_expect() {
+    smol::block_on(async {
+        for (activation, cycle, code) in [
+            // SYNC0 without cyclic operation.
+            (0x02u8, 1_000_000u32, 0x0030u16),
+            // SYNC1 (not supported).
+            (0x07, 1_000_000, 0x0030),
+            // A cycle shorter than the firmware can run.
+            (0x03, 10_000, 0x0035),
+            // A single shot (cycle 0) is no cyclic operation.
+            (0x03, 0, 0x0035),
+        ] {
+            let bus = VirtualBus::with_dc(line_of(1), Clock::simulated(), 0).expect("bus");
+            let md = &*bus.maindevice;
+            let group = bus.init().await.expect("init");
+            let s = group.subdevice(md, 0).expect("slave").configured_address();
+            // Process data configured (SM2/SM3, FMMUs), as before SAFE-OP.
+            let _group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
+            ethercrab::Command::fpwr(s, reg::DC_SYNC0_CYCLE_TIME)
+                .send(md, cycle)
+                .await
+                .expect("0x09A0");
+            ethercrab::Command::fpwr(s, reg::DC_ACTIVATION)
+                .send(md, activation)
+                .await
+                .expect("0x0981");
+            let st = crate::common::request(md, s, 0x04).await;
+            assert_eq!(
+                st,
+                (0x12, code),
+                "activation {activation:#04x} cycle {cycle}: PRE-OP + error, code {code:#06x}"
+            );
+        }
     });
 }

@@ -61,5 +61,5 @@ pub use description::{
 };
 pub use schedule::PollSchedule;
 pub use sii_image::mapping_entries;
-pub use slave::{FULL_PASS_NS, SM_CONTROL, Slave};
+pub use slave::{DC_MIN_CYCLE_NS, FULL_PASS_NS, SM_CONTROL, Slave, SyncMode};
 pub use soft::{SoftPdi, SoftSlave, SpiStats};

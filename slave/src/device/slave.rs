@@ -31,6 +31,24 @@ pub const SM_CONTROL: [u8; 4] = [0x26, 0x22, 0x64, 0x20];
 /// to.
 pub const FULL_PASS_NS: u64 = 100_000_000;
 
+/// Shortest SYNC0 cycle the firmware accepts in DC mode (0x09A0 below it
+/// is refused at PRE-OP→SAFE-OP with 0x0035): one pass of the firmware
+/// loop with process data must fit in a cycle.
+pub const DC_MIN_CYCLE_NS: u32 = 100_000;
+
+/// How the firmware synchronises its process data (ETG.1020 sync types,
+/// as 0x1C32:01 names them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SyncMode {
+    /// Free run (or SM-synchronous: the outputs are taken when SM2's event
+    /// comes); no DC SYNC signal.
+    #[default]
+    FreeRun,
+    /// DC-synchronous on SYNC0: the master activated cyclic operation with
+    /// SYNC0 (0x0981 = 0x03) before SAFE-OP.
+    DcSync0,
+}
+
 /// Most changes one SDO download hands to the application.
 const MAX_CHANGES: usize = complete::MAX_ENTRIES;
 
@@ -60,6 +78,15 @@ pub struct Slave<E: Esc, A: Application> {
     sm1_quiet: bool,
     /// Responses written to SM1 so far (wrapping).
     sm1_writes: u32,
+    /// Synchronisation chosen at PRE-OP→SAFE-OP.
+    sync_mode: SyncMode,
+    /// SYNC0 events the firmware saw (wrapping).
+    sync0_events: u32,
+    /// DC mode: SYNC0 cycles in which no new outputs had arrived (SM2
+    /// event) since the previous SYNC0: ETG.1020's "SM event missed".
+    sm_event_missed: u32,
+    /// An SM2 event came since the last SYNC0.
+    outputs_since_sync0: bool,
 }
 
 impl<E: Esc, A: Application> core::fmt::Debug for Slave<E, A> {
@@ -110,6 +137,8 @@ struct Checks<'a, E: Esc, A: Application> {
     /// 0x0001 and the firmware goes to its fail-safe state (never "assume
     /// all is well").
     pdi_error: Option<EscError>,
+    /// The synchronisation the PRE-OP→SAFE-OP check found.
+    sync_mode: Option<SyncMode>,
 }
 
 impl<E: Esc, A: Application> Checks<'_, E, A> {
@@ -118,6 +147,36 @@ impl<E: Esc, A: Application> Checks<'_, E, A> {
     fn pdi_failed(&mut self, e: EscError) -> AlStatusCode {
         self.pdi_error.get_or_insert(e);
         AlStatusCode::Unspecified
+    }
+}
+
+impl<E: Esc, A: Application> Checks<'_, E, A> {
+    /// The DC SYNC configuration the master left in the activation
+    /// register (0x0981) and the SYNC0 cycle time (0x09A0): no SYNC means
+    /// free run; cyclic operation with SYNC0 means DC mode if the cycle
+    /// fits. A SYNC signal without cyclic operation, or SYNC1 (not
+    /// supported yet), is refused with 0x0030; a SYNC0 cycle of 0 (single
+    /// shot) or shorter than [`DC_MIN_CYCLE_NS`] with 0x0035 (ETG.1000.6
+    /// AL status codes; ETG.1020 §22).
+    fn check_dc(&mut self) -> Result<SyncMode, AlStatusCode> {
+        let act = self
+            .esc
+            .read_u8(reg::DC_ACTIVATION)
+            .map_err(|e| self.pdi_failed(e))?;
+        if act & 0x06 == 0 {
+            return Ok(SyncMode::FreeRun);
+        }
+        if act & 0x01 == 0 || act & 0x04 != 0 {
+            return Err(AlStatusCode::InvalidDcSyncConfig);
+        }
+        let cycle = self
+            .esc
+            .read_u32(reg::DC_SYNC0_CYCLE_TIME)
+            .map_err(|e| self.pdi_failed(e))?;
+        if cycle < DC_MIN_CYCLE_NS {
+            return Err(AlStatusCode::InvalidDcCycleTime);
+        }
+        Ok(SyncMode::DcSync0)
     }
 }
 
@@ -175,6 +234,7 @@ impl<E: Esc, A: Application> TransitionChecks for Checks<'_, E, A> {
         if !in_ok {
             return Err(AlStatusCode::InvalidInputConfig);
         }
+        self.sync_mode = Some(self.check_dc()?);
         self.images = Some((outputs, inputs));
         Ok(())
     }
@@ -247,6 +307,10 @@ impl<E: Esc, A: Application> Slave<E, A> {
             full_pass_ns: None,
             sm1_quiet: false,
             sm1_writes: 0,
+            sync_mode: SyncMode::FreeRun,
+            sync0_events: 0,
+            sm_event_missed: 0,
+            outputs_since_sync0: false,
         }
     }
 
@@ -270,6 +334,10 @@ impl<E: Esc, A: Application> Slave<E, A> {
         self.now_ns = 0;
         self.full_pass_ns = None;
         self.sm1_quiet = false;
+        self.sync_mode = SyncMode::FreeRun;
+        self.sync0_events = 0;
+        self.sm_event_missed = 0;
+        self.outputs_since_sync0 = false;
     }
 
     /// Uses another memory layout (standard mailbox size); it must match
@@ -434,7 +502,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
             .is_none_or(|t| now_ns.saturating_sub(t) >= FULL_PASS_NS);
         // The process-data SyncManagers' events need only the process
         // data exchanged.
-        let process_data = reg::al_event_sm(2) | reg::al_event_sm(3);
+        let process_data = reg::al_event_sm(2) | reg::al_event_sm(3) | reg::AL_EVENT_SYNC0;
         if relevant & !process_data == 0 && !queued && !due {
             return self.light_pass(events);
         }
@@ -465,6 +533,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
             }
         }
         self.supervise(events)?;
+        self.sync0(events)?;
         if matches!(
             self.al.state,
             AlState::PreOp | AlState::SafeOp | AlState::Op | AlState::Boot
@@ -489,6 +558,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
     /// outputs the master wrote (SM2 event), the application's tick, the
     /// inputs; else the tick alone.
     fn light_pass(&mut self, events: u32) -> Result<(), EscError> {
+        self.sync0(events)?;
         let pd = matches!(self.al.state, AlState::SafeOp | AlState::Op);
         if pd {
             self.read_outputs(events)?;
@@ -632,6 +702,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
             images: None,
             now_ns: self.now_ns,
             pdi_error: None,
+            sync_mode: None,
         };
         let after = al::transition(before, control, &mut checks);
         if let Some(e) = checks.pdi_error {
@@ -644,6 +715,13 @@ impl<E: Esc, A: Application> Slave<E, A> {
         if let Some((o, i)) = checks.images.take() {
             self.outputs = o;
             self.inputs = i;
+        }
+        if let Some(m) = checks.sync_mode {
+            self.sync_mode = m;
+            self.outputs_since_sync0 = true;
+        }
+        if matches!(after.state, AlState::Init | AlState::PreOp) {
+            self.sync_mode = SyncMode::FreeRun;
         }
         if after.state != AlState::Op && before.state == AlState::Op {
             self.safe_outputs();
@@ -816,7 +894,44 @@ impl<E: Esc, A: Application> Slave<E, A> {
         Ok(self.esc.read_u8(base + smr::STATUS)? & smr::STATUS_MAILBOX_FULL != 0)
     }
 
+    /// A SYNC0 event: acknowledged by reading 0x098E (one PDI read);
+    /// counted, and in DC mode a cycle without new outputs since the last
+    /// SYNC0 counts as an SM event missed.
+    fn sync0(&mut self, events: u32) -> Result<(), EscError> {
+        if events & reg::AL_EVENT_SYNC0 == 0 {
+            return Ok(());
+        }
+        self.esc.read_u8(reg::DC_SYNC0_STATUS)?;
+        self.sync0_events = self.sync0_events.wrapping_add(1);
+        if self.sync_mode == SyncMode::DcSync0 && self.al.state == AlState::Op {
+            if !self.outputs_since_sync0 && events & reg::al_event_sm(2) == 0 {
+                self.sm_event_missed = self.sm_event_missed.wrapping_add(1);
+            }
+            self.outputs_since_sync0 = events & reg::al_event_sm(2) != 0;
+        }
+        Ok(())
+    }
+
+    /// The synchronisation chosen at the last PRE-OP→SAFE-OP.
+    pub fn sync_mode(&self) -> SyncMode {
+        self.sync_mode
+    }
+
+    /// SYNC0 events the firmware has seen (wrapping).
+    pub fn sync0_events(&self) -> u32 {
+        self.sync0_events
+    }
+
+    /// DC mode: SYNC0 cycles in OP that came without new outputs since
+    /// the previous one (ETG.1020 "SM event missed").
+    pub fn sm_event_missed(&self) -> u32 {
+        self.sm_event_missed
+    }
+
     fn read_outputs(&mut self, events: u32) -> Result<(), EscError> {
+        if events & reg::al_event_sm(2) != 0 {
+            self.outputs_since_sync0 = true;
+        }
         let mut buf = [0u8; MAX_IMAGE];
         if events & reg::al_event_sm(2) != 0 && self.outputs.byte_len() > 0 {
             let n = self.outputs.byte_len();

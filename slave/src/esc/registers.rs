@@ -128,6 +128,19 @@ pub const DC_SPEED_COUNTER_START: u16 = 0x0930;
 pub const DC_TIME_FILTER_DEPTH: u16 = 0x0934;
 /// DC speed counter filter depth (low nibble).
 pub const DC_SPEED_FILTER_DEPTH: u16 = 0x0935;
+/// DC cyclic unit control (u8: bit 0 SYNC out unit controlled by PDI).
+pub const DC_CYCLIC_UNIT_CONTROL: u16 = 0x0980;
+/// DC activation (u8): bit 0 cyclic operation, bit 1 SYNC0, bit 2 SYNC1.
+pub const DC_ACTIVATION: u16 = 0x0981;
+/// DC SYNC signal pulse length (u16, units of 10 ns; 0: acknowledge mode).
+pub const DC_PULSE_LENGTH: u16 = 0x0982;
+/// DC SYNC0 status (u8, bit 0: a SYNC0 pulse occurred; a read clears it).
+pub const DC_SYNC0_STATUS: u16 = 0x098E;
+/// DC start time of cyclic operation (u64, system time; read: the next
+/// SYNC0 pulse).
+pub const DC_START_TIME: u16 = 0x0990;
+/// DC SYNC0 cycle time (u32, ns; 0: a single pulse).
+pub const DC_SYNC0_CYCLE_TIME: u16 = 0x09A0;
 /// Digital I/O output data (4 bytes).
 pub const DIGITAL_OUTPUT: u16 = 0x0F00;
 /// Start of process RAM.
@@ -201,6 +214,9 @@ pub const AL_EVENT_AL_CONTROL: u32 = 0x0000_0001;
 /// (ET1100 datasheet section II, register 0x0220; cleared when the PDI
 /// reads a SyncManager's activation register, offset 6).
 pub const AL_EVENT_SM_CHANGED: u32 = 0x0000_0010;
+
+/// AL event request bit 2: DC SYNC0 status (cleared by reading 0x098E).
+pub const AL_EVENT_SYNC0: u32 = 0x0000_0004;
 
 /// AL event request bit 6, "watchdog process data expired" (cleared when
 /// the PDI reads the watchdog status 0x0440).

@@ -151,6 +151,11 @@ pub struct SoftEsc {
     /// back through port 1, when port 1 is open), for the DC unit.
     dc_port0_ns: u64,
     dc_port1_ns: Option<u64>,
+    /// System time of the next SYNC0 pulse while SYNC0 is active.
+    sync0_next: Option<u64>,
+    /// SYNC0 pulses since power-on, and the system time of the last.
+    sync0_pulses: u64,
+    sync0_last: Option<u64>,
 }
 
 /// A PDI failure injected into the software ESC: PDI accesses that touch
@@ -229,6 +234,9 @@ impl SoftEsc {
             dc: DcClock::default(),
             dc_port0_ns: 0,
             dc_port1_ns: None,
+            sync0_next: None,
+            sync0_pulses: 0,
+            sync0_last: None,
         };
         let n = sii.len().min(SII_SIZE);
         if let (Some(dst), Some(src)) = (esc.sii.get_mut(..n), sii.get(..n)) {
@@ -265,11 +273,14 @@ impl SoftEsc {
         // Ports 0 and 1 MII, ports 2 and 3 not implemented.
         self.set_u8(reg::PORT_DESCRIPTOR, 0x0F);
         // Bit-oriented FMMUs, LRW and read/write commands supported; DC
-        // receive times and a 64-bit system time (bits 2 and 3), but no
-        // SYNC/LATCH unit yet (bit 8 "enhanced DC sync" clear), so masters
-        // use it as a clock only (ETG.1000.4 Table 31).
-        self.set_u16(reg::FEATURES, 0x000C);
+        // receive times and a 64-bit system time (bits 2 and 3) and the
+        // SYNC0 unit with the activation registers 0x0981-0x0984 (bit 8,
+        // "enhanced DC sync activation"); ETG.1000.4 Table 31. No LATCH
+        // inputs and no SYNC1 pulses yet.
+        self.set_u16(reg::FEATURES, 0x010C);
         self.dc.power_on(self.dc_port0_ns);
+        self.sync0_next = None;
+        self.sync0_last = None;
         // DC control loop defaults (ET1100 Section II, 0x0930-0x0935).
         self.set_u16(reg::DC_SPEED_COUNTER_START, 0x1000);
         self.set_u8(reg::DC_TIME_FILTER_DEPTH, 4);
@@ -381,6 +392,7 @@ impl SoftEsc {
         // Frames processed after this without their own times (a single
         // ESC, not on a line) pass the DC unit at this time.
         self.dc_port0_ns = self.dc_port0_ns.max(now_ns);
+        self.update_dc(now_ns);
         let base = self.watchdog_base_ns();
         if core::mem::take(&mut self.wd_restart) {
             if self.wd_sm_armed_at.is_some() {
@@ -456,6 +468,74 @@ impl SoftEsc {
     /// (own − received).
     pub fn dc_difference(&self) -> i64 {
         dc::difference_of_register(self.mem_u32(reg::DC_SYSTEM_TIME_DIFF))
+    }
+
+    /// Runs the SYNC0 unit up to injected time `now_ns`: every pulse due
+    /// by then (start time + k × cycle, in system time) sets 0x098E bit 0
+    /// and AL event bit 2. Cheap when SYNC0 is off. A line calls this
+    /// before it looks for AL events, so a firmware waits on SYNC0 as it
+    /// would on its IRQ line.
+    pub fn update_dc(&mut self, now_ns: u64) {
+        let Some(next) = self.sync0_next else {
+            return;
+        };
+        let now = self.dc_system_time(now_ns);
+        if now < next {
+            return;
+        }
+        let cycle = u64::from(self.mem_u32(reg::DC_SYNC0_CYCLE_TIME));
+        let (count, last) = match (now - next).checked_div(cycle) {
+            // Cycle time 0: a single pulse.
+            None => {
+                self.sync0_next = None;
+                (1, next)
+            }
+            Some(k) => {
+                let last = next + k * cycle;
+                self.sync0_next = Some(last + cycle);
+                (k + 1, last)
+            }
+        };
+        self.sync0_pulses = self.sync0_pulses.saturating_add(count);
+        self.sync0_last = Some(last);
+        let st = self.mem_u8(reg::DC_SYNC0_STATUS) | 0x01;
+        self.set_u8(reg::DC_SYNC0_STATUS, st);
+        self.raise_al_event(reg::AL_EVENT_SYNC0);
+    }
+
+    /// SYNC0 pulses since power-on.
+    pub fn sync0_pulses(&self) -> u64 {
+        self.sync0_pulses
+    }
+
+    /// System time of the last SYNC0 pulse.
+    pub fn sync0_last(&self) -> Option<u64> {
+        self.sync0_last
+    }
+
+    /// System time of the next SYNC0 pulse (`None`: SYNC0 is off).
+    pub fn sync0_next(&self) -> Option<u64> {
+        self.sync0_next
+    }
+
+    /// ECAT write of the activation register 0x0981: cyclic operation with
+    /// SYNC0 (bits 0 and 1) arms the unit at the start time 0x0990; a
+    /// start time already past is compared on its low 32 bits, as the
+    /// ET1100 does, so the first pulse then comes after the 32-bit system
+    /// time wraps around (about 4.3 s later; masters write a start time
+    /// ahead of the reference clock's time). Anything else stops it.
+    fn dc_activate(&mut self) {
+        let act = self.mem_u8(reg::DC_ACTIVATION);
+        if act & 0x03 != 0x03 {
+            self.sync0_next = None;
+            return;
+        }
+        let now = self.dc_system_time(self.dc_port0_ns);
+        let mut start = self.mem_u64(reg::DC_START_TIME);
+        while start < now {
+            start = start.saturating_add(1 << 32);
+        }
+        self.sync0_next = Some(start);
     }
 
     /// ECAT write to 0x0900: every port's receive time latched (local
@@ -819,11 +899,19 @@ impl SoftEsc {
         if b > 0x1_0000 {
             return false;
         }
-        // The system time is the clock now, not a stored value.
+        // The system time is the clock now, not a stored value; 0x0990
+        // reads as the next SYNC0 pulse while the unit runs.
         let st = u32::from(reg::DC_SYSTEM_TIME);
         if a < st + 8 && st < b {
             let now = self.dc_system_time(self.dc_port0_ns);
             self.set_u64(reg::DC_SYSTEM_TIME, now);
+        }
+        let nx = u32::from(reg::DC_START_TIME);
+        if a < nx + 8 && nx < b {
+            self.update_dc(self.dc_port0_ns);
+            if let Some(next) = self.sync0_next {
+                self.set_u64(reg::DC_START_TIME, next);
+            }
         }
         // SyncManager checks, on the part in process RAM only: as on
         // silicon, SyncManagers map process RAM, and one a master
@@ -972,6 +1060,7 @@ impl SoftEsc {
         let mut al_control = false;
         let mut dc_latch = false;
         let mut dc_reset = false;
+        let mut dc_activation = false;
         // System time received (0x0910..0x0917): value and bytes written.
         let mut dc_received: Option<(u64, usize)> = None;
         for (i, &v) in data.iter().enumerate() {
@@ -1031,7 +1120,11 @@ impl SoftEsc {
                     self.set_u8(a, v);
                     dc_reset = true;
                 }
-                0x0932..=0x0933 => {}
+                0x0932..=0x0933 | 0x098E..=0x098F => {}
+                0x0981 => {
+                    self.set_u8(a, v);
+                    dc_activation = true;
+                }
                 0x0920..=0x092B | 0x0934..=0x09FF | 0x0F00..=0x0F03 => self.set_u8(a, v),
                 _ => {}
             }
@@ -1048,6 +1141,9 @@ impl SoftEsc {
         if dc_reset {
             self.dc.reset_control(self.dc_port0_ns);
             self.set_u32(reg::DC_SYSTEM_TIME_DIFF, 0);
+        }
+        if dc_activation {
+            self.dc_activate();
         }
         if touched_fmmu != 0 {
             self.reload_fmmus();
@@ -1340,6 +1436,13 @@ impl Esc for SoftEsc {
         }
         if covers(reg::WATCHDOG_STATUS_PD) {
             self.clear_al_event(reg::AL_EVENT_WATCHDOG_PD);
+        }
+        if covers(reg::DC_SYNC0_STATUS) {
+            // Acknowledge mode (pulse length 0): reading the status clears
+            // it and the AL event bit mirroring it.
+            let st = self.mem_u8(reg::DC_SYNC0_STATUS) & !0x01;
+            self.set_u8(reg::DC_SYNC0_STATUS, st);
+            self.clear_al_event(reg::AL_EVENT_SYNC0);
         }
         if (0..SM_COUNT as u8)
             .filter_map(reg::sm)

@@ -418,14 +418,14 @@ impl Chain {
         let mut moved = false;
         if core::mem::take(&mut self.touched_all) {
             for i in 0..self.slaves.len() {
-                if self.has_event(i) {
+                if self.has_event(i, now_ns) {
                     moved |= self.poll_one(i, now_ns, &mut first);
                 }
             }
         } else {
             let touched = core::mem::take(&mut self.touched);
             for &i in &touched {
-                if self.has_event(i) {
+                if self.has_event(i, now_ns) {
                     moved |= self.poll_one(i, now_ns, &mut first);
                 }
             }
@@ -498,11 +498,14 @@ impl Chain {
         moved
     }
 
-    /// Whether slave `i`'s ESC holds an AL event for the firmware.
-    fn has_event(&self, i: usize) -> bool {
-        self.slaves
-            .get(i)
-            .is_some_and(|s| s.esc().al_event_pending())
+    /// Whether slave `i`'s ESC holds an AL event for the firmware at
+    /// `now_ns` (its SYNC0 unit runs up to then first).
+    fn has_event(&mut self, i: usize, now_ns: u64) -> bool {
+        self.slaves.get_mut(i).is_some_and(|s| {
+            let esc = s.esc_mut();
+            esc.update_dc(now_ns);
+            esc.al_event_pending()
+        })
     }
 
     /// Runs slave `i`'s firmware; records a PDI failure in `first` and
