@@ -29,6 +29,35 @@ pub const ESI_VERSION: &str = "1.17";
 /// AL state machine timeouts in ms (ESI `Info/StateMachine/Timeout`):
 /// PRE-OP, SAFE-OP/OP, back to INIT, back to SAFE-OP.
 pub const STATE_MACHINE_TIMEOUTS_MS: [u32; 4] = [2000, 9000, 5000, 200];
+/// `<Dc>`: the two operation modes every device on the core runs, as
+/// configurators offer them (ETG.2000 `Dc/OpMode`): free run / SM-synchron
+/// (AssignActivate 0: no SYNC signal) and DC-synchron on SYNC0
+/// (AssignActivate 0x0300: 0x0981 = cyclic operation + SYNC0, written by
+/// the master as the 16-bit 0x0980; SYNC0 cycle = the bus cycle, factor 1;
+/// 0x1C32:01/0x1C33:01 = 2 through the `Sm` elements). The core checks
+/// what the master activates at PRE-OP→SAFE-OP (`device::DC_MIN_CYCLE_NS`).
+fn write_dc(w: &mut W) -> io::Result<()> {
+    start(w, "Dc", &[])?;
+    start(w, "OpMode", &[])?;
+    text(w, "Name", "FreeRun")?;
+    text(w, "Desc", "FreeRun/SM-Synchron")?;
+    text(w, "AssignActivate", "#x0000")?;
+    end(w, "OpMode")?;
+    start(w, "OpMode", &[])?;
+    text(w, "Name", "DcSync")?;
+    text(w, "Desc", "DC-Synchron (SYNC0)")?;
+    text(w, "AssignActivate", "#x0300")?;
+    text_attrs(w, "CycleTimeSync0", &[("Factor", "1")], "0")?;
+    text_attrs(w, "ShiftTimeSync0", &[("Factor", "0")], "0")?;
+    for sm in ["2", "3"] {
+        start(w, "Sm", &[("No", sm)])?;
+        text(w, "SyncType", "2")?;
+        end(w, "Sm")?;
+    }
+    end(w, "OpMode")?;
+    end(w, "Dc")
+}
+
 /// Mailbox request and response timeouts in ms (ESI `Info/Mailbox/Timeout`).
 pub const MAILBOX_TIMEOUTS_MS: [u32; 2] = [100, 2000];
 
@@ -738,6 +767,8 @@ pub fn generate(dev: &DeviceDescription) -> Result<Vec<u8>, EsiError> {
         empty(&mut w, "FoE", &[])?;
     }
     end(&mut w, "Mailbox")?;
+
+    write_dc(&mut w)?;
 
     let [divider, pdi, sm_wd] = watchdog_registers(&image);
     start(&mut w, "ESC", &[])?;

@@ -373,3 +373,82 @@ fn a_wrong_dc_configuration_is_refused_at_safe_op_with_the_code_masters_expect()
         }
     });
 }
+
+/// The generated ESI's `<Dc>` op modes, applied as a configurator does
+/// (AssignActivate written to 0x0980 as 16 bits, the SYNC0 cycle to
+/// 0x09A0, the `Sm` elements' SyncType to 0x1C32:01/0x1C33:01), give
+/// the behaviour they describe, and 0x1C32 reports it: free run, or DC
+/// SYNC0 with the cycle time.
+#[test]
+fn the_esi_dc_op_modes_applied_by_a_master_give_the_modes_they_describe() {
+    smol::block_on(async {
+        let xml = ecat_esi::generate(&io8_example::DEVICE).expect("ESI");
+        let xml = String::from_utf8(xml).expect("UTF-8");
+        let root = ecat_esi::xml::parse(&xml).expect("ESI parses");
+        let dc = root
+            .path("Descriptions/Devices/Device/Dc")
+            .expect("the ESI has <Dc>");
+        let modes: Vec<_> = dc.children_named("OpMode").collect();
+        assert_eq!(modes.len(), 2);
+        for mode in modes {
+            let name = mode.text_at("Name").expect("Name").to_string();
+            let assign =
+                ecat_esi::xml::hex_dec(mode.text_at("AssignActivate").expect("AssignActivate"))
+                    .expect("hex") as u16;
+            let sync_type = mode
+                .children_named("Sm")
+                .find_map(|sm| sm.text_at("SyncType"))
+                .map(|t| t.parse::<u16>().expect("SyncType"));
+            let cycle = 1_000_000u32;
+            let bus = VirtualBus::with_dc(line_of(1), Clock::real(), 1_000).expect("bus");
+            let md = &*bus.maindevice;
+            let group = bus.init().await.expect("init");
+            let sd = group.subdevice(md, 0).expect("slave");
+            let s = sd.configured_address();
+            if let Some(t) = sync_type {
+                sd.sdo_write(0x1C32, 1, t).await.expect("0x1C32:01");
+                sd.sdo_write(0x1C33, 1, t).await.expect("0x1C33:01");
+            }
+            let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
+            if assign != 0 {
+                let now: u64 = ethercrab::Command::fprd(s, reg::DC_SYSTEM_TIME)
+                    .receive(md)
+                    .await
+                    .expect("system time");
+                let start = (now + 10_000_000) / u64::from(cycle) * u64::from(cycle);
+                ethercrab::Command::fpwr(s, reg::DC_START_TIME)
+                    .send(md, start)
+                    .await
+                    .expect("start");
+                ethercrab::Command::fpwr(s, reg::DC_SYNC0_CYCLE_TIME)
+                    .send(md, cycle)
+                    .await
+                    .expect("cycle");
+            }
+            ethercrab::Command::fpwr(s, 0x0980)
+                .send(md, assign)
+                .await
+                .expect("AssignActivate");
+            let st = crate::common::request(md, s, 0x04).await;
+            assert_eq!(st, (0x04, 0), "{name}: SAFE-OP");
+            let mode_now = {
+                let chain = lock(&bus.chain);
+                firmware(&chain, 0).sync_mode()
+            };
+            let sd = group.subdevice(md, 0).expect("slave");
+            let reported: u16 = sd.sdo_read(0x1C32, 1).await.expect("0x1C32:01");
+            let reported_cycle: u32 = sd.sdo_read(0x1C32, 2).await.expect("0x1C32:02");
+            match name.as_str() {
+                "FreeRun" => {
+                    assert_eq!(mode_now, ecat_slave::device::SyncMode::FreeRun);
+                    assert_eq!((reported, reported_cycle), (0, 0), "{name}");
+                }
+                "DcSync" => {
+                    assert_eq!(mode_now, ecat_slave::device::SyncMode::DcSync0);
+                    assert_eq!((reported, reported_cycle), (2, cycle), "{name}");
+                }
+                other => panic!("unexpected op mode {other}"),
+            }
+        }
+    });
+}

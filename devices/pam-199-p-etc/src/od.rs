@@ -24,8 +24,8 @@ use DataType::{Bool, Int16, Int32, UInt8, UInt16, UInt32};
 use ObjectCode::{Array, Record, Var};
 use PdoMapping::None as NoPdo;
 use ecat_slave::od::build::{
-    assign, assign_count, base, constant, gap, input, map, output, pad, setting, string, sub_name,
-    sub0, var,
+    SYNC_PARAMETER_ENTRIES, assign, assign_count, base, constant, gap, input, map, output, pad,
+    setting, string, sub_name, sub0, var,
 };
 use ecat_slave::od::{Access, DataType, Entry, EnumDesc, Object, ObjectCode, PdoMapping};
 
@@ -320,6 +320,9 @@ pub const OBJECTS: &[Object] = &[
         assign(0x01, 0x1A00),
         assign(0x02, 0x1A02),
     ] },
+    // ETG.1020 synchronisation parameters, kept current by the core.
+    Object { index: 0x1C32, name: "SM output parameter", code: Record, entries: SYNC_PARAMETER_ENTRIES },
+    Object { index: 0x1C33, name: "SM input parameter", code: Record, entries: SYNC_PARAMETER_ENTRIES },
     // --- 6.1.2 process data: inputs ----------------------------------------
     Object { index: 0x6000, name: "DIR", code: Record, entries: &[
         sub0(0x07),

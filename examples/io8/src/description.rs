@@ -7,7 +7,8 @@ use ecat_slave::device::{
     ProcessData,
 };
 use ecat_slave::od::build::{
-    assign, assign_count, constant, input, map, output, ranged, string, sub_name, sub0, var,
+    SYNC_PARAMETER_ENTRIES, assign, assign_count, constant, input, map, output, ranged, string,
+    sub_name, sub0, var,
 };
 use ecat_slave::od::{Access, DataType, Entry, Object, ObjectCode, PdoMapping};
 
@@ -103,6 +104,9 @@ pub const OBJECTS: &[Object] = &[
         assign_count(1, 1),
         assign(1, 0x1A00),
     ] },
+    // ETG.1020 synchronisation parameters, kept current by the core.
+    Object { index: 0x1C32, name: "SM output parameter", code: ObjectCode::Record, entries: SYNC_PARAMETER_ENTRIES },
+    Object { index: 0x1C33, name: "SM input parameter", code: ObjectCode::Record, entries: SYNC_PARAMETER_ENTRIES },
     Object { index: INPUTS, name: "Inputs", code: ObjectCode::Record, entries: &[
         sub0(8),
         input(1, "Input 1", DataType::Bool),

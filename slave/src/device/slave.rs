@@ -163,7 +163,14 @@ impl<E: Esc, A: Application> Checks<'_, E, A> {
             .esc
             .read_u8(reg::DC_ACTIVATION)
             .map_err(|e| self.pdi_failed(e))?;
+        // A sync mode the master wrote into 0x1C32:01 must match the
+        // registers; a free-run/SM value with SYNC0 active is overruled
+        // by the registers (as the SSC derives the mode from 0x0981).
+        let requested = self.od.get(0x1C32, 1);
         if act & 0x06 == 0 {
+            if requested == Some(crate::od::build::sync_mode::DC_SYNC0) {
+                return Err(AlStatusCode::InvalidDcSyncConfig);
+            }
             return Ok(SyncMode::FreeRun);
         }
         if act & 0x01 == 0 || act & 0x04 != 0 {
@@ -719,8 +726,14 @@ impl<E: Esc, A: Application> Slave<E, A> {
         if let Some(m) = checks.sync_mode {
             self.sync_mode = m;
             self.outputs_since_sync0 = true;
+            let cycle = if m == SyncMode::DcSync0 {
+                i64::from(self.esc.read_u32(reg::DC_SYNC0_CYCLE_TIME)?)
+            } else {
+                0
+            };
+            self.publish_sync(cycle);
         }
-        if matches!(after.state, AlState::Init | AlState::PreOp) {
+        if matches!(after.state, AlState::Init | AlState::PreOp) && before.state != after.state {
             self.sync_mode = SyncMode::FreeRun;
         }
         if after.state != AlState::Op && before.state == AlState::Op {
@@ -906,10 +919,31 @@ impl<E: Esc, A: Application> Slave<E, A> {
         if self.sync_mode == SyncMode::DcSync0 && self.al.state == AlState::Op {
             if !self.outputs_since_sync0 && events & reg::al_event_sm(2) == 0 {
                 self.sm_event_missed = self.sm_event_missed.wrapping_add(1);
+                let n = i64::from(self.sm_event_missed as u16);
+                let od = A::Values::view_mut(&mut self.store);
+                od.set(0x1C32, 11, n);
+                od.set(0x1C33, 11, n);
             }
             self.outputs_since_sync0 = events & reg::al_event_sm(2) != 0;
         }
         Ok(())
+    }
+
+    /// 0x1C32/0x1C33 (if the device has them) show the sync mode and
+    /// cycle time chosen and the SM event missed counter.
+    fn publish_sync(&mut self, cycle: i64) {
+        use crate::od::build::sync_mode;
+        let mode = match self.sync_mode {
+            SyncMode::FreeRun => sync_mode::FREE_RUN,
+            SyncMode::DcSync0 => sync_mode::DC_SYNC0,
+        };
+        let od = A::Values::view_mut(&mut self.store);
+        for index in [0x1C32, 0x1C33] {
+            od.set(index, 1, mode);
+            od.set(index, 2, cycle);
+            od.set(index, 10, cycle);
+            od.set(index, 11, i64::from(self.sm_event_missed as u16));
+        }
     }
 
     /// The synchronisation chosen at the last PRE-OP→SAFE-OP.

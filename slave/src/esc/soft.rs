@@ -2154,4 +2154,96 @@ mod tests {
             }
         }
     }
+    /// An ECAT write of `data` at `addr` to a single ESC at frame time `t`.
+    fn ecat_write_at(e: &mut SoftEsc, t: u64, addr: u16, data: &[u8]) {
+        e.set_frame_times(t, None);
+        let (mut f, _) = frame(&[(Command::Apwr, phys(0, addr), data)]);
+        e.process_frame(&mut f);
+    }
+
+    /// An ECAT read of `len` bytes at `addr` at frame time `t`.
+    fn ecat_read_at(e: &mut SoftEsc, t: u64, addr: u16, len: usize) -> Vec<u8> {
+        e.set_frame_times(t, None);
+        let zeros = vec![0u8; len];
+        let (mut f, r) = frame(&[(Command::Aprd, phys(0, addr), &zeros)]);
+        e.process_frame(&mut f);
+        f[r[0].clone()].to_vec()
+    }
+
+    #[test]
+    fn a_write_to_0x0900_latches_the_receive_times_of_both_ports_in_local_time() {
+        let mut e = esc();
+        e.set_dc_oscillator(1_000_000); // +1000 ppm, to see local != injected
+        e.set_frame_times(2_000_000, Some(2_003_000));
+        let (mut f, _) = frame(&[(Command::Bwr, phys(0, 0x0900), &[0, 0, 0, 0])]);
+        e.process_frame(&mut f);
+        let m = e.raw_memory();
+        let p0 = u32::from_le_bytes(m[0x900..0x904].try_into().unwrap());
+        let p1 = u32::from_le_bytes(m[0x904..0x908].try_into().unwrap());
+        assert_eq!(p0, 2_002_000, "2 ms at +1000 ppm");
+        assert_eq!(p1, 2_005_003);
+        let pu = u64::from_le_bytes(m[0x918..0x920].try_into().unwrap());
+        assert_eq!(pu, 2_002_000, "processing unit = port 0 time");
+    }
+
+    #[test]
+    fn system_time_reads_local_time_plus_offset_at_the_frame_time() {
+        let mut e = esc();
+        ecat_write_at(&mut e, 0, 0x0920, &1_000_000_000u64.to_le_bytes());
+        let v = ecat_read_at(&mut e, 5_000, 0x0910, 8);
+        assert_eq!(u64::from_le_bytes(v.try_into().unwrap()), 1_000_005_000);
+    }
+
+    #[test]
+    fn sync0_pulses_at_start_plus_whole_cycles_and_a_pdi_read_acknowledges_it() {
+        let mut e = esc();
+        ecat_write_at(&mut e, 0, 0x0990, &1_000_000u64.to_le_bytes());
+        ecat_write_at(&mut e, 0, 0x09A0, &250_000u32.to_le_bytes());
+        ecat_write_at(&mut e, 0, 0x0981, &[0x03]);
+        assert_eq!(e.sync0_next(), Some(1_000_000));
+        e.update_dc(999_999);
+        assert_eq!(e.sync0_pulses(), 0, "not before the start time");
+        e.update_dc(1_600_000);
+        assert_eq!(e.sync0_pulses(), 3, "1.0, 1.25 and 1.5 ms");
+        assert_eq!(e.sync0_last(), Some(1_500_000));
+        assert_eq!(e.sync0_next(), Some(1_750_000));
+        assert_ne!(e.mem_u32(reg::AL_EVENT_REQUEST) & reg::AL_EVENT_SYNC0, 0);
+        assert_eq!(e.read_u8(reg::DC_SYNC0_STATUS).unwrap() & 1, 1);
+        assert_eq!(
+            e.mem_u32(reg::AL_EVENT_REQUEST) & reg::AL_EVENT_SYNC0,
+            0,
+            "acknowledged"
+        );
+        assert_eq!(e.mem_u8(reg::DC_SYNC0_STATUS) & 1, 0);
+        // 0x0990 reads as the next pulse.
+        let next = ecat_read_at(&mut e, 1_600_000, 0x0990, 8);
+        assert_eq!(u64::from_le_bytes(next.try_into().unwrap()), 1_750_000);
+        // Deactivated: no more pulses.
+        ecat_write_at(&mut e, 1_600_000, 0x0981, &[0x00]);
+        e.update_dc(10_000_000);
+        assert_eq!(e.sync0_pulses(), 3);
+    }
+
+    #[test]
+    fn a_start_time_in_the_past_waits_for_the_32_bit_wrap() {
+        let mut e = esc();
+        ecat_write_at(&mut e, 0, 0x0990, &500u64.to_le_bytes());
+        ecat_write_at(&mut e, 0, 0x09A0, &1_000u32.to_le_bytes());
+        ecat_write_at(&mut e, 1_000_000, 0x0981, &[0x03]);
+        assert_eq!(e.sync0_next(), Some(500 + (1 << 32)));
+        e.update_dc(2_000_000_000);
+        assert_eq!(e.sync0_pulses(), 0);
+    }
+
+    #[test]
+    fn writing_the_speed_counter_start_resets_the_drift_control() {
+        let mut e = esc();
+        // A received time 1 ms behind: the loop corrects.
+        ecat_write_at(&mut e, 2_000_000, 0x0910, &1_000_000u64.to_le_bytes());
+        assert_ne!(e.dc_clock().correction_ppb(), 0);
+        assert_ne!(e.dc_difference(), 0);
+        ecat_write_at(&mut e, 2_000_000, 0x0930, &0x1000u16.to_le_bytes());
+        assert_eq!(e.dc_clock().correction_ppb(), 0);
+        assert_eq!(e.dc_difference(), 0);
+    }
 }

@@ -196,3 +196,59 @@ pub const fn ranged(
         ..setting(sub, name, t, default, unit)
     }
 }
+
+/// ETG.1020 sync modes of 0x1C32:01 / 0x1C33:01.
+pub mod sync_mode {
+    /// Free run: the application runs on its own timing.
+    pub const FREE_RUN: i64 = 0;
+    /// Synchronous with the SM2 (outputs) / SM3 (inputs) event.
+    pub const SM_SYNCHRON: i64 = 1;
+    /// DC-synchronous on SYNC0.
+    pub const DC_SYNC0: i64 = 2;
+}
+
+/// 0x1C32:04 / 0x1C33:04 "Sync modes supported": free run (bit 0),
+/// SM-synchronous (bit 1), DC SYNC0 (bits 4:2 = 001).
+pub const SYNC_MODES_SUPPORTED: i64 = 0x0007;
+
+/// The entries of 0x1C32 "SM output parameter" and 0x1C33 "SM input
+/// parameter" (ETG.1020, synchronisation; the subindices ETG.1020 gives
+/// them, 7 and 8 left out). A device puts both objects in its dictionary
+/// with these entries; the core keeps them current: the sync mode and
+/// cycle times chosen at PRE-OP→SAFE-OP from the DC registers, the SM
+/// event missed counter in DC mode. The master may write the sync mode
+/// in PRE-OP (checked against the DC registers at SAFE-OP).
+pub const SYNC_PARAMETER_ENTRIES: &[Entry] = &[
+    sub0(12),
+    Entry {
+        min: Some(sync_mode::FREE_RUN),
+        max: Some(sync_mode::DC_SYNC0),
+        ..base(
+            1,
+            "Sync mode",
+            DataType::UInt16,
+            Access::RwPreOp,
+            PdoMapping::None,
+            sync_mode::FREE_RUN,
+        )
+    },
+    constant(2, "Cycle time", DataType::UInt32, 0),
+    constant(3, "Shift time", DataType::UInt32, 0),
+    constant(
+        4,
+        "Sync modes supported",
+        DataType::UInt16,
+        SYNC_MODES_SUPPORTED,
+    ),
+    constant(
+        5,
+        "Minimum cycle time",
+        DataType::UInt32,
+        crate::device::DC_MIN_CYCLE_NS as i64,
+    ),
+    constant(6, "Calc and copy time", DataType::UInt32, 0),
+    constant(9, "Delay time", DataType::UInt32, 0),
+    constant(10, "Sync0 cycle time", DataType::UInt32, 0),
+    constant(11, "SM event missed counter", DataType::UInt16, 0),
+    constant(12, "Cycle time too small counter", DataType::UInt16, 0),
+];
