@@ -11,6 +11,7 @@ exits 1 on the first disagreement.
     soem_interop.py phase1 IFACE ESI.xml EEPROM.bin GOOD.efw BAD_CRC.efw VERSION
     soem_interop.py phase2 IFACE VERSION
     soem_interop.py chain IFACE NAME,NAME,...
+    soem_interop.py dc IFACE COUNT
 
 phase1: discovery, SDO, SDO Information, complete access, SII, state
 machine, SM watchdog, 1000 cycles, an ended session followed by a second
@@ -21,6 +22,12 @@ chain: a line spread over several runners (`pam-slave --forward`): SOEM
 finds the slaves named, in that order, with SOEM's station addresses,
 reads an SDO from each, brings them all to OP and runs 200 cycles with
 its expected working counter.
+dc: SOEM's Distributed Clocks: config_dc (receive times, offsets,
+delays), dcsync0 (SYNC0 every 1 ms) on every slave, OP with SOEM's
+process data cycle (which distributes the reference time), then every
+slave's system time difference (0x092C), its sync mode and cycle in
+0x1C32, SYNC0 running (0x0990 advancing by whole cycles); a SYNC0 cycle
+of 10 us is refused at SAFE-OP with 0x0035.
 """
 
 import struct
@@ -339,6 +346,57 @@ def chain(iface, names):
     m.close()
 
 
+def dc_difference(v):
+    """0x092C: bit 31 set = the local copy is smaller, bits 30..0 = ns."""
+    return -(v & 0x7FFFFFFF) if v & 0x80000000 else v
+
+
+def dc(iface, count):
+    count = int(count)
+    m, n = open_master(iface)
+    check(n == count, f"SOEM finds {n} slaves ({count} expected)")
+    has_dc = m.config_dc()
+    check(bool(has_dc), f"config_dc: the line has DC ({has_dc})")
+    delays = [struct.unpack("<I", s._fprd(0x0928, 4, 20000))[0] for s in m.slaves]
+    log(f"      transmission delays SOEM wrote (0x0928): {delays} ns")
+    check(delays[0] == 0 and all(b > a for a, b in zip(delays, delays[1:])),
+          "delays grow along the line from 0 at the reference")
+    set_sm_watchdog(m, LONG_WATCHDOG_MS)
+    # SYNC0 in PRE-OP, before config_map requests SAFE-OP (as SOEM's
+    # PO2SO hooks do it): the slaves check it at PRE-OP -> SAFE-OP.
+    cycle = 1_000_000
+    for s in m.slaves:
+        s.dc_sync(1, cycle)
+    m.config_map()
+    check(to_op(m), f"all {count} slaves in OP, DC-synchronous (SYNC0 every {cycle} ns)")
+    wkcs = cycles(m, 500, 0.001)
+    bad = [w for w in wkcs if w != m.expected_wkc]
+    check(not bad, f"500 cycles with WKC {m.expected_wkc} ({len(bad)} others)")
+    diffs = [dc_difference(struct.unpack("<I", s._fprd(0x092C, 4, 20000))[0]) for s in m.slaves]
+    log(f"      system time differences (0x092C) after 500 cycles: {diffs} ns")
+    check(all(abs(d) <= 1000 for d in diffs), "every slave within 1 us of the reference")
+    modes = [struct.unpack("<H", s.sdo_read(0x1C32, 1))[0] for s in m.slaves]
+    cycles_od = [struct.unpack("<I", s.sdo_read(0x1C32, 2))[0] for s in m.slaves]
+    check(all(x == 2 for x in modes), f"0x1C32:01 sync mode DC SYNC0 (2) on every slave: {modes}")
+    check(all(c == cycle for c in cycles_od), f"0x1C32:02 cycle time {cycle} ns: {cycles_od}")
+    s = m.slaves[0]
+    n1 = struct.unpack("<Q", s._fprd(0x0990, 8, 20000))[0]
+    time.sleep(0.05)
+    cycles(m, 5, 0.001)
+    n2 = struct.unpack("<Q", s._fprd(0x0990, 8, 20000))[0]
+    log(f"      next SYNC0 pulse (0x0990): {n1} then {n2}")
+    check(n2 > n1 and (n2 - n1) % cycle == 0, "SYNC0 runs: the next pulse moved on by whole cycles")
+    # A cycle the firmware cannot run: refused at SAFE-OP with 0x0035.
+    m.state = pysoem.INIT_STATE
+    m.write_state()
+    m.state_check(pysoem.INIT_STATE, 2_000_000)
+    st, code = request_state(m, s, pysoem.PREOP_STATE)
+    s.dc_sync(1, 10_000)
+    st, code = request_state(m, s, pysoem.SAFEOP_STATE)
+    check(st == 0x12 and code == 0x0035, f"SYNC0 every 10 us refused: AL status {st:#06x}, code {code:#06x}")
+    m.close()
+
+
 def main():
     if len(sys.argv) < 3:
         print(__doc__)
@@ -350,6 +408,8 @@ def main():
         phase2(*sys.argv[2:4])
     elif sys.argv[1] == "chain":
         chain(*sys.argv[2:4])
+    elif sys.argv[1] == "dc":
+        dc(*sys.argv[2:4])
     else:
         print(__doc__)
         return 2

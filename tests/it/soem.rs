@@ -32,8 +32,9 @@ pub(crate) fn pysoem_python() -> Option<String> {
     })
 }
 
-/// Starts the runner; its stderr goes to `log`.
-fn start_runner(
+/// Starts the runner (`extra`: more arguments); its stderr goes to `log`.
+#[allow(clippy::too_many_arguments)]
+fn start_runner_with(
     ns: &str,
     bin: &Path,
     line: &str,
@@ -41,11 +42,13 @@ fn start_runner(
     state: &Path,
     pcap: &Path,
     log: &Path,
+    extra: &[&str],
 ) -> Child {
     let stderr = std::fs::File::create(log).expect("runner log file");
     let child = Command::new("ip")
         .args(["netns", "exec", ns])
         .arg(bin)
+        .args(extra)
         .args(["--iface", iface, "--line", line, "--state-dir"])
         .arg(state)
         .arg("--pcap")
@@ -56,6 +59,19 @@ fn start_runner(
         .expect("start pam-slave in the namespace");
     std::thread::sleep(Duration::from_millis(400));
     child
+}
+
+/// Starts the runner; its stderr goes to `log`.
+fn start_runner(
+    ns: &str,
+    bin: &Path,
+    line: &str,
+    iface: &str,
+    state: &Path,
+    pcap: &Path,
+    log: &Path,
+) -> Child {
+    start_runner_with(ns, bin, line, iface, state, pcap, log, &[])
 }
 
 /// Ctrl-C to the runner (it flushes its capture and saves its state).
@@ -317,4 +333,56 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
         foe_errors.contains(&0x800C),
         "corrupt image answered 0x800C: {foe_errors:#06x?}"
     );
+}
+
+/// SOEM's Distributed Clocks against the runner: `config_dc`, `dcsync0`
+/// on every slave, OP with SOEM's cycle (which distributes the reference
+/// time), the slaves within 1 us of the reference, 0x1C32 in DC mode,
+/// SYNC0 running, and a 10 us SYNC0 cycle refused with 0x0035 (the `dc`
+/// phase of the script).
+#[test]
+fn soem_configures_distributed_clocks_and_runs_the_line_dc_synchronous() {
+    let Some(py) = pysoem_python() else {
+        return skip(
+            "no Python with pysoem (pip install pysoem, or set PAM_PYSOEM_PYTHON); .ci/run installs it",
+        );
+    };
+    let Some(bin) = runner_binary() else {
+        return skip("pam-slave binary not built next to the test binary");
+    };
+    let _serial = crate::common::NET_TESTS
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
+    let (mut guard, host_if, slave_if) = match setup("d") {
+        Ok(x) => x,
+        Err(e) => {
+            return skip(&format!(
+                "cannot create a network namespace and veth pair here ({e}); needs root and iproute2"
+            ));
+        }
+    };
+    let dir = TempDir(std::env::temp_dir().join(format!("pam-soem-dc-{}", std::process::id())));
+    std::fs::create_dir_all(&dir.0).expect("temp dir");
+    let file = |n: &str| dir.0.join(n);
+    // Oscillators up to ±30 ppm apart: SOEM's cycle must steer them.
+    let runner = start_runner_with(
+        &guard.name,
+        &bin,
+        "pam,io8,pam,io8",
+        &slave_if,
+        &file("state"),
+        &file("dc.pcap"),
+        &file("runner.log"),
+        &["--oscillators", "30"],
+    );
+    guard.runner = Some(runner);
+    let _ = std::fs::remove_file(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../target/interop-logs/soem-dc.log"
+    ));
+    let (ok, out) = run_python(&py, &["dc", &host_if, "4"]);
+    keep_log("soem-dc.log", &format!("--- SOEM dc ---\n{out}"));
+    eprintln!("--- SOEM dc ---\n{out}");
+    stop_runner(guard.runner.take().expect("runner"));
+    assert!(ok, "SOEM DC phase failed (log above)");
 }

@@ -212,6 +212,14 @@ pub fn parse_line(spec: &str) -> Result<Vec<LineEntry>, CatalogError> {
     Ok(out)
 }
 
+/// A deterministic oscillator error for the slave at `position` of a
+/// line, spread over ±`spread_ppm` (ppb): what `pam-slave --oscillators`
+/// gives each slave, so the DC drift control has real work to do.
+pub fn oscillator_ppb(position: usize, spread_ppm: u32) -> i64 {
+    let k = (position as i64 * 37 + 11) % 21 - 10; // -10..=10
+    k * i64::from(spread_ppm) * 100
+}
+
 /// Software slaves for the line `entries`, first to last.
 pub fn slaves(entries: &[LineEntry]) -> Vec<Box<dyn LineSlave>> {
     entries.iter().map(|d| (d.device.make)(d.pdi)).collect()
@@ -240,6 +248,15 @@ mod tests {
         for bad in ["", "pam,,pam", "pam*0", "pam*x", "pam*4097", "io8*4096,pam"] {
             assert!(parse_line(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn oscillators_spread_within_the_bounds_and_differ_between_neighbours() {
+        let e: Vec<i64> = (0..64).map(|i| oscillator_ppb(i, 30)).collect();
+        assert!(e.iter().all(|x| x.abs() <= 30_000));
+        assert!(e.windows(2).all(|w| w[0] != w[1]));
+        assert!(e.iter().any(|&x| x > 0) && e.iter().any(|&x| x < 0));
+        assert_eq!(oscillator_ppb(5, 0), 0);
     }
 
     #[test]

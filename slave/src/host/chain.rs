@@ -395,8 +395,7 @@ impl Chain {
     /// down the line and back), then runs the firmware that has something
     /// to do at `now_ns` ([`Chain::service`]).
     pub fn process(&mut self, frame: &mut [u8], now_ns: u64) -> FrameOutcome {
-        self.frame_ns = now_ns;
-        let outcome = self.process_frame(frame);
+        let outcome = self.process_frame_at(frame, now_ns);
         // A PDI failure is counted and handled by the slave (fail-safe);
         // the frame has already been answered by the ESCs.
         let _ = self.service(now_ns);
@@ -542,7 +541,16 @@ impl Chain {
         outcome
     }
 
-    /// The ESC part of [`Chain::process`], without running the firmware.
+    /// [`Chain::process_frame`] for a frame arriving at `now_ns`: the DC
+    /// units see it pass their ports from that time on.
+    pub fn process_frame_at(&mut self, frame: &mut [u8], now_ns: u64) -> FrameOutcome {
+        self.frame_ns = now_ns;
+        self.process_frame(frame)
+    }
+
+    /// The ESC part of [`Chain::process`], without running the firmware
+    /// (the DC units take the frame time of the last frame; see
+    /// [`Chain::process_frame_at`]).
     pub fn process_frame(&mut self, frame: &mut [u8]) -> FrameOutcome {
         let n = self.slaves.len();
         if n == 0 {

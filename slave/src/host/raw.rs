@@ -246,7 +246,8 @@ pub fn run(
                         // (a flash write with fsync in FoE) delays the
                         // mailbox answer, never the frame: masters with
                         // short frame timeouts (SOEM: 2 ms) keep working.
-                        chain.process_frame(&mut buf);
+                        let arrived = u64::try_from(start.elapsed().as_nanos()).unwrap_or(now);
+                        chain.process_frame_at(&mut buf, arrived);
                         if let Some(p) = pcap.as_mut() {
                             let _ = p.write_frame(&buf);
                         }
@@ -259,13 +260,13 @@ pub fn run(
                             _ => {
                                 reply(&mut out_tx, port1.up, &mut buf)?;
                                 if let Some(mut again) = request {
-                                    chain.process_frame(&mut again);
+                                    chain.process_frame_at(&mut again, arrived);
                                     reply(&mut out_tx, port1.up, &mut again)?;
                                 }
                             }
                         }
                         stats.answered += 1;
-                        let _ = chain.service(now);
+                        let _ = chain.service(arrived);
                         // Before the next frame: whatever the firmware step
                         // just acknowledged (SAVE) is on stable storage
                         // before the master can read the acknowledgement.

@@ -64,6 +64,11 @@ struct Cli {
     /// bench).
     #[arg(long, conflicts_with_all = ["line", "forward", "faults", "pcap", "state_dir"])]
     reflect: bool,
+    /// Give each slave's DC oscillator an error of up to ±PPM (a fixed
+    /// pattern along the line), so a master's DC drift compensation has
+    /// something to compensate; default 0 (ideal clocks).
+    #[arg(long, value_name = "PPM", default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=500))]
+    oscillators: u32,
 }
 
 fn main() -> ExitCode {
@@ -125,7 +130,12 @@ fn main() -> ExitCode {
         cfg.iface,
         summarize(&names)
     );
-    match run(&cfg, device_catalog::slaves(&entries), &stop) {
+    let mut slaves = device_catalog::slaves(&entries);
+    for (i, s) in slaves.iter_mut().enumerate() {
+        s.esc_mut()
+            .set_dc_oscillator(device_catalog::oscillator_ppb(i, cli.oscillators));
+    }
+    match run(&cfg, slaves, &stop) {
         Ok(stats) => {
             eprintln!(
                 "pam-slave: stopped after {} EtherCAT frames ({} other frames ignored)",
