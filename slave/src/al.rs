@@ -99,6 +99,8 @@ pub enum AlStatusCode {
     InvalidInputMapping,
     /// 0x0025 invalid output mapping.
     InvalidOutputMapping,
+    /// 0x002C fatal sync error.
+    FatalSyncError,
     /// 0x0030 invalid DC SYNC configuration.
     InvalidDcSyncConfig,
     /// 0x0035 invalid DC sync cycle time.
@@ -128,6 +130,7 @@ impl AlStatusCode {
             AlStatusCode::WaitingForInit => 0x0021,
             AlStatusCode::InvalidInputMapping => 0x0024,
             AlStatusCode::InvalidOutputMapping => 0x0025,
+            AlStatusCode::FatalSyncError => 0x002C,
             AlStatusCode::InvalidDcSyncConfig => 0x0030,
             AlStatusCode::InvalidDcCycleTime => 0x0035,
             AlStatusCode::Other(c) => c,
@@ -156,6 +159,7 @@ impl AlStatusCode {
             AlStatusCode::WaitingForInit => "waiting for INIT",
             AlStatusCode::InvalidInputMapping => "invalid input mapping",
             AlStatusCode::InvalidOutputMapping => "invalid output mapping",
+            AlStatusCode::FatalSyncError => "fatal sync error",
             AlStatusCode::InvalidDcSyncConfig => "invalid DC SYNC configuration",
             AlStatusCode::InvalidDcCycleTime => "invalid DC sync cycle time",
             AlStatusCode::Other(_) => "other AL status code",
@@ -182,6 +186,7 @@ impl AlStatusCode {
             0x0021 => AlStatusCode::WaitingForInit,
             0x0024 => AlStatusCode::InvalidInputMapping,
             0x0025 => AlStatusCode::InvalidOutputMapping,
+            0x002C => AlStatusCode::FatalSyncError,
             0x0030 => AlStatusCode::InvalidDcSyncConfig,
             0x0035 => AlStatusCode::InvalidDcCycleTime,
             c => AlStatusCode::Other(c),

@@ -452,3 +452,81 @@ fn the_esi_dc_op_modes_applied_by_a_master_give_the_modes_they_describe() {
         }
     });
 }
+
+/// In DC mode the outputs take effect at SYNC0, not when the frame
+/// brings them (simulated time, so the order is exact); the master
+/// switching SYNC0 off under the running firmware is a fatal sync error.
+#[test]
+fn dc_outputs_take_effect_at_sync0_and_losing_sync0_is_a_fatal_sync_error() {
+    smol::block_on(async {
+        let bus = VirtualBus::with_dc(line_of(1), Clock::simulated(), 0).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let s = group.subdevice(md, 0).expect("slave").configured_address();
+        let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
+        let cycle: u32 = 1_000_000;
+        let now: u64 = ethercrab::Command::fprd(s, reg::DC_SYSTEM_TIME)
+            .receive(md)
+            .await
+            .expect("system time");
+        // First pulse on the next whole millisecond + 1.
+        let start = (now / u64::from(cycle) + 2) * u64::from(cycle);
+        ethercrab::Command::fpwr(s, reg::DC_START_TIME)
+            .send(md, start)
+            .await
+            .expect("start");
+        ethercrab::Command::fpwr(s, reg::DC_SYNC0_CYCLE_TIME)
+            .send(md, cycle)
+            .await
+            .expect("cycle");
+        ethercrab::Command::fpwr(s, reg::DC_ACTIVATION)
+            .send(md, 0x03u8)
+            .await
+            .expect("activation");
+        assert_eq!(
+            crate::common::request(md, s, 0x04).await,
+            (0x04, 0),
+            "SAFE-OP"
+        );
+        group.tx_rx(md).await.expect("outputs");
+        bus.clock.advance(Duration::from_millis(3));
+        group.tx_rx(md).await.expect("outputs");
+        assert_eq!(crate::common::request(md, s, 0x08).await, (0x08, 0), "OP");
+        let board = |bus: &VirtualBus| {
+            let chain = lock(&bus.chain);
+            let io8 = chain.slave::<io8_example::Io8>(0).expect("IO8");
+            (1..=8u8).fold(0u8, |b, c| {
+                b | (u8::from(io8.slave().app().board().output(c)) << (c - 1))
+            })
+        };
+        // The outputs arrive between two pulses: held.
+        group.subdevice(md, 0).expect("slave").outputs_raw_mut()[0] = 0b1010_0101;
+        group.tx_rx(md).await.expect("outputs");
+        group.tx_rx(md).await.expect("outputs");
+        assert_eq!(board(&bus), 0, "not before SYNC0");
+        // The next pulse: applied.
+        bus.clock.advance(Duration::from_millis(1));
+        group.tx_rx(md).await.expect("cycle");
+        assert_eq!(board(&bus), 0b1010_0101, "at SYNC0");
+        {
+            let chain = lock(&bus.chain);
+            assert_eq!(chain.slaves()[0].od().get(0x7000, 1), Some(1));
+        }
+        // SYNC0 switched off in OP: SAFE-OP with 0x002C at the next full
+        // pass of the firmware, outputs off.
+        ethercrab::Command::fpwr(s, reg::DC_ACTIVATION)
+            .send(md, 0x00u8)
+            .await
+            .expect("activation off");
+        bus.clock
+            .advance(Duration::from_nanos(ecat_slave::device::FULL_PASS_NS));
+        group.tx_rx(md).await.expect("cycle");
+        crate::common::settle(md).await;
+        assert_eq!(
+            crate::common::status(md, s).await,
+            (0x14, 0x002C),
+            "SAFE-OP + fatal sync error"
+        );
+        assert_eq!(board(&bus), 0, "outputs off");
+    });
+}

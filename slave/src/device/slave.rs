@@ -87,6 +87,9 @@ pub struct Slave<E: Esc, A: Application> {
     sm_event_missed: u32,
     /// An SM2 event came since the last SYNC0.
     outputs_since_sync0: bool,
+    /// DC mode: outputs received (length, bytes), applied at the next
+    /// SYNC0.
+    dc_outputs: Option<(usize, [u8; MAX_IMAGE])>,
 }
 
 impl<E: Esc, A: Application> core::fmt::Debug for Slave<E, A> {
@@ -318,6 +321,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
             sync0_events: 0,
             sm_event_missed: 0,
             outputs_since_sync0: false,
+            dc_outputs: None,
         }
     }
 
@@ -345,6 +349,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
         self.sync0_events = 0;
         self.sm_event_missed = 0;
         self.outputs_since_sync0 = false;
+        self.dc_outputs = None;
     }
 
     /// Uses another memory layout (standard mailbox size); it must match
@@ -540,7 +545,6 @@ impl<E: Esc, A: Application> Slave<E, A> {
             }
         }
         self.supervise(events)?;
-        self.sync0(events)?;
         if matches!(
             self.al.state,
             AlState::PreOp | AlState::SafeOp | AlState::Op | AlState::Boot
@@ -551,6 +555,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
         if pd {
             self.read_outputs(events)?;
         }
+        self.sync0(events)?;
         self.run_app();
         if pd {
             self.write_inputs()?;
@@ -565,11 +570,11 @@ impl<E: Esc, A: Application> Slave<E, A> {
     /// outputs the master wrote (SM2 event), the application's tick, the
     /// inputs; else the tick alone.
     fn light_pass(&mut self, events: u32) -> Result<(), EscError> {
-        self.sync0(events)?;
         let pd = matches!(self.al.state, AlState::SafeOp | AlState::Op);
         if pd {
             self.read_outputs(events)?;
         }
+        self.sync0(events)?;
         self.run_app();
         if pd {
             self.write_inputs()?;
@@ -638,6 +643,16 @@ impl<E: Esc, A: Application> Slave<E, A> {
                     AlStatusCode::InvalidMailboxPreOp
                 };
                 return self.local_error(AlState::Init, code);
+            }
+        }
+        if matches!(self.al.state, AlState::SafeOp | AlState::Op)
+            && self.sync_mode == SyncMode::DcSync0
+        {
+            // The master switched SYNC0 off under a DC-synchronous
+            // firmware: its outputs have no time base any more.
+            let act = self.esc.read_u8(reg::DC_ACTIVATION)?;
+            if act & 0x03 != 0x03 && !self.al.error {
+                return self.local_error(AlState::SafeOp, AlStatusCode::FatalSyncError);
             }
         }
         if matches!(self.al.state, AlState::SafeOp | AlState::Op) {
@@ -916,6 +931,15 @@ impl<E: Esc, A: Application> Slave<E, A> {
         }
         self.esc.read_u8(reg::DC_SYNC0_STATUS)?;
         self.sync0_events = self.sync0_events.wrapping_add(1);
+        // DC-synchronous outputs take effect at SYNC0, not when they
+        // arrive (ETG.1020: outputs valid at the SYNC0 event).
+        if let Some((n, buf)) = self.dc_outputs.take()
+            && self.al.state == AlState::Op
+            && let Some(b) = buf.get(..n)
+        {
+            let od = A::Values::view_mut(&mut self.store);
+            self.outputs.unpack(od, b);
+        }
         if self.sync_mode == SyncMode::DcSync0 && self.al.state == AlState::Op {
             if !self.outputs_since_sync0 && events & reg::al_event_sm(2) == 0 {
                 self.sm_event_missed = self.sm_event_missed.wrapping_add(1);
@@ -971,10 +995,15 @@ impl<E: Esc, A: Application> Slave<E, A> {
             let n = self.outputs.byte_len();
             if let Some(b) = buf.get_mut(..n) {
                 self.esc.read(self.layout.pd_out, b)?;
-                if self.al.state == AlState::Op {
-                    let od = A::Values::view_mut(&mut self.store);
-                    self.outputs.unpack(od, b);
-                }
+            }
+            if self.sync_mode == SyncMode::DcSync0 {
+                // Held until the next SYNC0.
+                self.dc_outputs = Some((n, buf));
+            } else if self.al.state == AlState::Op
+                && let Some(b) = buf.get(..n)
+            {
+                let od = A::Values::view_mut(&mut self.store);
+                self.outputs.unpack(od, b);
             }
         }
         Ok(())
