@@ -23,7 +23,7 @@ finds the slaves named, in that order, with SOEM's station addresses,
 reads an SDO from each, brings them all to OP and runs 200 cycles with
 its expected working counter.
 dc: SOEM's Distributed Clocks: config_dc (receive times, offsets,
-delays), dcsync0 (SYNC0 every 1 ms) on every slave, OP with SOEM's
+delays), dcsync0 (SYNC0 every 1 ms, shifted 250 us) on every slave, OP with SOEM's
 process data cycle (which distributes the reference time), then every
 slave's system time difference (0x092C), its sync mode and cycle in
 0x1C32, SYNC0 running (0x0990 advancing by whole cycles); a SYNC0 cycle
@@ -364,9 +364,9 @@ def dc(iface, count):
     set_sm_watchdog(m, LONG_WATCHDOG_MS)
     # SYNC0 in PRE-OP, before config_map requests SAFE-OP (as SOEM's
     # PO2SO hooks do it): the slaves check it at PRE-OP -> SAFE-OP.
-    cycle = 1_000_000
+    cycle, shift = 1_000_000, 250_000
     for s in m.slaves:
-        s.dc_sync(1, cycle)
+        s.dc_sync(1, cycle, shift)
     m.config_map()
     check(to_op(m), f"all {count} slaves in OP, DC-synchronous (SYNC0 every {cycle} ns)")
     wkcs = cycles(m, 500, 0.001)
@@ -386,6 +386,8 @@ def dc(iface, count):
     n2 = struct.unpack("<Q", s._fprd(0x0990, 8, 20000))[0]
     log(f"      next SYNC0 pulse (0x0990): {n1} then {n2}")
     check(n2 > n1 and (n2 - n1) % cycle == 0, "SYNC0 runs: the next pulse moved on by whole cycles")
+    check(n1 % cycle == shift and n2 % cycle == shift,
+          f"SYNC0 pulses {shift} ns after each cycle boundary (SOEM's shift): {n1 % cycle}, {n2 % cycle}")
     # A cycle the firmware cannot run: refused at SAFE-OP with 0x0035.
     m.state = pysoem.INIT_STATE
     m.write_state()

@@ -26,11 +26,14 @@ const ERRORS_PPB: [i64; 8] = [0, 20_000, -15_000, 35_000, -25_000, 10_000, -5_00
 /// oscillator change drifts 2 µs in 200 ms.
 const SYNC_BOUND_NS: i64 = 100;
 
+/// 8 IO8s whose oscillators run [`ERRORS_PPB`] off and which powered on
+/// at different moments (local times up to 9 ms apart).
 fn line() -> Chain {
     let entries = device_catalog::parse_line("io8*8").expect("line");
     let mut chain = Chain::with_slaves(device_catalog::slaves(&entries));
-    for (s, e) in chain.slaves_mut().iter_mut().zip(ERRORS_PPB) {
+    for (i, (s, e)) in chain.slaves_mut().iter_mut().zip(ERRORS_PPB).enumerate() {
         s.esc_mut().set_dc_oscillator(e);
+        s.esc_mut().set_dc_local_time(i as u64 * 1_234_567);
     }
     chain
 }

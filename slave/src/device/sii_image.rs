@@ -206,7 +206,13 @@ impl DeviceDescription {
         let id = &self.identity;
         let cfg = sii::SiiConfig {
             pdi_control: self.esc.pdi_control,
-            pdi_config: 0x0000,
+            // 0x0151 (high byte): SYNC0 is an output (bit 2) mapped to AL
+            // event request bit 2 (bit 3), which the core's DC-synchronous
+            // firmware waits on; 0x0150 (SPI mode etc.) 0. Sync impulse
+            // length 0 (SII word 2 -> 0x0982): acknowledge mode, SYNC0
+            // stays active until the firmware reads 0x098E (ET1100
+            // Section II, 0x0151 and 0x0982).
+            pdi_config: 0x0C00,
             sync_impulse: 0x0000,
             pdi_config2: 0x0000,
             station_alias: 0,

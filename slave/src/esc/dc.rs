@@ -105,6 +105,13 @@ impl DcClock {
         self.received = 0;
     }
 
+    /// Sets the local time to `local` at injected time `t` (a slave that
+    /// powered on at another moment than its neighbours).
+    pub fn set_local(&mut self, t: u64, local: u64) {
+        self.base_t = t;
+        self.base_local = local;
+    }
+
     /// Changes the oscillator's error from injected time `t` on (a
     /// temperature change, a test).
     pub fn set_error_ppb(&mut self, error_ppb: i64, t: u64) {

@@ -446,6 +446,12 @@ impl SoftEsc {
         self.dc.set_error_ppb(error_ppb, self.dc_port0_ns);
     }
 
+    /// Sets the DC local time to `local_ns` at the current frame time (a
+    /// slave powered on earlier or later than its neighbours).
+    pub fn set_dc_local_time(&mut self, local_ns: u64) {
+        self.dc.set_local(self.dc_port0_ns, local_ns);
+    }
+
     /// The DC unit's clock (oscillator error, drift correction).
     pub fn dc_clock(&self) -> &DcClock {
         &self.dc
@@ -500,7 +506,11 @@ impl SoftEsc {
         self.sync0_last = Some(last);
         let st = self.mem_u8(reg::DC_SYNC0_STATUS) | 0x01;
         self.set_u8(reg::DC_SYNC0_STATUS, st);
-        self.raise_al_event(reg::AL_EVENT_SYNC0);
+        // Only when the SII maps SYNC0 into the AL event request
+        // (0x0151 bit 3); else a firmware polls 0x098E or wires SYNC0.
+        if self.mem_u8(reg::PDI_CONFIG + 1) & 0x08 != 0 {
+            self.raise_al_event(reg::AL_EVENT_SYNC0);
+        }
     }
 
     /// SYNC0 pulses since power-on.
@@ -567,6 +577,10 @@ impl SoftEsc {
         let depth = self.mem_u8(reg::DC_TIME_FILTER_DEPTH) & 0x0F;
         let filtered = self.dc.receive(diff, depth, t);
         self.set_u32(reg::DC_SYSTEM_TIME_DIFF, dc::difference_register(filtered));
+        // 0x0932 "speed counter diff": here the drift control's rate
+        // correction in ppm (an ESC shows it in its own clock units).
+        let ppm = (self.dc.correction_ppb() / 1000).clamp(i64::from(i16::MIN), i64::from(i16::MAX));
+        self.set_u16(reg::DC_SPEED_COUNTER_START + 2, ppm as i16 as u16);
     }
 
     /// PDI accesses (reads and writes, of any length) since the ESC was
@@ -1141,6 +1155,7 @@ impl SoftEsc {
         if dc_reset {
             self.dc.reset_control(self.dc_port0_ns);
             self.set_u32(reg::DC_SYSTEM_TIME_DIFF, 0);
+            self.set_u16(reg::DC_SPEED_COUNTER_START + 2, 0);
         }
         if dc_activation {
             self.dc_activate();
@@ -2194,9 +2209,32 @@ mod tests {
         assert_eq!(u64::from_le_bytes(v.try_into().unwrap()), 1_000_005_000);
     }
 
+    /// An ESC whose SII maps SYNC0 into the AL event request (0x0151 = 0x0C).
+    fn esc_sync0_mapped() -> SoftEsc {
+        let mut sii = [0xFFu8; 128];
+        sii[..16].fill(0);
+        sii[3] = 0x0C;
+        SoftEsc::new(&sii)
+    }
+
+    #[test]
+    fn sync0_raises_its_al_event_only_when_the_sii_maps_it() {
+        for (mut e, mapped) in [(esc(), false), (esc_sync0_mapped(), true)] {
+            ecat_write_at(&mut e, 0, 0x0990, &1_000u64.to_le_bytes());
+            ecat_write_at(&mut e, 0, 0x09A0, &1_000u32.to_le_bytes());
+            ecat_write_at(&mut e, 0, 0x0981, &[0x03]);
+            e.update_dc(5_000);
+            assert_eq!(e.mem_u8(reg::DC_SYNC0_STATUS) & 1, 1, "status either way");
+            assert_eq!(
+                e.mem_u32(reg::AL_EVENT_REQUEST) & reg::AL_EVENT_SYNC0 != 0,
+                mapped
+            );
+        }
+    }
+
     #[test]
     fn sync0_pulses_at_start_plus_whole_cycles_and_a_pdi_read_acknowledges_it() {
-        let mut e = esc();
+        let mut e = esc_sync0_mapped();
         ecat_write_at(&mut e, 0, 0x0990, &1_000_000u64.to_le_bytes());
         ecat_write_at(&mut e, 0, 0x09A0, &250_000u32.to_le_bytes());
         ecat_write_at(&mut e, 0, 0x0981, &[0x03]);
