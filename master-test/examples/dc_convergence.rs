@@ -38,7 +38,10 @@ fn main() {
     smol::block_on(async {
         let md = &*bus.maindevice;
         let group = bus.init().await.expect("init with DC");
-        let reference = group.subdevice(md, 0).expect("slave 0").configured_address();
+        let reference = group
+            .subdevice(md, 0)
+            .expect("slave 0")
+            .configured_address();
         println!("distributions (1 ms apart)  largest |system time - reference| (ns)");
         let marks = [0usize, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000];
         let mut k = 0;
