@@ -515,6 +515,32 @@ fn dc_outputs_take_effect_at_sync0_and_losing_sync0_is_a_fatal_sync_error() {
             let chain = lock(&bus.chain);
             assert_eq!(chain.slaves()[0].od().get(0x7000, 1), Some(1));
         }
+        // Cycles whose frames carry no outputs: each SYNC0 without new
+        // outputs is an SM event missed (0x1C32:0B); cycles with outputs
+        // add none.
+        let missed = |bus: &VirtualBus| {
+            let chain = lock(&bus.chain);
+            (
+                firmware(&chain, 0).sm_event_missed(),
+                chain.slaves()[0].od().get(0x1C32, 11),
+            )
+        };
+        let (before, _) = missed(&bus);
+        for _ in 0..4 {
+            bus.clock.advance(Duration::from_millis(1));
+            let _: u16 = ethercrab::Command::fprd(s, 0x0130)
+                .receive(md)
+                .await
+                .expect("AL status only");
+        }
+        let (after, od) = missed(&bus);
+        assert_eq!(after - before, 4, "4 cycles without outputs");
+        assert_eq!(od, Some(i64::from(after)));
+        for _ in 0..4 {
+            bus.clock.advance(Duration::from_millis(1));
+            group.tx_rx(md).await.expect("cycle");
+        }
+        assert_eq!(missed(&bus).0, after, "cycles with outputs miss nothing");
         // SYNC0 switched off in OP: SAFE-OP with 0x002C at the next full
         // pass of the firmware, outputs off.
         ethercrab::Command::fpwr(s, reg::DC_ACTIVATION)

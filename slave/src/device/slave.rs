@@ -179,6 +179,15 @@ impl<E: Esc, A: Application> Checks<'_, E, A> {
         if act & 0x01 == 0 || act & 0x04 != 0 {
             return Err(AlStatusCode::InvalidDcSyncConfig);
         }
+        // The firmware runs on SYNC0 through the AL event request; an SII
+        // that does not map SYNC0 there (0x0151 bit 3) leaves it deaf.
+        let sync_map = self
+            .esc
+            .read_u8(reg::PDI_CONFIG + 1)
+            .map_err(|e| self.pdi_failed(e))?;
+        if sync_map & 0x08 == 0 {
+            return Err(AlStatusCode::InvalidDcSyncConfig);
+        }
         let cycle = self
             .esc
             .read_u32(reg::DC_SYNC0_CYCLE_TIME)
@@ -603,6 +612,9 @@ impl<E: Esc, A: Application> Slave<E, A> {
         if self.al.state == AlState::Op && state != AlState::Op {
             self.safe_outputs();
         }
+        if matches!(state, AlState::Init | AlState::PreOp) {
+            self.reset_sync();
+        }
         if matches!(state, AlState::Init) {
             self.pending = None;
             self.last_sent = None;
@@ -645,11 +657,10 @@ impl<E: Esc, A: Application> Slave<E, A> {
                 return self.local_error(AlState::Init, code);
             }
         }
-        if matches!(self.al.state, AlState::SafeOp | AlState::Op)
-            && self.sync_mode == SyncMode::DcSync0
-        {
+        if self.al.state == AlState::Op && self.sync_mode == SyncMode::DcSync0 {
             // The master switched SYNC0 off under a DC-synchronous
-            // firmware: its outputs have no time base any more.
+            // firmware in OP: its outputs have no time base any more
+            // (in SAFE-OP the master may do so on its way down).
             let act = self.esc.read_u8(reg::DC_ACTIVATION)?;
             if act & 0x03 != 0x03 && !self.al.error {
                 return self.local_error(AlState::SafeOp, AlStatusCode::FatalSyncError);
@@ -738,9 +749,16 @@ impl<E: Esc, A: Application> Slave<E, A> {
             self.outputs = o;
             self.inputs = i;
         }
-        if let Some(m) = checks.sync_mode {
+        // The synchronisation the check found counts only if SAFE-OP was
+        // reached (the application may still have refused it).
+        if let Some(m) = checks.sync_mode
+            && after.state == AlState::SafeOp
+            && before.state == AlState::PreOp
+        {
             self.sync_mode = m;
             self.outputs_since_sync0 = true;
+            self.sm_event_missed = 0;
+            self.dc_outputs = None;
             let cycle = if m == SyncMode::DcSync0 {
                 i64::from(self.esc.read_u32(reg::DC_SYNC0_CYCLE_TIME)?)
             } else {
@@ -748,8 +766,10 @@ impl<E: Esc, A: Application> Slave<E, A> {
             };
             self.publish_sync(cycle);
         }
-        if matches!(after.state, AlState::Init | AlState::PreOp) && before.state != after.state {
-            self.sync_mode = SyncMode::FreeRun;
+        if matches!(after.state, AlState::Init | AlState::PreOp | AlState::Boot)
+            && before.state != after.state
+        {
+            self.reset_sync();
         }
         if after.state != AlState::Op && before.state == AlState::Op {
             self.safe_outputs();
@@ -768,6 +788,8 @@ impl<E: Esc, A: Application> Slave<E, A> {
     /// Outputs to their safe state: every RxPDO-mappable entry back to
     /// zero, then the application switches its hardware outputs off.
     fn safe_outputs(&mut self) {
+        // Outputs held for the next SYNC0 are as stale as the rest.
+        self.dc_outputs = None;
         let od = A::Values::view_mut(&mut self.store);
         let dict = od.dictionary();
         for (flat, _, e) in dict.entries() {
@@ -941,16 +963,27 @@ impl<E: Esc, A: Application> Slave<E, A> {
             self.outputs.unpack(od, b);
         }
         if self.sync_mode == SyncMode::DcSync0 && self.al.state == AlState::Op {
-            if !self.outputs_since_sync0 && events & reg::al_event_sm(2) == 0 {
+            // `read_outputs` ran first in this pass: outputs that came
+            // with this SYNC0 count for it.
+            if !self.outputs_since_sync0 {
                 self.sm_event_missed = self.sm_event_missed.wrapping_add(1);
                 let n = i64::from(self.sm_event_missed as u16);
                 let od = A::Values::view_mut(&mut self.store);
                 od.set(0x1C32, 11, n);
                 od.set(0x1C33, 11, n);
             }
-            self.outputs_since_sync0 = events & reg::al_event_sm(2) != 0;
+            self.outputs_since_sync0 = false;
         }
         Ok(())
+    }
+
+    /// Back to free run (PRE-OP, INIT, BOOT): no held outputs, and
+    /// 0x1C32/0x1C33 say so (a stale "DC" there would read as the next
+    /// master's request).
+    fn reset_sync(&mut self) {
+        self.sync_mode = SyncMode::FreeRun;
+        self.dc_outputs = None;
+        self.publish_sync(0);
     }
 
     /// 0x1C32/0x1C33 (if the device has them) show the sync mode and

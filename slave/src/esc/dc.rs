@@ -25,6 +25,14 @@
 /// as on silicon (ESC oscillators are specified to ±25 ppm and better).
 pub const MAX_CORRECTION_PPB: i64 = 500_000;
 
+/// Largest oscillator error a soft ESC takes, ppb (±10 %; a crystal is
+/// off by tens of ppm).
+pub const MAX_ERROR_PPB: i64 = 100_000_000;
+
+/// Largest difference the drift control takes in, ns (larger ones are
+/// clamped: it only ever slews, and its arithmetic stays in range).
+const MAX_DIFFERENCE_NS: i64 = 1 << 40;
+
 /// Proportional gain of the drift control: ppb of rate correction per ns
 /// of filtered difference. With it a difference of 1 µs corrects at
 /// 100 ppm, i.e. by 1 µs in about 10 ms.
@@ -64,6 +72,13 @@ impl DcClock {
     /// A clock whose oscillator runs `error_ppb` parts per billion fast
     /// (negative: slow), local time 0 at injected time 0.
     pub const fn new(error_ppb: i64) -> Self {
+        let error_ppb = if error_ppb > MAX_ERROR_PPB {
+            MAX_ERROR_PPB
+        } else if error_ppb < -MAX_ERROR_PPB {
+            -MAX_ERROR_PPB
+        } else {
+            error_ppb
+        };
         DcClock {
             error_ppb,
             integral_ppb: 0,
@@ -114,9 +129,10 @@ impl DcClock {
 
     /// Changes the oscillator's error from injected time `t` on (a
     /// temperature change, a test).
+    /// (clamped to ±[`MAX_ERROR_PPB`]).
     pub fn set_error_ppb(&mut self, error_ppb: i64, t: u64) {
         self.rebase(t);
-        self.error_ppb = error_ppb;
+        self.error_ppb = error_ppb.clamp(-MAX_ERROR_PPB, MAX_ERROR_PPB);
     }
 
     /// Local time (ns) at injected time `t`. Times before the last rate
@@ -124,7 +140,7 @@ impl DcClock {
     /// backwards).
     pub fn local(&self, t: u64) -> u64 {
         let dt = i128::from(t.saturating_sub(self.base_t));
-        let rate = 1_000_000_000i128 + i128::from(self.error_ppb + self.correction_ppb);
+        let rate = 1_000_000_000i128 + i128::from(self.error_ppb) + i128::from(self.correction_ppb);
         let advanced = dt * rate / 1_000_000_000;
         self.base_local
             .wrapping_add(u64::try_from(advanced.max(0)).unwrap_or(u64::MAX))
@@ -144,6 +160,7 @@ impl DcClock {
     /// Returns the filtered difference.
     pub fn receive(&mut self, difference: i64, filter_depth: u8, t: u64) -> i64 {
         self.rebase(t);
+        let difference = difference.clamp(-MAX_DIFFERENCE_NS, MAX_DIFFERENCE_NS);
         let depth = u32::from(filter_depth.min(15));
         if self.received == 0 {
             self.filtered = difference;
@@ -256,6 +273,19 @@ mod tests {
         assert_eq!(c.correction_ppb(), 0);
         assert_eq!(c.local(2_000), before);
         assert_eq!(c.local(1_002_000), before + 1_000_000, "nominal rate again");
+    }
+
+    #[test]
+    fn extreme_inputs_neither_panic_nor_leave_the_bounds() {
+        let mut c = DcClock::new(i64::MAX);
+        assert_eq!(c.error_ppb(), MAX_ERROR_PPB);
+        c.set_error_ppb(i64::MIN, 0);
+        assert_eq!(c.error_ppb(), -MAX_ERROR_PPB);
+        for d in [i64::MAX, i64::MIN, 0, i64::MAX, i64::MIN] {
+            c.receive(d, 0, 10);
+            assert!(c.correction_ppb().abs() <= MAX_CORRECTION_PPB);
+        }
+        let _ = c.local(u64::MAX);
     }
 
     #[test]

@@ -436,8 +436,10 @@ impl SoftEsc {
     /// times and reads its clock at. A line sets them per slave from its
     /// position and hop delay.
     pub fn set_frame_times(&mut self, port0_ns: u64, port1_ns: Option<u64>) {
-        self.dc_port0_ns = port0_ns;
-        self.dc_port1_ns = port1_ns;
+        // Time only moves forward for a clock (a frame stamped earlier
+        // than what the ESC has seen is taken as now).
+        self.dc_port0_ns = port0_ns.max(self.dc_port0_ns);
+        self.dc_port1_ns = port1_ns.map(|t| t.max(self.dc_port0_ns));
     }
 
     /// Makes this ESC's oscillator run `error_ppb` parts per billion fast
@@ -498,8 +500,8 @@ impl SoftEsc {
             }
             Some(k) => {
                 let last = next + k * cycle;
-                self.sync0_next = Some(last + cycle);
-                (k + 1, last)
+                self.sync0_next = last.checked_add(cycle);
+                (k.saturating_add(1), last)
             }
         };
         self.sync0_pulses = self.sync0_pulses.saturating_add(count);
@@ -510,6 +512,24 @@ impl SoftEsc {
         // (0x0151 bit 3); else a firmware polls 0x098E or wires SYNC0.
         if self.mem_u8(reg::PDI_CONFIG + 1) & 0x08 != 0 {
             self.raise_al_event(reg::AL_EVENT_SYNC0);
+        }
+    }
+
+    /// Before a read of `[a, b)` (either side): the system time is the
+    /// clock now, not a stored value; 0x0990 reads as the next SYNC0
+    /// pulse while the unit runs.
+    fn refresh_dc_registers(&mut self, a: u32, b: u32) {
+        let st = u32::from(reg::DC_SYSTEM_TIME);
+        if a < st + 8 && st < b {
+            let now = self.dc_system_time(self.dc_port0_ns);
+            self.set_u64(reg::DC_SYSTEM_TIME, now);
+        }
+        let nx = u32::from(reg::DC_START_TIME);
+        if a < nx + 8 && nx < b {
+            self.update_dc(self.dc_port0_ns);
+            if let Some(next) = self.sync0_next {
+                self.set_u64(reg::DC_START_TIME, next);
+            }
         }
     }
 
@@ -542,8 +562,9 @@ impl SoftEsc {
         }
         let now = self.dc_system_time(self.dc_port0_ns);
         let mut start = self.mem_u64(reg::DC_START_TIME);
-        while start < now {
-            start = start.saturating_add(1 << 32);
+        if start < now {
+            let wraps = (now - start).div_ceil(1 << 32);
+            start = start.saturating_add(wraps.saturating_mul(1 << 32));
         }
         self.sync0_next = Some(start);
     }
@@ -913,20 +934,7 @@ impl SoftEsc {
         if b > 0x1_0000 {
             return false;
         }
-        // The system time is the clock now, not a stored value; 0x0990
-        // reads as the next SYNC0 pulse while the unit runs.
-        let st = u32::from(reg::DC_SYSTEM_TIME);
-        if a < st + 8 && st < b {
-            let now = self.dc_system_time(self.dc_port0_ns);
-            self.set_u64(reg::DC_SYSTEM_TIME, now);
-        }
-        let nx = u32::from(reg::DC_START_TIME);
-        if a < nx + 8 && nx < b {
-            self.update_dc(self.dc_port0_ns);
-            if let Some(next) = self.sync0_next {
-                self.set_u64(reg::DC_START_TIME, next);
-            }
-        }
+        self.refresh_dc_registers(a, b);
         // SyncManager checks, on the part in process RAM only: as on
         // silicon, SyncManagers map process RAM, and one a master
         // configured over the registers must not hide them (the master
@@ -1075,8 +1083,8 @@ impl SoftEsc {
         let mut dc_latch = false;
         let mut dc_reset = false;
         let mut dc_activation = false;
-        // System time received (0x0910..0x0917): value and bytes written.
-        let mut dc_received: Option<(u64, usize)> = None;
+        // System time received (0x0910..0x0917): value and which bytes.
+        let mut dc_received: Option<(u64, u8)> = None;
         for (i, &v) in data.iter().enumerate() {
             let Some(a) = addr.checked_add(i as u16) else {
                 break;
@@ -1123,9 +1131,9 @@ impl SoftEsc {
                 // the system time difference: read-only.
                 0x0904..=0x090F | 0x0918..=0x091F | 0x092C..=0x092F => {}
                 0x0910..=0x0917 => {
-                    let (value, n) = dc_received.unwrap_or((0, 0));
-                    let shift = 8 * u32::from(a - reg::DC_SYSTEM_TIME);
-                    dc_received = Some((value | u64::from(v) << shift, n + 1));
+                    let (value, mask) = dc_received.unwrap_or((0, 0));
+                    let byte = u32::from(a - reg::DC_SYSTEM_TIME);
+                    dc_received = Some((value | u64::from(v) << (8 * byte), mask | 1 << byte));
                 }
                 // Speed counter start: a write resets the drift control
                 // (ETG.1020 §22.2.4: masters write 0x0934 then 0x0930 to
@@ -1149,8 +1157,11 @@ impl SoftEsc {
         if dc_latch {
             self.dc_latch();
         }
-        if let Some((value, n)) = dc_received {
-            self.dc_receive(value, n);
+        // A time is the low 32 bits at least; all 8 bytes make it 64-bit.
+        match dc_received {
+            Some((value, 0xFF)) => self.dc_receive(value, 8),
+            Some((value, mask)) if mask & 0x0F == 0x0F => self.dc_receive(value, 4),
+            _ => {}
         }
         if dc_reset {
             self.dc.reset_control(self.dc_port0_ns);
@@ -1437,11 +1448,15 @@ impl Esc for SoftEsc {
                 len: buf.len(),
             });
         }
-        let (complete, touched) = if a >= u32::from(reg::PROCESS_RAM) {
-            self.pdi_sm_checks(a, b, false)?
+        // SyncManager rules on the part in process RAM (an access may
+        // start among the registers and run into it).
+        let ram = a.max(u32::from(reg::PROCESS_RAM));
+        let (complete, touched) = if ram < b {
+            self.pdi_sm_checks(ram, b, false)?
         } else {
             (0, 0)
         };
+        self.refresh_dc_registers(a, b);
         self.mem_get(addr, buf);
         let covers = |r: u16| a <= u32::from(r) && u32::from(r) < b;
         // Reading AL control acknowledges its event; reading the watchdog
@@ -1497,11 +1512,18 @@ impl Esc for SoftEsc {
                 len: data.len(),
             });
         }
-        if a < u32::from(reg::PROCESS_RAM) {
+        // The part among the registers, then the part in process RAM (an
+        // access may run from one into the other).
+        let ram = u32::from(reg::PROCESS_RAM);
+        let split = usize::try_from(ram.saturating_sub(a))
+            .unwrap_or(usize::MAX)
+            .min(data.len());
+        let (regs, data) = data.split_at(split);
+        if !regs.is_empty() {
             // PDI-writable registers: AL status/code, alias, event mask,
             // SM PDI control, LED overrides, watchdog counters; DL status
             // and the rest stay as the ESC sets them.
-            for (i, &v) in data.iter().enumerate() {
+            for (i, &v) in regs.iter().enumerate() {
                 let r = addr.wrapping_add(i as u16);
                 let writable = matches!(
                     r,
@@ -1519,8 +1541,11 @@ impl Esc for SoftEsc {
                 }
             }
             self.refresh_address();
-            return Ok(());
+            if data.is_empty() {
+                return Ok(());
+            }
         }
+        let a = a.max(ram);
         let (complete, touched) = self.pdi_sm_checks(a, b, true)?;
         if let Some(dst) = self.mem.get_mut(a as usize..b as usize) {
             dst.copy_from_slice(data);
@@ -2283,5 +2308,60 @@ mod tests {
         ecat_write_at(&mut e, 2_000_000, 0x0930, &0x1000u16.to_le_bytes());
         assert_eq!(e.dc_clock().correction_ppb(), 0);
         assert_eq!(e.dc_difference(), 0);
+    }
+    #[test]
+    fn a_pdi_access_from_the_registers_into_process_ram_reaches_both() {
+        let mut e = esc();
+        // AL status code (writable by the PDI) up to 0x1001.
+        let mut data = vec![0u8; 0x1002 - 0x0FFE];
+        data[2] = 0xAB;
+        data[3] = 0xCD;
+        e.write(0x0FFE, &data).unwrap();
+        assert_eq!(&e.raw_memory()[0x1000..0x1002], &[0xAB, 0xCD]);
+        let mut back = [0u8; 4];
+        e.read(0x0FFE, &mut back).unwrap();
+        assert_eq!(&back[2..], &[0xAB, 0xCD]);
+    }
+
+    #[test]
+    fn a_pdi_read_of_the_system_time_reads_the_clock_now() {
+        let mut e = esc();
+        e.set_frame_times(7_000, None);
+        assert_eq!(e.read_u32(0x0910).unwrap(), 7_000);
+        e.set_frame_times(9_000, None);
+        assert_eq!(e.read_u32(0x0910).unwrap(), 9_000);
+        e.set_frame_times(1_000, None);
+        assert_eq!(
+            e.read_u32(0x0910).unwrap(),
+            9_000,
+            "a clock never runs back"
+        );
+    }
+
+    #[test]
+    fn only_a_whole_low_word_of_0x0910_is_a_received_time() {
+        let mut e = esc();
+        ecat_write_at(&mut e, 2_000_000, 0x0912, &[1, 2]);
+        assert_eq!(e.dc_clock().correction_ppb(), 0, "2 bytes: ignored");
+        ecat_write_at(&mut e, 2_000_000, 0x0910, &1_000_000u32.to_le_bytes());
+        assert_ne!(e.dc_clock().correction_ppb(), 0, "32-bit time compared");
+    }
+
+    #[test]
+    fn a_start_time_far_in_the_past_arms_without_looping() {
+        let mut e = esc();
+        // System time near 2^60 (a master's epoch), start time 0.
+        ecat_write_at(&mut e, 0, 0x0920, &(1u64 << 60).to_le_bytes());
+        ecat_write_at(&mut e, 0, 0x09A0, &1_000u32.to_le_bytes());
+        ecat_write_at(&mut e, 0, 0x0981, &[0x03]);
+        let next = e.sync0_next().unwrap();
+        assert!(next >= 1 << 60 && next - (1 << 60) <= 1 << 32);
+        assert_eq!(next % (1 << 32), 0, "the low 32 bits of the start time");
+        // A start time near the end of time does not overflow.
+        ecat_write_at(&mut e, 0, 0x0981, &[0x00]);
+        ecat_write_at(&mut e, 0, 0x0990, &(u64::MAX - 10).to_le_bytes());
+        ecat_write_at(&mut e, 0, 0x0920, &(u64::MAX - 5).to_le_bytes());
+        ecat_write_at(&mut e, 0, 0x0981, &[0x03]);
+        e.update_dc(u64::MAX);
     }
 }
