@@ -236,7 +236,7 @@ impl Line {
         match self.path {
             Path::Dispatch => self.chain.process(frame, self.now_ns),
             Path::Serial => {
-                let outcome = self.chain.process_serial(frame);
+                let outcome = self.chain.process_serial_at(frame, self.now_ns);
                 let _ = self.chain.poll(self.now_ns);
                 outcome
             }

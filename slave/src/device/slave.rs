@@ -672,11 +672,13 @@ impl<E: Esc, A: Application> Slave<E, A> {
             let out_ok = self.outputs.byte_len() == 0
                 || (sm2.3
                     && sm2.0 == self.layout.pd_out
-                    && usize::from(sm2.1) == self.outputs.byte_len());
+                    && usize::from(sm2.1) == self.outputs.byte_len()
+                    && sm2.2 & 0x0F == SM_CONTROL[2] & 0x0F);
             let in_ok = self.inputs.byte_len() == 0
                 || (sm3.3
                     && sm3.0 == self.layout.pd_in
-                    && usize::from(sm3.1) == self.inputs.byte_len());
+                    && usize::from(sm3.1) == self.inputs.byte_len()
+                    && sm3.2 & 0x0F == SM_CONTROL[3] & 0x0F);
             if !out_ok {
                 return self.local_error(AlState::PreOp, AlStatusCode::InvalidOutputConfig);
             }
@@ -1027,7 +1029,12 @@ impl<E: Esc, A: Application> Slave<E, A> {
         if events & reg::al_event_sm(2) != 0 && self.outputs.byte_len() > 0 {
             let n = self.outputs.byte_len();
             if let Some(b) = buf.get_mut(..n) {
-                self.esc.read(self.layout.pd_out, b)?;
+                match self.esc.read(self.layout.pd_out, b) {
+                    // SM2 turned into a mailbox by the master: nothing to
+                    // take; the supervision answers it with 0x001D.
+                    Err(EscError::SmBusy { .. }) => return Ok(()),
+                    r => r?,
+                }
             }
             if self.sync_mode == SyncMode::DcSync0 {
                 // Held until the next SYNC0.
@@ -1048,7 +1055,13 @@ impl<E: Esc, A: Application> Slave<E, A> {
             let mut inb = [0u8; MAX_IMAGE];
             if let Some(b) = inb.get_mut(..n) {
                 self.inputs.pack(A::Values::view(&self.store), b);
-                self.esc.write(self.layout.pd_in, b)?;
+                match self.esc.write(self.layout.pd_in, b) {
+                    // The master made SM3 a mailbox it has not emptied:
+                    // its configuration, not the PDI, is at fault; the
+                    // supervision answers it with 0x001E.
+                    Err(EscError::SmBusy { .. }) => {}
+                    r => r?,
+                }
             }
         }
         Ok(())

@@ -231,6 +231,18 @@ pub struct Chain {
 /// EBUS ESCs forward faster).
 pub const DEFAULT_HOP_NS: u64 = 500;
 
+/// When a frame entering the line at `t` passes slave `i` of `n`: port 0
+/// at `t + i·hop`, port 1 at `t + (2(n−1) − i)·hop` (none for the last).
+fn port_times(i: usize, n: usize, (t, hop): (u64, u64)) -> (u64, Option<u64>) {
+    let k = i as u64;
+    let p0 = t.saturating_add(k.saturating_mul(hop));
+    let p1 = (i + 1 < n).then(|| {
+        let hops = (2 * (n as u64).saturating_sub(1)).saturating_sub(k);
+        t.saturating_add(hops.saturating_mul(hop))
+    });
+    (p0, p1)
+}
+
 /// Hands datagram `dg` to slave `i` of `n`, telling its DC unit when the
 /// frame passes its ports: port 0 at `t + i·hop` on the way down, port 1
 /// at `t + (2(n−1) − i)·hop` on the way back (the last slave turns the
@@ -534,11 +546,21 @@ impl Chain {
     /// The reference path: the frame through every ESC in turn.
     pub fn process_serial(&mut self, frame: &mut [u8]) -> FrameOutcome {
         let mut outcome = FrameOutcome::Malformed;
-        for s in &mut self.slaves {
+        let n = self.slaves.len();
+        for (i, s) in self.slaves.iter_mut().enumerate() {
+            let (p0, p1) = port_times(i, n, (self.frame_ns, self.hop_ns));
+            s.esc_mut().set_frame_times(p0, p1);
             outcome = s.process_frame(frame);
         }
         self.reindex();
         outcome
+    }
+
+    /// [`Chain::process_serial`] for a frame arriving at `now_ns` (the DC
+    /// units see the same port times as on the dispatching path).
+    pub fn process_serial_at(&mut self, frame: &mut [u8], now_ns: u64) -> FrameOutcome {
+        self.frame_ns = now_ns;
+        self.process_serial(frame)
     }
 
     /// [`Chain::process_frame`] for a frame arriving at `now_ns`: the DC
