@@ -168,7 +168,12 @@ fn without_the_distribution_a_warming_oscillator_drifts_away_and_with_it_stays_i
 
 /// A line of `n` IO8s with oscillators from [`ERRORS_PPB`] (repeated).
 fn line_of(n: usize) -> Chain {
-    let entries = device_catalog::parse_line(&format!("io8*{n}")).expect("line");
+    line_spec(&format!("io8*{n}"))
+}
+
+/// The line `spec` with oscillators from [`ERRORS_PPB`] (repeated).
+fn line_spec(spec: &str) -> Chain {
+    let entries = device_catalog::parse_line(spec).expect("line");
     let mut chain = Chain::with_slaves(device_catalog::slaves(&entries));
     for (i, s) in chain.slaves_mut().iter_mut().enumerate() {
         s.esc_mut()
@@ -192,10 +197,11 @@ fn firmware(
 /// pulses at the start time plus whole cycles (in system time, which all
 /// slaves share to within `SYNC_BOUND_NS`), as often as the elapsed time
 /// says, and the firmware sees the pulses.
-async fn dc_sync0_line(n: usize) {
+async fn dc_sync0_line(spec: &str) {
     use ethercrab::DcSync;
     use ethercrab::subdevice_group::{CycleInfo, DcConfiguration, TxRxResponse};
-    let bus = VirtualBus::with_dc(line_of(n), Clock::real(), 10_000).expect("bus");
+    let bus = VirtualBus::with_dc(line_spec(spec), Clock::real(), 10_000).expect("bus");
+    let n = lock(&bus.chain).slaves().len();
     let md = &*bus.maindevice;
     let mut group = bus.init().await.expect("init with DC");
     for mut sd in group.iter_mut(md) {
@@ -288,14 +294,20 @@ async fn dc_sync0_line(n: usize) {
             "slave {i}: {pulses} SYNC0 pulses in {} us, {expected} expected",
             (t_end - t_op) / 1000
         );
-        let fw = firmware(&chain, i);
+        // What the firmware reports over CoE: DC SYNC0 at this cycle.
+        assert_eq!(s.od().get(0x1C32, 1), Some(2), "slave {i}: 0x1C32:01");
         assert_eq!(
-            fw.sync_mode(),
-            ecat_slave::device::SyncMode::DcSync0,
-            "slave {i}"
+            s.od().get(0x1C32, 2),
+            Some(cycle as i64),
+            "slave {i}: 0x1C32:02"
         );
-        assert!(fw.sync0_events() > 0, "slave {i}: the firmware saw SYNC0");
-        missed += fw.sm_event_missed();
+        missed += s.od().get(0x1C32, 11).unwrap_or(0);
+        // On the direct PDI the firmware's own counters are at hand.
+        if let Some(io8) = chain.slave::<io8_example::Io8>(i) {
+            let fw = io8.slave();
+            assert_eq!(fw.sync_mode(), ecat_slave::device::SyncMode::DcSync0);
+            assert!(fw.sync0_events() > 0, "slave {i}: the firmware saw SYNC0");
+        }
     }
     // All slaves pulse at the same system time: same start and cycle, and
     // their system times agree (the static and cyclic drift compensation).
@@ -307,7 +319,7 @@ async fn dc_sync0_line(n: usize) {
     let t = bus.clock.now_ns();
     let spread = spread(&chain, t);
     eprintln!(
-        "{n} slaves in DC mode: start {start}, {expected} cycles, SM events missed {missed}, \
+        "{spec}: {n} slaves in DC mode: start {start}, {expected} cycles, SM events missed {missed}, \
          system time spread {:?} ns",
         (spread.iter().min(), spread.iter().max())
     );
@@ -325,17 +337,26 @@ async fn dc_sync0_line(n: usize) {
 
 #[test]
 fn ethercrab_runs_1_slave_dc_synchronous_on_sync0() {
-    smol::block_on(dc_sync0_line(1));
+    smol::block_on(dc_sync0_line("io8"));
 }
 
 #[test]
 fn ethercrab_runs_8_slaves_dc_synchronous_on_sync0() {
-    smol::block_on(dc_sync0_line(8));
+    smol::block_on(dc_sync0_line("io8*8"));
 }
 
 #[test]
 fn ethercrab_runs_64_slaves_dc_synchronous_on_sync0() {
-    smol::block_on(dc_sync0_line(64));
+    smol::block_on(dc_sync0_line("io8*64"));
+}
+
+/// DC mode with the firmware on the SPI drivers: the DC registers (0x0981,
+/// 0x09A0, 0x0151, 0x098E) go through the driver and the emulated chip.
+#[test]
+fn ethercrab_runs_slaves_on_the_spi_drivers_dc_synchronous_on_sync0() {
+    smol::block_on(dc_sync0_line(
+        "io8@et1100,io8@lan9252,pam@et1100,pam@lan9252",
+    ));
 }
 
 /// PRE-OP→SAFE-OP with a DC configuration the firmware cannot run:
