@@ -166,6 +166,20 @@ fn without_the_distribution_a_warming_oscillator_drifts_away_and_with_it_stays_i
     });
 }
 
+/// An FPWR of `value` to `register` of slave `station` (as a configurator
+/// writes the DC registers).
+async fn write(
+    md: &ethercrab::MainDevice<'_>,
+    station: u16,
+    register: u16,
+    value: impl ethercrab::EtherCrabWireWrite,
+) {
+    ethercrab::Command::fpwr(station, register)
+        .send(md, value)
+        .await
+        .unwrap_or_else(|e| panic!("FPWR {register:#06x}: {e}"));
+}
+
 /// A line of `n` IO8s with oscillators from [`ERRORS_PPB`] (repeated).
 fn line_of(n: usize) -> Chain {
     line_spec(&format!("io8*{n}"))
@@ -380,14 +394,8 @@ fn a_wrong_dc_configuration_is_refused_at_safe_op_with_the_code_masters_expect()
             let s = group.subdevice(md, 0).expect("slave").configured_address();
             // Process data configured (SM2/SM3, FMMUs), as before SAFE-OP.
             let _group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
-            ethercrab::Command::fpwr(s, reg::DC_SYNC0_CYCLE_TIME)
-                .send(md, cycle)
-                .await
-                .expect("0x09A0");
-            ethercrab::Command::fpwr(s, reg::DC_ACTIVATION)
-                .send(md, activation)
-                .await
-                .expect("0x0981");
+            write(md, s, reg::DC_SYNC0_CYCLE_TIME, cycle).await;
+            write(md, s, reg::DC_ACTIVATION, activation).await;
             let st = crate::common::request(md, s, 0x04).await;
             assert_eq!(
                 st,
@@ -440,19 +448,10 @@ fn the_esi_dc_op_modes_applied_by_a_master_give_the_modes_they_describe() {
                     .await
                     .expect("system time");
                 let start = (now + 10_000_000) / u64::from(cycle) * u64::from(cycle);
-                ethercrab::Command::fpwr(s, reg::DC_START_TIME)
-                    .send(md, start)
-                    .await
-                    .expect("start");
-                ethercrab::Command::fpwr(s, reg::DC_SYNC0_CYCLE_TIME)
-                    .send(md, cycle)
-                    .await
-                    .expect("cycle");
+                write(md, s, reg::DC_START_TIME, start).await;
+                write(md, s, reg::DC_SYNC0_CYCLE_TIME, cycle).await;
             }
-            ethercrab::Command::fpwr(s, 0x0980)
-                .send(md, assign)
-                .await
-                .expect("AssignActivate");
+            write(md, s, 0x0980, assign).await;
             let st = crate::common::request(md, s, 0x04).await;
             assert_eq!(st, (0x04, 0), "{name}: SAFE-OP");
             let mode_now = {
@@ -495,18 +494,9 @@ fn dc_outputs_take_effect_at_sync0_and_losing_sync0_is_a_fatal_sync_error() {
             .expect("system time");
         // First pulse on the next whole millisecond + 1.
         let start = (now / u64::from(cycle) + 2) * u64::from(cycle);
-        ethercrab::Command::fpwr(s, reg::DC_START_TIME)
-            .send(md, start)
-            .await
-            .expect("start");
-        ethercrab::Command::fpwr(s, reg::DC_SYNC0_CYCLE_TIME)
-            .send(md, cycle)
-            .await
-            .expect("cycle");
-        ethercrab::Command::fpwr(s, reg::DC_ACTIVATION)
-            .send(md, 0x03u8)
-            .await
-            .expect("activation");
+        write(md, s, reg::DC_START_TIME, start).await;
+        write(md, s, reg::DC_SYNC0_CYCLE_TIME, cycle).await;
+        write(md, s, reg::DC_ACTIVATION, 0x03u8).await;
         assert_eq!(
             crate::common::request(md, s, 0x04).await,
             (0x04, 0),
@@ -564,10 +554,7 @@ fn dc_outputs_take_effect_at_sync0_and_losing_sync0_is_a_fatal_sync_error() {
         assert_eq!(missed(&bus).0, after, "cycles with outputs miss nothing");
         // SYNC0 switched off in OP: SAFE-OP with 0x002C at the next full
         // pass of the firmware, outputs off.
-        ethercrab::Command::fpwr(s, reg::DC_ACTIVATION)
-            .send(md, 0x00u8)
-            .await
-            .expect("activation off");
+        write(md, s, reg::DC_ACTIVATION, 0x00u8).await;
         bus.clock
             .advance(Duration::from_nanos(ecat_slave::device::FULL_PASS_NS));
         group.tx_rx(md).await.expect("cycle");

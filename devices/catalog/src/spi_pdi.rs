@@ -10,11 +10,21 @@
 
 use ecat_esc_spi::et1100::{Et1100Config, Et1100Spi};
 use ecat_esc_spi::lan9252::Lan9252Spi;
+use ecat_esc_spi_emu::Counters;
 use ecat_esc_spi_emu::et1100::Et1100Emu;
 use ecat_esc_spi_emu::lan9252::Lan9252Emu;
 use ecat_slave::device::{SoftPdi, SpiStats};
 use ecat_slave::esc::soft::SoftEsc;
 use ecat_slave::esc::{Esc, EscError};
+
+/// The line's view of what an emulated chip counted.
+fn stats(c: &Counters) -> SpiStats {
+    SpiStats {
+        transactions: c.transactions(),
+        protocol_errors: c.protocol_errors(),
+        refused_accesses: c.refused_accesses(),
+    }
+}
 
 /// The ET1100 SPI driver on an emulated ET1100 in front of a software ESC.
 pub struct Et1100Pdi {
@@ -69,12 +79,7 @@ impl SoftPdi for Et1100Pdi {
         self.driver.spi_mut().reset();
     }
     fn spi_stats(&self) -> Option<SpiStats> {
-        let c = self.chip();
-        Some(SpiStats {
-            transactions: c.transactions(),
-            protocol_errors: c.protocol_errors(),
-            refused_accesses: c.refused_accesses(),
-        })
+        Some(stats(self.chip().counters()))
     }
 }
 
@@ -145,11 +150,6 @@ impl SoftPdi for Lan9252Pdi {
         let _ = self.ensure_ready();
     }
     fn spi_stats(&self) -> Option<SpiStats> {
-        let c = self.chip();
-        Some(SpiStats {
-            transactions: c.transactions(),
-            protocol_errors: c.protocol_errors(),
-            refused_accesses: c.refused_accesses(),
-        })
+        Some(stats(self.chip().counters()))
     }
 }

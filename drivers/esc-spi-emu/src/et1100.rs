@@ -22,6 +22,7 @@
 //! byte, the AL control event acknowledged by reading 0x0120) happen once
 //! per access, as on silicon.
 
+use crate::Counters;
 use ecat_slave::esc::Esc;
 use ecat_slave::esc::soft::{MEM_SIZE, SoftEsc};
 use embedded_hal::spi::{self, ErrorKind, Operation, SpiDevice};
@@ -49,7 +50,7 @@ pub const CMD_ADDR_EXT: u8 = 0b110;
 ///
 /// It has no values: a real chip has no way to signal an error on SPI, so
 /// the emulations never fail a transaction. Malformed accesses are counted
-/// instead (`protocol_errors()` of each emulation).
+/// instead (`counters().protocol_errors()` of each emulation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EmuError {}
 
@@ -187,10 +188,7 @@ pub struct Et1100Emu {
     esc: SoftEsc,
     /// Data of the current access (the single ESC read or write).
     buf: [u8; MEM_SIZE],
-    transactions: u64,
-    bytes_clocked: u64,
-    protocol_errors: u64,
-    refused: u64,
+    counters: Counters,
     last_command: Option<(u8, u16, u16)>,
 }
 
@@ -198,9 +196,7 @@ impl core::fmt::Debug for Et1100Emu {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Et1100Emu")
             .field("esc", &self.esc)
-            .field("transactions", &self.transactions)
-            .field("protocol_errors", &self.protocol_errors)
-            .field("refused_accesses", &self.refused)
+            .field("counters", &self.counters)
             .field("last_command", &self.last_command)
             .finish_non_exhaustive()
     }
@@ -212,10 +208,7 @@ impl Et1100Emu {
         Et1100Emu {
             esc,
             buf: [0; MEM_SIZE],
-            transactions: 0,
-            bytes_clocked: 0,
-            protocol_errors: 0,
-            refused: 0,
+            counters: Counters::default(),
             last_command: None,
         }
     }
@@ -236,28 +229,9 @@ impl Et1100Emu {
         self.esc
     }
 
-    /// SEL cycles (transactions) seen.
-    pub fn transactions(&self) -> u64 {
-        self.transactions
-    }
-
-    /// Bytes clocked over all SEL cycles.
-    pub fn bytes_clocked(&self) -> u64 {
-        self.bytes_clocked
-    }
-
-    /// SEL cycles that broke a protocol rule (reserved command, read not
-    /// terminated by 0xFF, address phase cut short, wrong wait-state
-    /// byte); at most one per cycle.
-    pub fn protocol_errors(&self) -> u64 {
-        self.protocol_errors
-    }
-
-    /// Accesses the software ESC refused (a mailbox not full on a read or
-    /// full on a write, an address beyond its memory): the read returned
-    /// 0x00 bytes, the write was dropped, as a real chip carries on.
-    pub fn refused_accesses(&self) -> u64 {
-        self.refused
+    /// What the chip counted on its SPI side.
+    pub fn counters(&self) -> &Counters {
+        &self.counters
     }
 
     /// The last decoded access as `(command, address, data length)`: the
@@ -326,12 +300,12 @@ impl Et1100Emu {
             Some(buf) => {
                 if self.esc.read(c.addr, buf).is_err() {
                     buf.fill(0x00);
-                    self.refused += 1;
+                    self.counters.refuse();
                 }
             }
             // Longer than the whole ESC memory: the SoftEsc would refuse
             // it as out of range; it is refused without reaching it.
-            None => self.refused += 1,
+            None => self.counters.refuse(),
         }
     }
 
@@ -451,10 +425,10 @@ impl Et1100Emu {
                     match self.buf.get(..c.write_len) {
                         Some(d) => {
                             if self.esc.write(c.addr, d).is_err() {
-                                self.refused += 1;
+                                self.counters.refuse();
                             }
                         }
-                        None => self.refused += 1,
+                        None => self.counters.refuse(),
                     }
                 }
                 c.write_len
@@ -489,11 +463,7 @@ impl SpiDevice<u8> for Et1100Emu {
         };
         clock_ops(operations, |k, mosi| self.clock(&mut c, k, mosi));
         self.finish(&mut c);
-        self.transactions += 1;
-        self.bytes_clocked += total as u64;
-        if c.error {
-            self.protocol_errors += 1;
-        }
+        self.counters.cycle(total, c.error);
         Ok(())
     }
 }
@@ -546,9 +516,9 @@ mod tests {
         );
         assert_eq!(e.esc().pdi_accesses(), pdi + 1, "one PDI access");
         assert_eq!(e.last_command(), Some((CMD_READ, 0x0130, 2)));
-        assert_eq!(e.protocol_errors(), 0);
-        assert_eq!(e.transactions(), 1);
-        assert_eq!(e.bytes_clocked(), 4);
+        assert_eq!(e.counters().protocol_errors(), 0);
+        assert_eq!(e.counters().transactions(), 1);
+        assert_eq!(e.counters().bytes_clocked(), 4);
     }
 
     #[test]
@@ -561,10 +531,10 @@ mod tests {
             [0x01, 0x02, 0xFF, 0x02, 0x00]
         );
         assert_eq!(e.last_command(), Some((CMD_READ_WAIT, 0x0130, 2)));
-        assert_eq!(e.protocol_errors(), 0);
+        assert_eq!(e.counters().protocol_errors(), 0);
         // A wait-state byte that is not 0xFF is a protocol error.
         xfer(&mut e, [0x09, 0x83, 0x00, 0x00, 0xFF]);
-        assert_eq!(e.protocol_errors(), 1);
+        assert_eq!(e.counters().protocol_errors(), 1);
     }
 
     #[test]
@@ -586,7 +556,7 @@ mod tests {
         xfer(&mut e, [0x09, 0x84, 0x02, 0x00]);
         assert_eq!(e.esc().raw_memory()[0x0130..0x0132], [0x02, 0x00]);
         assert_eq!(e.esc().pdi_accesses(), pdi + 2);
-        assert_eq!(e.protocol_errors(), 0);
+        assert_eq!(e.counters().protocol_errors(), 0);
     }
 
     #[test]
@@ -607,20 +577,20 @@ mod tests {
             xfer(&mut e, [0x7F, 0xE2, 0x00, 0x00, 0x00, 0xFF]),
             [0x33, 0x44, 9, 8, 7, 6]
         );
-        assert_eq!(e.protocol_errors(), 0);
+        assert_eq!(e.counters().protocol_errors(), 0);
         // 0x3000 is beyond the SoftEsc memory: 0x00 bytes, refused.
         assert_eq!(
             xfer(&mut e, [0x80, 0x06, 0x28, 0x00, 0x00, 0x00, 0xFF]),
             [0x33, 0x44, 0x55, 0, 0, 0, 0]
         );
         assert_eq!(e.last_command(), Some((CMD_READ, 0x3000, 4)));
-        assert_eq!(e.refused_accesses(), 1);
+        assert_eq!(e.counters().refused_accesses(), 1);
         // A write there is dropped and counted too.
         xfer(&mut e, [0xFF, 0xFE, 0xE0 | (CMD_WRITE << 2), 1, 2]);
-        assert_eq!(e.refused_accesses(), 2);
+        assert_eq!(e.counters().refused_accesses(), 2);
         // res[1:0] != 00b is a protocol error.
         xfer(&mut e, [0x7F, 0xE6, 0x29, 0x00, 0xFF]);
-        assert_eq!(e.protocol_errors(), 1);
+        assert_eq!(e.counters().protocol_errors(), 1);
     }
 
     #[test]
@@ -633,7 +603,7 @@ mod tests {
         // 3-byte NOP.
         assert_eq!(xfer(&mut e, [0x00, 0x06, 0x00]), [0x02, 0x01, 0x00]);
         assert_eq!(e.esc().pdi_accesses(), pdi);
-        assert_eq!(e.protocol_errors(), 0);
+        assert_eq!(e.counters().protocol_errors(), 0);
         assert_eq!(e.last_command(), Some((CMD_NOP, 0, 0)));
     }
 
@@ -678,15 +648,15 @@ mod tests {
         // Read again: the mailbox is empty; the chip returns 0x00 bytes.
         let miso = xfer(&mut e, [0x80, 0x02, 0, 0, 0, 0, 0, 0, 0, 0xFF]);
         assert_eq!(miso[2..], [0; 8]);
-        assert_eq!(e.refused_accesses(), 1);
+        assert_eq!(e.counters().refused_accesses(), 1);
         // SM1 (mailbox in) takes one PDI write of 8 bytes; a second is
         // refused because it is full.
         let w = [0x84, 0x04, 9, 9, 9, 9, 9, 9, 9, 9];
         xfer(&mut e, w);
         assert_ne!(e.esc().raw_memory()[0x080D] & 0x08, 0, "SM1 full");
         xfer(&mut e, w);
-        assert_eq!(e.refused_accesses(), 2);
-        assert_eq!(e.protocol_errors(), 0);
+        assert_eq!(e.counters().refused_accesses(), 2);
+        assert_eq!(e.counters().protocol_errors(), 0);
     }
 
     #[test]
@@ -695,27 +665,27 @@ mod tests {
         e.esc_mut().raw_memory_mut()[0x0130] = 0x04;
         // Unterminated read: the read still happened.
         assert_eq!(xfer(&mut e, [0x09, 0x82, 0x00, 0x00])[2], 0x04);
-        assert_eq!(e.protocol_errors(), 1);
+        assert_eq!(e.counters().protocol_errors(), 1);
         // 0xFF before the last byte.
         xfer(&mut e, [0x09, 0x82, 0xFF, 0xFF]);
-        assert_eq!(e.protocol_errors(), 2);
+        assert_eq!(e.counters().protocol_errors(), 2);
         // Reserved commands 001b, 101b, 111b, and 110b as CMD1.
         let pdi = e.esc().pdi_accesses();
         for cmd in [0x01u8, 0x05, 0x07] {
             assert_eq!(xfer(&mut e, [0x09, 0x80 | cmd, 0x00, 0xFF])[2..], [0, 0]);
         }
         xfer(&mut e, [0x09, 0x86, 0x18, 0x00, 0xFF]);
-        assert_eq!(e.protocol_errors(), 6);
+        assert_eq!(e.counters().protocol_errors(), 6);
         assert_eq!(e.esc().pdi_accesses(), pdi);
         // A 1-byte cycle, and a 3-byte address phase cut after 2 bytes.
         xfer(&mut e, [0x09]);
         xfer(&mut e, [0x09, 0x86]);
-        assert_eq!(e.protocol_errors(), 8);
+        assert_eq!(e.counters().protocol_errors(), 8);
         assert_eq!(e.esc().pdi_accesses(), pdi);
         // An empty transaction is no error.
         e.transaction(&mut []).unwrap();
-        assert_eq!(e.protocol_errors(), 8);
-        assert_eq!(e.transactions(), 9);
+        assert_eq!(e.counters().protocol_errors(), 8);
+        assert_eq!(e.counters().transactions(), 9);
     }
 
     #[test]
@@ -738,19 +708,23 @@ mod tests {
         assert_eq!(data, [1, 2, 3]);
         assert_eq!(tail, [4]);
         assert_eq!(e.last_command(), Some((CMD_READ, 0x0130, 4)));
-        assert_eq!(e.protocol_errors(), 0);
+        assert_eq!(e.counters().protocol_errors(), 0);
         // Transfer with w longer than r: extra MISO discarded.
         let mut r = [0u8; 1];
         e.transaction(&mut [Operation::Transfer(&mut r, &[0x09, 0x82, 0x00, 0xFF])])
             .unwrap();
         assert_eq!(r, [0x07]);
-        assert_eq!(e.bytes_clocked(), 10);
+        assert_eq!(e.counters().bytes_clocked(), 10);
         // Write then Read (what `write_read`-style drivers do).
         let mut d = [0u8; 1];
         e.transaction(&mut [Operation::Write(&[0x09, 0x82]), Operation::Read(&mut d)])
             .unwrap();
         assert_eq!(d, [1]);
-        assert_eq!(e.protocol_errors(), 1, "a Read clocks 0x00: unterminated");
+        assert_eq!(
+            e.counters().protocol_errors(),
+            1,
+            "a Read clocks 0x00: unterminated"
+        );
     }
 
     #[test]
@@ -831,7 +805,7 @@ mod tests {
                 e.reset();
             }
         }
-        assert_eq!(e.transactions(), 4000);
-        assert!(e.protocol_errors() > 0);
+        assert_eq!(e.counters().transactions(), 4000);
+        assert!(e.counters().protocol_errors() > 0);
     }
 }

@@ -20,6 +20,7 @@
 //! delays are not modelled: a command completes as soon as it is written
 //! (its busy bit reads 0 at the next poll), a reset is over at once.
 
+use crate::Counters;
 use crate::et1100::{clock_ops, clocked_len, esc_irq, mem_u32};
 use ecat_slave::esc::Esc;
 use ecat_slave::esc::soft::{MEM_SIZE, SoftEsc};
@@ -189,10 +190,7 @@ pub struct Lan9252Emu {
     wr_addr_len: u32,
     rd: RdFifo,
     wr: WrFifo,
-    transactions: u64,
-    bytes_clocked: u64,
-    protocol_errors: u64,
-    refused: u64,
+    counters: Counters,
 }
 
 impl core::fmt::Debug for Lan9252Emu {
@@ -201,9 +199,7 @@ impl core::fmt::Debug for Lan9252Emu {
             .field("esc", &self.esc)
             .field("irq_cfg", &self.irq_cfg)
             .field("int_en", &self.int_en)
-            .field("transactions", &self.transactions)
-            .field("protocol_errors", &self.protocol_errors)
-            .field("refused_accesses", &self.refused)
+            .field("counters", &self.counters)
             .finish_non_exhaustive()
     }
 }
@@ -231,10 +227,7 @@ impl Lan9252Emu {
                 dwords: 0,
                 got: 0,
             },
-            transactions: 0,
-            bytes_clocked: 0,
-            protocol_errors: 0,
-            refused: 0,
+            counters: Counters::default(),
         }
     }
 
@@ -254,28 +247,9 @@ impl Lan9252Emu {
         self.esc
     }
 
-    /// SEL cycles (transactions) seen.
-    pub fn transactions(&self) -> u64 {
-        self.transactions
-    }
-
-    /// Bytes clocked over all SEL cycles.
-    pub fn bytes_clocked(&self) -> u64 {
-        self.bytes_clocked
-    }
-
-    /// SEL cycles that broke a protocol rule (unknown instruction, address
-    /// cut short, illegal CSR command, FIFO read when empty or write when
-    /// not started, partial FIFO DWORD, ...); at most one per cycle.
-    pub fn protocol_errors(&self) -> u64 {
-        self.protocol_errors
-    }
-
-    /// Accesses the software ESC refused (a mailbox not full on a read or
-    /// full on a write, an address beyond its memory): the read delivered
-    /// 0x00 bytes, the write was dropped, as a real chip carries on.
-    pub fn refused_accesses(&self) -> u64 {
-        self.refused
+    /// What the chip counted on its SPI side.
+    pub fn counters(&self) -> &Counters {
+        &self.counters
     }
 
     /// Whether the IRQ output is asserted: (AL event request AND AL event
@@ -422,14 +396,14 @@ impl Lan9252Emu {
         if v & CSR_READ != 0 {
             if self.esc.read(addr, part).is_err() {
                 part.fill(0);
-                self.refused += 1;
+                self.counters.refuse();
             }
             self.csr_data = u32::from_le_bytes(b);
         } else {
             let d = self.csr_data.to_le_bytes();
             let data = d.get(..size).unwrap_or(&[]);
             if self.esc.write(addr, data).is_err() {
-                self.refused += 1;
+                self.counters.refuse();
             }
         }
     }
@@ -465,12 +439,12 @@ impl Lan9252Emu {
             Some(dst) => {
                 if self.esc.read(addr, dst).is_err() {
                     dst.fill(0);
-                    self.refused += 1;
+                    self.counters.refuse();
                 }
             }
             // Longer than process RAM: out of range for the SoftEsc;
             // refused without reaching it, the FIFO delivers zeros.
-            None => self.refused += 1,
+            None => self.counters.refuse(),
         }
         self.rd.dwords = (lane + len).div_ceil(4);
     }
@@ -520,10 +494,10 @@ impl Lan9252Emu {
             match self.wr.buf.get(lane..lane + self.wr.len) {
                 Some(data) => {
                     if self.esc.write(self.wr.addr, data).is_err() {
-                        self.refused += 1;
+                        self.counters.refuse();
                     }
                 }
-                None => self.refused += 1,
+                None => self.counters.refuse(),
             }
             self.wr.dwords = 0;
             self.wr.got = 0;
@@ -694,11 +668,7 @@ impl SpiDevice<u8> for Lan9252Emu {
         };
         clock_ops(operations, |k, mosi| self.clock(&mut c, k, mosi));
         self.finish(&mut c);
-        self.transactions += 1;
-        self.bytes_clocked += total as u64;
-        if c.error {
-            self.protocol_errors += 1;
-        }
+        self.counters.cycle(total, c.error);
         Ok(())
     }
 }
@@ -778,9 +748,9 @@ mod tests {
         assert_eq!(rd32(&mut e, 0x0100), 0);
         // 0xFF (SQI reset) is a no-op.
         xfer(&mut e, [0xFF]);
-        assert_eq!(e.protocol_errors(), 0);
+        assert_eq!(e.counters().protocol_errors(), 0);
         assert_eq!(e.esc().pdi_accesses(), 0);
-        assert_eq!(e.transactions(), 11);
+        assert_eq!(e.counters().transactions(), 11);
     }
 
     #[test]
@@ -808,7 +778,7 @@ mod tests {
         assert_eq!(rd32(&mut e, ECAT_CSR_DATA), 0x0403_0201);
         wr32(&mut e, ECAT_CSR_CMD, 0xC001_0223);
         assert_eq!(rd32(&mut e, ECAT_CSR_DATA), 0x04);
-        assert_eq!(e.protocol_errors(), 0);
+        assert_eq!(e.counters().protocol_errors(), 0);
     }
 
     #[test]
@@ -829,7 +799,7 @@ mod tests {
         );
         assert_eq!(e.esc().raw_memory()[0x0134..0x0136], [0x1D, 0x00]);
         assert_eq!(e.esc().pdi_accesses(), pdi + 2);
-        assert_eq!(e.protocol_errors(), 0);
+        assert_eq!(e.counters().protocol_errors(), 0);
     }
 
     #[test]
@@ -855,7 +825,7 @@ mod tests {
         );
         assert_eq!(rd32(&mut e, ECAT_PRAM_RD_CMD), 0, "done");
         assert_eq!(e.esc().pdi_accesses(), pdi + 1);
-        assert_eq!(e.protocol_errors(), 0);
+        assert_eq!(e.counters().protocol_errors(), 0);
     }
 
     #[test]
@@ -877,10 +847,10 @@ mod tests {
             [0, 0, 0xA0, 0xA1, 0xA2, 0xA3, 0xA4, 0xA5, 0, 0]
         );
         assert_eq!(rd32(&mut e, ECAT_PRAM_WR_CMD), 0);
-        assert_eq!(e.protocol_errors(), 0);
+        assert_eq!(e.counters().protocol_errors(), 0);
         // A push with no transfer under way is a protocol error.
         xfer(&mut e, [0x02, 0x00, 0x20, 1, 2, 3, 4]);
-        assert_eq!(e.protocol_errors(), 1);
+        assert_eq!(e.counters().protocol_errors(), 1);
         assert_eq!(e.esc().pdi_accesses(), pdi + 1);
     }
 
@@ -920,7 +890,7 @@ mod tests {
             .unwrap();
         assert_eq!(e.esc().raw_memory()[0x1100..0x1146], w[..70]);
         assert_eq!(e.esc().raw_memory()[0x1146], 0);
-        assert_eq!(e.protocol_errors(), 0);
+        assert_eq!(e.counters().protocol_errors(), 0);
     }
 
     #[test]
@@ -945,7 +915,11 @@ mod tests {
             assert_eq!(m[3..], want);
         }
         assert_eq!(e.esc().raw_memory()[0x0805] & 0x08, 0, "emptied");
-        assert_eq!(e.refused_accesses(), 1, "second read: mailbox empty");
+        assert_eq!(
+            e.counters().refused_accesses(),
+            1,
+            "second read: mailbox empty"
+        );
     }
 
     #[test]
@@ -990,7 +964,7 @@ mod tests {
             assert_eq!(rd32(&mut e, ECAT_PRAM_RD_CMD), 0);
             assert_eq!(e.esc().raw_memory()[0x1000], 0, "process RAM cleared");
             assert_eq!(rd32(&mut e, BYTE_TEST), 0x8765_4321);
-            assert_eq!(e.protocol_errors(), 0);
+            assert_eq!(e.counters().protocol_errors(), 0);
         }
         // Other bits reset nothing.
         let mut e = emu();
@@ -1007,7 +981,7 @@ mod tests {
         let pdi = e.esc().pdi_accesses();
         // Unknown instruction (quad read), rest ignored.
         assert_eq!(xfer(&mut e, [0xEB, 0x00, 0x64, 0, 0, 0, 0]), [0; 7]);
-        assert_eq!(e.protocol_errors(), 1);
+        assert_eq!(e.counters().protocol_errors(), 1);
         // CSR size 3, size 0, size 2 at an odd address, process RAM.
         for cmd in [
             0xC003_0130u32,
@@ -1018,12 +992,12 @@ mod tests {
         ] {
             wr32(&mut e, ECAT_CSR_CMD, cmd);
         }
-        assert_eq!(e.protocol_errors(), 6);
+        assert_eq!(e.counters().protocol_errors(), 6);
         assert_eq!(rd32(&mut e, ECAT_CSR_CMD) & BUSY, 0);
         assert_eq!(e.esc().pdi_accesses(), pdi, "nothing accessed");
         // FIFO read when empty.
         assert_eq!(xfer(&mut e, [0x03, 0x00, 0x00, 0, 0, 0, 0])[3..], [0; 4]);
-        assert_eq!(e.protocol_errors(), 7);
+        assert_eq!(e.counters().protocol_errors(), 7);
         // Partial DWORD: 6 bytes from a 2-DWORD FIFO.
         e.esc_mut().raw_memory_mut()[0x1000..0x1008].copy_from_slice(&[1, 2, 3, 4, 5, 6, 7, 8]);
         wr32(&mut e, ECAT_PRAM_RD_ADDR_LEN, (8 << 16) | 0x1000);
@@ -1032,24 +1006,24 @@ mod tests {
             xfer(&mut e, [0x03, 0x00, 0x00, 0, 0, 0, 0, 0, 0])[3..],
             [1, 2, 3, 4, 5, 6]
         );
-        assert_eq!(e.protocol_errors(), 8);
+        assert_eq!(e.counters().protocol_errors(), 8);
         assert_eq!(rd32(&mut e, ECAT_PRAM_RD_CMD), 0, "dropped");
         // Partial write DWORD.
         wr32(&mut e, ECAT_PRAM_WR_ADDR_LEN, (4 << 16) | 0x1000);
         wr32(&mut e, ECAT_PRAM_WR_CMD, BUSY);
         xfer(&mut e, [0x02, 0x00, 0x20, 1, 2]);
-        assert_eq!(e.protocol_errors(), 9);
+        assert_eq!(e.counters().protocol_errors(), 9);
         // PRAM start below 0x1000 or with length 0.
         wr32(&mut e, ECAT_PRAM_RD_ADDR_LEN, (4 << 16) | 0x0130);
         wr32(&mut e, ECAT_PRAM_RD_CMD, BUSY);
         wr32(&mut e, ECAT_PRAM_WR_ADDR_LEN, 0x1000);
         wr32(&mut e, ECAT_PRAM_WR_CMD, BUSY);
-        assert_eq!(e.protocol_errors(), 11);
+        assert_eq!(e.counters().protocol_errors(), 11);
         // Address cut short; an empty cycle is no error.
         xfer(&mut e, [0x0B, 0x00, 0x64]);
         xfer(&mut e, [0x02, 0x00]);
         e.transaction(&mut []).unwrap();
-        assert_eq!(e.protocol_errors(), 13);
+        assert_eq!(e.counters().protocol_errors(), 13);
     }
 
     /// xorshift64*.
@@ -1111,8 +1085,8 @@ mod tests {
                 frame(&mut e, &[(Command::Apwr, 0x1000, &[i as u8; 8])]);
             }
         }
-        assert_eq!(e.transactions(), 4000);
-        assert!(e.protocol_errors() > 0);
+        assert_eq!(e.counters().transactions(), 4000);
+        assert!(e.counters().protocol_errors() > 0);
         assert!(e.esc().pdi_accesses() > 0);
     }
 }

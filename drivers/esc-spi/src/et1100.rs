@@ -17,6 +17,7 @@
 //! The protocol facts and their sources are listed in `docs/SPI-NOTES.md`
 //! (part A); the bracketed keys in the comments refer to that file.
 
+use crate::check_range;
 use ecat_slave::esc::{Esc, EscError};
 use embedded_hal::spi::{Operation, SpiDevice};
 
@@ -43,8 +44,6 @@ const READ_TERMINATOR: u8 = 0xFF;
 /// The 2-byte address phase carries A[12:0] only (A[15:13] = 000b), so it
 /// reaches the first 8 KB [ET1200-III §6.3.5, Table 40].
 const TWO_BYTE_LIMIT: usize = 0x2000;
-/// Size of the ESC address space (16-bit addresses).
-const MEMORY_SIZE: usize = 0x1_0000;
 
 /// Which address phase the driver sends.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -242,15 +241,6 @@ impl<D: SpiDevice> Et1100Spi<D> {
     fn run(&mut self, ops: &mut [Operation<'_, u8>]) -> Result<(), EscError> {
         self.transactions = self.transactions.wrapping_add(1);
         self.spi.transaction(ops).map_err(|_| EscError::Interface)
-    }
-}
-
-/// Rejects accesses past the 64 KB ESC address space.
-fn check_range(addr: u16, len: usize) -> Result<(), EscError> {
-    if usize::from(addr).saturating_add(len) > MEMORY_SIZE {
-        Err(EscError::OutOfRange { addr, len })
-    } else {
-        Ok(())
     }
 }
 

@@ -29,3 +29,18 @@
 
 pub mod et1100;
 pub mod lan9252;
+
+use ecat_slave::esc::EscError;
+
+/// Size of the ESC address space (16-bit addresses).
+const MEMORY_SIZE: usize = 0x1_0000;
+
+/// Rejects accesses past the 64 KB ESC address space (before any SPI
+/// traffic).
+fn check_range(addr: u16, len: usize) -> Result<(), EscError> {
+    if usize::from(addr).saturating_add(len) > MEMORY_SIZE {
+        Err(EscError::OutOfRange { addr, len })
+    } else {
+        Ok(())
+    }
+}

@@ -172,10 +172,10 @@ impl Rig {
 fn a_quiet_irq_line_means_a_pass_per_idle_period_and_no_spi_traffic_between() {
     let mut rig = Rig::new();
     rig.run_for(2_000);
-    let sel = rig.chip.borrow().transactions();
+    let sel = rig.chip.borrow().counters().transactions();
     let passes = rig.run_for(10_000);
     assert_eq!(passes, 10, "one pass per IDLE_POLL_NS (1 ms) over 10 ms");
-    let per_pass = (rig.chip.borrow().transactions() - sel) / u64::from(passes);
+    let per_pass = (rig.chip.borrow().counters().transactions() - sel) / u64::from(passes);
     assert_eq!(
         per_pass, 3,
         "an idle pass on the LAN9252: the AL event through CSR"
@@ -234,5 +234,5 @@ fn in_op_the_pins_follow_the_process_data_both_ways() {
         [true, false, false, false, false, false, false, true],
         "outputs 1 and 8 on"
     );
-    assert_eq!(rig.chip.borrow().protocol_errors(), 0);
+    assert_eq!(rig.chip.borrow().counters().protocol_errors(), 0);
 }
