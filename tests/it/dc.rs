@@ -536,6 +536,15 @@ fn dc_outputs_take_effect_at_sync0_and_losing_sync0_is_a_fatal_sync_error() {
                 chain.slaves()[0].od().get(0x1C32, 11),
             )
         };
+        // One cycle without outputs first: the link's idle passes run the
+        // firmware whenever they like, so the last outputs may have been
+        // taken at the SYNC0 before or after them; from here on each
+        // SYNC0 is one cycle.
+        bus.clock.advance(Duration::from_millis(1));
+        let _: u16 = ethercrab::Command::fprd(s, 0x0130)
+            .receive(md)
+            .await
+            .expect("AL status only");
         let (before, _) = missed(&bus);
         for _ in 0..4 {
             bus.clock.advance(Duration::from_millis(1));
@@ -547,17 +556,27 @@ fn dc_outputs_take_effect_at_sync0_and_losing_sync0_is_a_fatal_sync_error() {
         let (after, od) = missed(&bus);
         assert_eq!(after - before, 4, "4 cycles without outputs");
         assert_eq!(od, Some(i64::from(after)));
+        // Outputs sent before each pulse, as a DC master shifts its cycle
+        // ahead of SYNC0; the pulse is then seen by whichever firmware
+        // pass comes first (an idle pass or the next frame).
         for _ in 0..4 {
-            bus.clock.advance(Duration::from_millis(1));
             group.tx_rx(md).await.expect("cycle");
+            bus.clock.advance(Duration::from_millis(1));
+            let _: u16 = ethercrab::Command::fprd(s, 0x0130)
+                .receive(md)
+                .await
+                .expect("AL status");
         }
         assert_eq!(missed(&bus).0, after, "cycles with outputs miss nothing");
         // SYNC0 switched off in OP: SAFE-OP with 0x002C at the next full
         // pass of the firmware, outputs off.
+        // The master keeps its cycle (outputs every 1 ms, so the SM
+        // watchdog stays quiet) until a full pass has come.
         write(md, s, reg::DC_ACTIVATION, 0x00u8).await;
-        bus.clock
-            .advance(Duration::from_nanos(ecat_slave::device::FULL_PASS_NS));
-        group.tx_rx(md).await.expect("cycle");
+        for _ in 0..=ecat_slave::device::FULL_PASS_NS / 1_000_000 {
+            bus.clock.advance(Duration::from_millis(1));
+            group.tx_rx(md).await.expect("cycle");
+        }
         crate::common::settle(md).await;
         assert_eq!(
             crate::common::status(md, s).await,
