@@ -204,6 +204,8 @@ pub struct Chain {
     touched_in: Vec<u64>,
     /// The next slave of the round-robin sweep.
     sweep_next: usize,
+    /// Whether [`Chain::idle`] runs firmware beyond what is due.
+    idle_passes: bool,
     /// Time up to which the sweep has run.
     swept_until: u64,
     /// Firmware runs so far.
@@ -338,6 +340,7 @@ impl Chain {
             touched_all: false,
             touched_in: Vec::new(),
             sweep_next: 0,
+            idle_passes: true,
             swept_until: 0,
             runs: 0,
             windows: Vec::new(),
@@ -458,6 +461,9 @@ impl Chain {
     /// run completely on every idle pass.
     pub fn idle(&mut self, now_ns: u64) -> Result<(), (usize, EscError)> {
         let serviced = self.service(now_ns);
+        if !self.idle_passes {
+            return serviced;
+        }
         let n = self.slaves.len();
         let mut first = None;
         let mut moved = false;
@@ -470,6 +476,15 @@ impl Chain {
             self.reindex();
         }
         serviced.and(first.map_or(Ok(()), Err))
+    }
+
+    /// Turns the extra passes of [`Chain::idle`] on (the default) or off.
+    /// Off, a firmware runs only when its ESC flags an event or its sweep
+    /// turn comes in the slaves' time: with a simulated clock that stands
+    /// still, each frame then costs exactly the passes it caused, which is
+    /// what a measurement of the per-pass PDI cost needs.
+    pub fn set_idle_passes(&mut self, on: bool) {
+        self.idle_passes = on;
     }
 
     /// The sweep period of this line.
@@ -1008,6 +1023,19 @@ mod tests {
     fn al_status(line: &Chain, i: usize) -> u16 {
         let m = line.slaves()[i].esc().raw_memory();
         u16::from_le_bytes([m[0x0130], m[0x0131]])
+    }
+
+    #[test]
+    fn idle_passes_switched_off_run_only_what_is_due() {
+        let mut line = crate::testing::line(4);
+        line.idle(0).unwrap();
+        assert_eq!(line.firmware_runs(), 4, "idle runs the whole short line");
+        line.set_idle_passes(false);
+        line.idle(0).unwrap();
+        assert_eq!(line.firmware_runs(), 4, "nothing flagged, nothing due");
+        line.set_idle_passes(true);
+        line.idle(0).unwrap();
+        assert_eq!(line.firmware_runs(), 8);
     }
 
     #[test]
