@@ -105,6 +105,9 @@ pub enum AlStatusCode {
     InvalidDcSyncConfig,
     /// 0x0035 invalid DC sync cycle time.
     InvalidDcCycleTime,
+    /// 0x0070 the configured module ident list (0xF030) does not match the
+    /// detected one (0xF050) (ETG.1000.6; ETG.5001 modular devices).
+    ModuleIdentMismatch,
     /// Any other code.
     Other(u16),
 }
@@ -133,6 +136,7 @@ impl AlStatusCode {
             AlStatusCode::FatalSyncError => 0x002C,
             AlStatusCode::InvalidDcSyncConfig => 0x0030,
             AlStatusCode::InvalidDcCycleTime => 0x0035,
+            AlStatusCode::ModuleIdentMismatch => 0x0070,
             AlStatusCode::Other(c) => c,
         }
     }
@@ -162,6 +166,9 @@ impl AlStatusCode {
             AlStatusCode::FatalSyncError => "fatal sync error",
             AlStatusCode::InvalidDcSyncConfig => "invalid DC SYNC configuration",
             AlStatusCode::InvalidDcCycleTime => "invalid DC sync cycle time",
+            AlStatusCode::ModuleIdentMismatch => {
+                "detected module ident list (0xF050) and configured module ident list (0xF030) do not match"
+            }
             AlStatusCode::Other(_) => "other AL status code",
         }
     }
@@ -189,6 +196,7 @@ impl AlStatusCode {
             0x002C => AlStatusCode::FatalSyncError,
             0x0030 => AlStatusCode::InvalidDcSyncConfig,
             0x0035 => AlStatusCode::InvalidDcCycleTime,
+            0x0070 => AlStatusCode::ModuleIdentMismatch,
             c => AlStatusCode::Other(c),
         }
     }

@@ -7,7 +7,7 @@
 
 use crate::coe::{CoeServer, ObjectAccess};
 use crate::foe::{FoeContext, FoeServer};
-use crate::od::Dictionary;
+use crate::od::modules::ObjectView;
 use crate::wire::foe::FoeRepr;
 use crate::wire::mailbox::{
     HEADER_LEN, Mailbox, MailboxError, MailboxErrorCode, MailboxErrorRepr, MailboxRepr,
@@ -98,9 +98,9 @@ impl MailboxServer {
 
     /// The next part of a response that spans several mailboxes (SDO
     /// Information fragments), framed for SM1; `None` when nothing is due.
-    pub fn next_pending(&mut self, out: &mut [u8], dict: &Dictionary) -> Option<usize> {
+    pub fn next_pending(&mut self, out: &mut [u8], view: ObjectView) -> Option<usize> {
         let body = out.get_mut(HEADER_LEN..)?;
-        let n = self.coe.next_fragment(body, dict)?;
+        let n = self.coe.next_fragment(body, view)?;
         self.frame(out, MailboxType::CoE, n)
     }
 

@@ -163,6 +163,7 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
         foe: true,
     },
     esc: EscConfig::DEFAULT,
+    modules: None,
 };
 
 const _: () = DEVICE.assert_valid();

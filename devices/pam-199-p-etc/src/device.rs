@@ -74,6 +74,7 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
         foe: true,
     },
     esc: EscConfig::DEFAULT,
+    modules: None,
 };
 
 const _: () = DEVICE.assert_valid();

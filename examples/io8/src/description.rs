@@ -172,6 +172,7 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
         foe: true,
     },
     esc: EscConfig::DEFAULT,
+    modules: None,
 };
 
 // Every contradiction in the description is a build error.

@@ -10,6 +10,7 @@ pub mod sdo;
 pub mod sdo_info;
 
 use crate::od::Dictionary;
+use crate::od::modules::ObjectView;
 use crate::wire::coe::{CoeHeader, CoeService, SdoAbortCode};
 use crate::wire::mailbox::MailboxErrorCode;
 
@@ -17,6 +18,12 @@ use crate::wire::mailbox::MailboxErrorCode;
 pub trait ObjectAccess {
     /// The dictionary SDO Information describes.
     fn dictionary(&self) -> &'static Dictionary;
+
+    /// What of the dictionary is visible now (a modular device hides the
+    /// objects of its empty slots); everything by default.
+    fn view(&self) -> ObjectView {
+        ObjectView::all(self.dictionary())
+    }
 
     /// Reads `index:sub` (or the whole object with `complete_access`) into
     /// `out`; returns the number of bytes.
@@ -80,7 +87,7 @@ impl CoeServer {
                 let (head, rest) = out
                     .split_at_mut_checked(CoeHeader::<&[u8]>::HEADER_LEN)
                     .ok_or(MailboxErrorCode::NoMoreMemory)?;
-                let Some(n) = self.info.handle(body, rest, od.dictionary()) else {
+                let Some(n) = self.info.handle(body, rest, od.view()) else {
                     return Ok(None);
                 };
                 CoeHeader::emit_into(head, 0, CoeService::SdoInformation);
@@ -92,12 +99,12 @@ impl CoeServer {
 
     /// The next fragment of an SDO Information response in progress (CoE
     /// header onwards), if any.
-    pub fn next_fragment(&mut self, out: &mut [u8], dict: &Dictionary) -> Option<usize> {
+    pub fn next_fragment(&mut self, out: &mut [u8], view: ObjectView) -> Option<usize> {
         if !self.info.busy() {
             return None;
         }
         let (head, rest) = out.split_at_mut_checked(CoeHeader::<&[u8]>::HEADER_LEN)?;
-        let n = self.info.next_fragment(rest, dict)?;
+        let n = self.info.next_fragment(rest, view)?;
         CoeHeader::emit_into(head, 0, CoeService::SdoInformation);
         Some(n + CoeHeader::<&[u8]>::HEADER_LEN)
     }

@@ -65,7 +65,7 @@
 //!   short or malformed requests, unknown opcodes and unknown list types
 //!   0x05040001, a description larger than [`INFO_BUFFER`] 0x06010005.
 
-use crate::od::Dictionary;
+use crate::od::modules::ObjectView;
 use crate::od::types::{DataType, DefaultValue, Entry, Object, ObjectCode, PdoMapping};
 use crate::wire::coe::{SDO_INFO_HEADER_LEN, SdoAbortCode, SdoInfo, SdoInfoOpcode, SdoInfoRepr};
 
@@ -173,9 +173,13 @@ impl ListType {
         }
     }
 
-    /// Number of objects of `dict` in this list.
-    pub fn count(self, dict: &Dictionary) -> usize {
-        dict.objects().iter().filter(|o| self.contains(o)).count()
+    /// Number of objects of `view` in this list.
+    pub fn count(self, view: ObjectView) -> usize {
+        view.dict
+            .objects()
+            .iter()
+            .filter(|o| self.contains(o) && view.visible(o.index))
+            .count()
     }
 }
 
@@ -345,10 +349,10 @@ impl SdoInfoServer {
     /// on) of the first response fragment into `out` and returns its
     /// length; `None` if `out` cannot hold even the smallest response.
     /// A response still in progress is abandoned.
-    pub fn handle(&mut self, request: &[u8], out: &mut [u8], dict: &Dictionary) -> Option<usize> {
+    pub fn handle(&mut self, request: &[u8], out: &mut [u8], view: ObjectView) -> Option<usize> {
         self.state = InfoState::Idle;
-        match self.start(request, dict) {
-            Ok(()) => self.next_fragment(out, dict),
+        match self.start(request, view) {
+            Ok(()) => self.next_fragment(out, view),
             Err(code) => emit_error(code, out),
         }
     }
@@ -356,7 +360,7 @@ impl SdoInfoServer {
     /// Writes the next fragment of the response in progress into `out` and
     /// returns its length; `None` when no response is in progress. If `out`
     /// cannot carry any service data the response is abandoned.
-    pub fn next_fragment(&mut self, out: &mut [u8], dict: &Dictionary) -> Option<usize> {
+    pub fn next_fragment(&mut self, out: &mut [u8], view: ObjectView) -> Option<usize> {
         let state = self.state;
         let written = match state {
             InfoState::Idle => None,
@@ -364,7 +368,7 @@ impl SdoInfoServer {
                 list,
                 cursor,
                 first,
-            } => self.list_fragment(list, cursor, first, out, dict),
+            } => self.list_fragment(list, cursor, first, out, view),
             InfoState::Buffered { opcode, len, sent } => {
                 self.buffered_fragment(opcode, len, sent, out)
             }
@@ -376,7 +380,7 @@ impl SdoInfoServer {
     }
 
     /// Parses a request and sets up the response state.
-    fn start(&mut self, request: &[u8], dict: &Dictionary) -> Result<(), SdoAbortCode> {
+    fn start(&mut self, request: &[u8], view: ObjectView) -> Result<(), SdoAbortCode> {
         let info = SdoInfo::new_checked(request).map_err(|_| SdoAbortCode::UnknownCommand)?;
         let data = info.payload();
         match info.opcode() {
@@ -386,7 +390,7 @@ impl SdoInfoServer {
                     self.buffer(SdoInfoOpcode::GetOdListResp, |w| {
                         w.u16(LIST_LENGTHS);
                         for list in ListType::LISTS {
-                            w.u16(u16::try_from(list.count(dict)).unwrap_or(u16::MAX));
+                            w.u16(u16::try_from(list.count(view)).unwrap_or(u16::MAX));
                         }
                     })
                 } else {
@@ -401,7 +405,7 @@ impl SdoInfoServer {
             }
             SdoInfoOpcode::GetObjDescReq => {
                 let index = read_u16(data, 0).ok_or(SdoAbortCode::UnknownCommand)?;
-                let (_, o) = dict.find(index).ok_or(SdoAbortCode::ObjectNotFound)?;
+                let (_, o) = view.find(index).ok_or(SdoAbortCode::ObjectNotFound)?;
                 self.buffer(SdoInfoOpcode::GetObjDescResp, |w| {
                     w.u16(o.index);
                     w.u16(object_data_type(o));
@@ -414,7 +418,7 @@ impl SdoInfoServer {
                 let index = read_u16(data, 0).ok_or(SdoAbortCode::UnknownCommand)?;
                 let sub = data.get(2).copied().ok_or(SdoAbortCode::UnknownCommand)?;
                 let asked = data.get(3).copied().ok_or(SdoAbortCode::UnknownCommand)?;
-                let (_, o) = dict.find(index).ok_or(SdoAbortCode::ObjectNotFound)?;
+                let (_, o) = view.find(index).ok_or(SdoAbortCode::ObjectNotFound)?;
                 let e = o.entry(sub).ok_or(SdoAbortCode::SubindexNotFound)?;
                 self.buffer(SdoInfoOpcode::GetEntryDescResp, |w| {
                     write_entry_description(w, index, e, asked);
@@ -449,9 +453,10 @@ impl SdoInfoServer {
         cursor: usize,
         first: bool,
         out: &mut [u8],
-        dict: &Dictionary,
+        view: ObjectView,
     ) -> Option<usize> {
-        let objects = dict.objects();
+        let objects = view.dict.objects();
+        let listed = |o: &Object| list.contains(o) && view.visible(o.index);
         let (head, body) = out.split_at_mut_checked(SDO_INFO_HEADER_LEN)?;
         // Even fragment size: the list type and every index stay whole.
         let room = body.len() & !1;
@@ -468,7 +473,7 @@ impl SdoInfoServer {
                 .get(cursor..)
                 .unwrap_or(&[])
                 .iter()
-                .position(|o| list.contains(o));
+                .position(listed);
             let Some(skip) = next else {
                 cursor = objects.len();
                 break;
@@ -482,7 +487,7 @@ impl SdoInfoServer {
             .get(cursor..)
             .unwrap_or(&[])
             .iter()
-            .filter(|o| list.contains(o))
+            .filter(|o| listed(o))
             .count()
             .saturating_mul(2);
         self.state = if rest == 0 {
@@ -676,9 +681,9 @@ mod tests {
         let mut server = SdoInfoServer::new();
         let mut out = vec![0u8; size];
         let mut frames = Vec::new();
-        let n = server.handle(req, &mut out, &DICT).expect("a response");
+        let n = server.handle(req, &mut out, ObjectView::all(&DICT)).expect("a response");
         frames.push(out[..n].to_vec());
-        while let Some(n) = server.next_fragment(&mut out, &DICT) {
+        while let Some(n) = server.next_fragment(&mut out, ObjectView::all(&DICT)) {
             frames.push(out[..n].to_vec());
             assert!(frames.len() < 1000);
         }
@@ -700,6 +705,56 @@ mod tests {
         assert_eq!(got, want);
         let rx = data(&exchange(&request(1, &2u16.to_le_bytes()), 128));
         assert_eq!(&rx[2..], &[0x00, 0x70, 0x10, 0x70], "0x7000, 0x7010");
+    }
+
+    #[test]
+    fn objects_of_empty_slots_are_neither_listed_nor_described() {
+        use crate::od::modules::{ModularLayout, SlotRange};
+        static LAYOUT: ModularLayout = ModularLayout {
+            slots: 2,
+            index_distance: 0x10,
+            pdo_increment: 1,
+            ranges: &[SlotRange {
+                base: 0x7000,
+                distance: 0x10,
+                width: 1,
+            }],
+            modules: &[],
+        };
+        // No 0xF050 in the test dictionary: no module detected.
+        let store = crate::testing::store();
+        let view = ObjectView::modular(&DICT, &LAYOUT, store.od());
+        let run = |req: &[u8]| {
+            let mut server = SdoInfoServer::new();
+            let mut out = vec![0u8; 64];
+            let mut frames = vec![];
+            let n = server.handle(req, &mut out, view).unwrap();
+            frames.push(out[..n].to_vec());
+            while let Some(n) = server.next_fragment(&mut out, view) {
+                frames.push(out[..n].to_vec());
+            }
+            frames
+        };
+        let all = data(&run(&request(1, &1u16.to_le_bytes())));
+        let got: Vec<u16> = all[2..]
+            .chunks(2)
+            .map(|c| u16::from_le_bytes([c[0], c[1]]))
+            .collect();
+        let want: Vec<u16> = DICT
+            .objects()
+            .iter()
+            .map(|o| o.index)
+            .filter(|i| *i != 0x7000 && *i != 0x7010)
+            .collect();
+        assert_eq!(got, want);
+        let rx = data(&run(&request(1, &2u16.to_le_bytes())));
+        assert_eq!(rx, [2, 0], "the RxPDO-mappable objects are all in empty slots");
+        let lengths = data(&run(&request(1, &0u16.to_le_bytes())));
+        assert_eq!(&lengths[2..6], &[want.len() as u8, 0, 0, 0], "all; RxPDO list empty");
+        let f = &run(&request(3, &[0x10, 0x70]))[0];
+        assert_eq!(&f[4..8], &0x0602_0000u32.to_le_bytes(), "object does not exist");
+        let f = &run(&request(3, &[0x00, 0x60]))[0];
+        assert_eq!(f[0] & 0x7F, 4, "a device object is still described");
     }
 
     #[test]

@@ -26,11 +26,13 @@
 //!     process_data: ProcessData { sets: &[] },
 //!     mailbox: MailboxConfig::STANDARD,
 //!     esc: EscConfig::DEFAULT,
+//!     modules: None,
 //! };
 //! const _: () = DEVICE.assert_valid(); // contradictions fail the build
 //! ```
 
 use crate::od::dictionary::{DescriptionError, Dictionary};
+use crate::od::modules::ModularLayout;
 use crate::od::{DefaultValue, Object, PdoMapping};
 use crate::pdo::{Direction, MAX_IMAGE, MAX_MAPPED};
 
@@ -177,6 +179,9 @@ pub struct DeviceDescription {
     pub mailbox: MailboxConfig,
     /// ESC and board data for the SII.
     pub esc: EscConfig,
+    /// Slots and modules of a modular device (ETG.5001); `None` for a
+    /// compact device.
+    pub modules: Option<&'static ModularLayout>,
 }
 
 /// Physical layout of the mailboxes and process data buffers in ESC memory.
@@ -350,6 +355,16 @@ impl DeviceDescription {
         let i = &self.identity;
         if !same(id, 1, i.vendor_id) || !same(id, 2, i.product_code) || !same(id, 3, i.revision) {
             return Err(DescriptionError::Identity);
+        }
+        if self.modules.is_some() {
+            let mut k = 0;
+            let needed = [0xF000u16, 0xF030, 0xF050];
+            while k < needed.len() {
+                if find_object(objects, needed[k]).is_none() {
+                    return Err(DescriptionError::MissingObject { index: needed[k] });
+                }
+                k += 1;
+            }
         }
         let sets = self.process_data.sets;
         let mut s = 0usize;

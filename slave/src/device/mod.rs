@@ -33,6 +33,7 @@
 //!     process_data: ProcessData { sets: &[] },
 //!     mailbox: MailboxConfig::STANDARD,
 //!     esc: EscConfig::DEFAULT,
+//!     modules: None,
 //! };
 //! struct Bad;
 //! impl Application for Bad {

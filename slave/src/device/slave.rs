@@ -12,6 +12,7 @@ use crate::firmware::{self, DeviceIdentity, ImageStore};
 use crate::foe::FoeContext;
 use crate::mailbox::MailboxServer;
 use crate::od::complete;
+use crate::od::modules::{CONFIGURED_MODULES, ObjectView};
 use crate::od::store::{ObjectStore, Od};
 use crate::od::types::PdoMapping;
 use crate::od::{Dictionary, ValueStorage};
@@ -220,6 +221,23 @@ impl<E: Esc, A: Application> TransitionChecks for Checks<'_, E, A> {
     }
 
     fn check_process_data(&mut self) -> Result<(), AlStatusCode> {
+        if let Some(m) = A::DESCRIPTION.modules {
+            m.check_configured(self.od)?;
+            // Every assigned PDO must belong to a slot that holds a module.
+            let view = object_view::<A>(self.od);
+            for (assign, code) in [
+                (0x1C12u16, AlStatusCode::InvalidOutputConfig),
+                (0x1C13u16, AlStatusCode::InvalidInputConfig),
+            ] {
+                let n = self.od.get(assign, 0).unwrap_or(0).clamp(0, 255) as u8;
+                for k in 1..=n {
+                    let pdo = self.od.get(assign, k).unwrap_or(0) as u16;
+                    if !view.visible(pdo) {
+                        return Err(code);
+                    }
+                }
+            }
+        }
         let pd = &A::DESCRIPTION.process_data;
         let outputs = ProcessImage::build(self.od, Direction::Outputs, pd)
             .map_err(|_| AlStatusCode::InvalidOutputConfig)?;
@@ -872,7 +890,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
         if self.pending.is_some() {
             return Ok(());
         }
-        let dict: &'static Dictionary = A::DESCRIPTION.dictionary;
+        let view = object_view::<A>(A::Values::view(&self.store));
         if !self.sm_full(0)? {
             // Nothing new: continue a response that spans several mailboxes.
             let (_, inp) = self.mailbox_layout();
@@ -880,7 +898,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
             let mut response = [0u8; MAX_MAILBOX];
             let mut produced = response
                 .get_mut(..max)
-                .and_then(|r| self.mailbox.next_pending(r, dict));
+                .and_then(|r| self.mailbox.next_pending(r, view));
             if produced.is_none() && self.emergencies_enabled && !self.emergencies.is_empty() {
                 produced = response.get_mut(..max).and_then(|r| {
                     let body = r.get_mut(crate::wire::mailbox::HEADER_LEN..)?;
@@ -1077,7 +1095,38 @@ struct OdAccess<'a, A: Application> {
     now_ns: u64,
 }
 
+/// What SDO access and SDO Information show of `A`'s dictionary (a
+/// modular device hides its empty slots).
+fn object_view<A: Application>(od: &Od) -> ObjectView {
+    let dict = A::DESCRIPTION.dictionary;
+    match A::DESCRIPTION.modules {
+        Some(m) => ObjectView::modular(dict, m, od),
+        None => ObjectView::all(dict),
+    }
+}
+
 impl<A: Application> OdAccess<'_, A> {
+    /// A configured module list (0xF030) holds idents of module types the
+    /// device knows (0 for an empty slot), at most one per slot.
+    fn check_module_list(&self, index: u16, changes: &[(u8, i64)]) -> Result<(), SdoAbortCode> {
+        let Some(m) = A::DESCRIPTION.modules else {
+            return Ok(());
+        };
+        if index != CONFIGURED_MODULES {
+            return Ok(());
+        }
+        for (s, v) in changes {
+            if *s == 0 {
+                if *v > i64::from(m.slots) {
+                    return Err(SdoAbortCode::ValueTooHigh);
+                }
+            } else if *v != 0 && m.module(*v as u32).is_none() {
+                return Err(SdoAbortCode::ValueRange);
+            }
+        }
+        Ok(())
+    }
+
     /// The core's rules for 0x1C12/0x1C13: only PDOs of the assignment's
     /// direction that exist, no more than its capacity, all of one PDO set.
     fn check_assignment(&self, index: u16, changes: &[(u8, i64)]) -> Result<(), SdoAbortCode> {
@@ -1103,7 +1152,7 @@ impl<A: Application> OdAccess<'_, A> {
         // Every written PDO must be one of the direction's mapping objects.
         for (s, v) in changes.iter().filter(|(s, _)| *s != 0) {
             let pdo = *v as u16;
-            if pdo < lo || pdo > hi || dict.find(pdo).is_none() {
+            if pdo < lo || pdo > hi || object_view::<A>(self.od).find(pdo).is_none() {
                 let _ = s;
                 return Err(SdoAbortCode::ValueRange);
             }
@@ -1135,6 +1184,7 @@ impl<A: Application> OdAccess<'_, A> {
         changes: &[(u8, i64)],
     ) -> Result<(), SdoAbortCode> {
         self.check_assignment(index, changes)?;
+        self.check_module_list(index, changes)?;
         let d = Download {
             index,
             sub,
@@ -1156,6 +1206,10 @@ impl<A: Application> ObjectAccess for OdAccess<'_, A> {
         A::DESCRIPTION.dictionary
     }
 
+    fn view(&self) -> ObjectView {
+        object_view::<A>(self.od)
+    }
+
     fn sdo_upload(
         &mut self,
         index: u16,
@@ -1163,6 +1217,9 @@ impl<A: Application> ObjectAccess for OdAccess<'_, A> {
         complete_access: bool,
         out: &mut [u8],
     ) -> Result<usize, SdoAbortCode> {
+        if !self.view().visible(index) {
+            return Err(SdoAbortCode::ObjectNotFound);
+        }
         self.app.sdo_upload(self.od, index, sub)?;
         if complete_access {
             return complete::upload(self.od, index, sub, out);
@@ -1177,6 +1234,9 @@ impl<A: Application> ObjectAccess for OdAccess<'_, A> {
         complete_access: bool,
         data: &[u8],
     ) -> Result<(), SdoAbortCode> {
+        if !self.view().visible(index) {
+            return Err(SdoAbortCode::ObjectNotFound);
+        }
         if complete_access {
             let flat_changes = complete::check_download(self.od, index, sub, data, self.state)?;
             let dict = self.od.dictionary();

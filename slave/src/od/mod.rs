@@ -9,6 +9,7 @@
 pub mod build;
 pub mod complete;
 pub mod dictionary;
+pub mod modules;
 pub mod store;
 mod sub_names;
 pub mod types;
