@@ -17,6 +17,7 @@ use ecat_slave::esc::Esc;
 use ecat_slave::esc::registers as reg;
 use ecat_slave::esc::soft::SoftEsc;
 use ecat_slave::od::Dictionary;
+use ecat_slave::od::modules::ModularLayout;
 use ecat_slave::od::types::{
     Access, DataType, DefaultValue, Entry, Object, ObjectCode, PdoMapping,
 };
@@ -249,10 +250,15 @@ pub fn object_bit_size(o: &Object) -> u32 {
     }
 }
 
-fn write_base_types(w: &mut W, dict: &Dictionary) -> io::Result<()> {
+/// The objects of a dictionary an ESI `Dictionary` element describes: of
+/// a modular device the device's own objects, or one module's objects in
+/// slot 0 (ETG.2000 `Modules/Module/Profile`).
+type Objects<'a> = &'a [&'static Object];
+
+fn write_base_types(w: &mut W, dict: &Dictionary, objects: Objects<'_>) -> io::Result<()> {
     // Name -> (sort key, bit size); sorted by CoE code then name.
     let mut base: BTreeMap<(u16, String), u32> = BTreeMap::new();
-    for o in dict.objects() {
+    for o in objects {
         for e in o.entries {
             if matches!(e.data_type, DataType::Enum(_)) {
                 continue;
@@ -311,8 +317,8 @@ fn write_sub_item(
     end(w, "SubItem")
 }
 
-fn write_complex_types(w: &mut W, dict: &Dictionary) -> io::Result<()> {
-    for o in dict.objects() {
+fn write_complex_types(w: &mut W, objects: Objects<'_>) -> io::Result<()> {
+    for o in objects.iter().copied() {
         match o.code {
             ObjectCode::Var => {}
             ObjectCode::Record => {
@@ -393,8 +399,8 @@ fn object_access(o: &Object) -> Access {
     }
 }
 
-fn write_objects(w: &mut W, dict: &Dictionary) -> io::Result<()> {
-    for o in dict.objects() {
+fn write_objects(w: &mut W, objects: Objects<'_>) -> io::Result<()> {
+    for o in objects.iter().copied() {
         start(w, "Object", &[])?;
         text(w, "Index", &hex(u32::from(o.index), 4))?;
         text(w, "Name", o.name)?;
@@ -430,9 +436,9 @@ fn write_objects(w: &mut W, dict: &Dictionary) -> io::Result<()> {
     Ok(())
 }
 
-fn write_unit_types(w: &mut W, dict: &Dictionary) -> io::Result<()> {
+fn write_unit_types(w: &mut W, objects: Objects<'_>) -> io::Result<()> {
     let mut units: BTreeMap<u32, (&str, &str)> = BTreeMap::new();
-    for e in dict.objects().iter().flat_map(|o| o.entries) {
+    for e in objects.iter().flat_map(|o| o.entries) {
         if let Some((code, name, symbol)) = unit_code(e.unit) {
             units.insert(code, (name, symbol));
         }
@@ -452,15 +458,15 @@ fn write_unit_types(w: &mut W, dict: &Dictionary) -> io::Result<()> {
     end(w, "UnitTypes")
 }
 
-fn write_dictionary(w: &mut W, dict: &Dictionary) -> io::Result<()> {
+fn write_dictionary(w: &mut W, dict: &Dictionary, objects: Objects<'_>) -> io::Result<()> {
     start(w, "Dictionary", &[])?;
-    write_unit_types(w, dict)?;
+    write_unit_types(w, objects)?;
     start(w, "DataTypes", &[])?;
-    write_base_types(w, dict)?;
-    write_complex_types(w, dict)?;
+    write_base_types(w, dict, objects)?;
+    write_complex_types(w, objects)?;
     end(w, "DataTypes")?;
     start(w, "Objects", &[])?;
-    write_objects(w, dict)?;
+    write_objects(w, objects)?;
     end(w, "Objects")?;
     end(w, "Dictionary")
 }
@@ -630,6 +636,80 @@ fn watchdog_registers(image: &[u8]) -> [u16; 3] {
     .map(|a| esc.read_u16(a).unwrap_or(0))
 }
 
+/// `Slots` of a modular device (ETG.2000, ETG.5001): one slot per module
+/// position, the first one mandatory, each taking the device's module
+/// types; the configurator downloads the configured module ident list
+/// (0xF030) at PRE-OP→SAFE-OP.
+fn write_slots(w: &mut W, m: &ModularLayout) -> io::Result<()> {
+    let pdo = m.pdo_increment.to_string();
+    let index = hex(u32::from(m.index_distance), 2);
+    let count = m.slots.to_string();
+    start(
+        w,
+        "Slots",
+        &[
+            ("DownloadModuleIdentList", "1"),
+            ("MaxSlotCount", &count),
+            ("SlotPdoIncrement", &pdo),
+            ("SlotIndexIncrement", &index),
+        ],
+    )?;
+    for slot in 0..m.slots {
+        let min = if slot == 0 { "1" } else { "0" };
+        start(w, "Slot", &[("MinInstances", min), ("MaxInstances", "1")])?;
+        text_attrs(
+            w,
+            "Name",
+            &[("LcId", "1033")],
+            &format!("Slot {}", slot + 1),
+        )?;
+        for (k, t) in m.modules.iter().enumerate() {
+            let attrs: &[(&str, &str)] = if k == 0 { &[("Default", "1")] } else { &[] };
+            text_attrs(w, "ModuleIdent", attrs, &hex(t.ident, 8))?;
+        }
+        end(w, "Slot")?;
+    }
+    end(w, "Slots")
+}
+
+/// `Modules`: each module type with its PDOs and objects as in slot 0.
+fn write_modules(w: &mut W, dev: &DeviceDescription, m: &ModularLayout) -> Result<(), EsiError> {
+    start(w, "Modules", &[])?;
+    for t in m.modules {
+        start(w, "Module", &[])?;
+        text_attrs(w, "Type", &[("ModuleIdent", &hex(t.ident, 8))], t.type_name)?;
+        text_attrs(w, "Name", &[("LcId", "1033")], t.name)?;
+        let pdos: Vec<PdoSlot> =
+            t.rx.iter()
+                .map(|&index| PdoSlot {
+                    index,
+                    direction: PdoDirection::Rx,
+                    sm: Some(2),
+                })
+                .chain(t.tx.iter().map(|&index| PdoSlot {
+                    index,
+                    direction: PdoDirection::Tx,
+                    sm: Some(3),
+                }))
+                .collect();
+        for slot in &pdos {
+            write_pdo(w, dev, slot, &pdos)?;
+        }
+        let objects: Vec<&'static Object> = dev
+            .dictionary
+            .objects()
+            .iter()
+            .filter(|o| m.slot_of(o.index) == Some(0))
+            .collect();
+        start(w, "Profile", &[])?;
+        write_dictionary(w, dev.dictionary, &objects)?;
+        end(w, "Profile")?;
+        end(w, "Module")?;
+    }
+    end(w, "Modules")?;
+    Ok(())
+}
+
 /// Generates the ESI XML of the device `dev`.
 pub fn generate(dev: &DeviceDescription) -> Result<Vec<u8>, EsiError> {
     let image = dev.sii_image();
@@ -714,7 +794,13 @@ pub fn generate(dev: &DeviceDescription) -> Result<Vec<u8>, EsiError> {
     text(&mut w, "GroupType", general.group)?;
     start(&mut w, "Profile", &[])?;
     text(&mut w, "ProfileNo", &profile.to_string())?;
-    write_dictionary(&mut w, dev.dictionary)?;
+    let own: Vec<&'static Object> = dev
+        .dictionary
+        .objects()
+        .iter()
+        .filter(|o| dev.modules.is_none_or(|m| m.slot_of(o.index).is_none()))
+        .collect();
+    write_dictionary(&mut w, dev.dictionary, &own)?;
     end(&mut w, "Profile")?;
 
     for u in r.fmmus()? {
@@ -769,6 +855,9 @@ pub fn generate(dev: &DeviceDescription) -> Result<Vec<u8>, EsiError> {
     end(&mut w, "Mailbox")?;
 
     write_dc(&mut w)?;
+    if let Some(m) = dev.modules {
+        write_slots(&mut w, m)?;
+    }
 
     let [divider, pdi, sm_wd] = watchdog_registers(&image);
     start(&mut w, "ESC", &[])?;
@@ -790,6 +879,9 @@ pub fn generate(dev: &DeviceDescription) -> Result<Vec<u8>, EsiError> {
     write_alternative_mappings(&mut w, dev)?;
     end(&mut w, "Device")?;
     end(&mut w, "Devices")?;
+    if let Some(m) = dev.modules {
+        write_modules(&mut w, dev, m)?;
+    }
     end(&mut w, "Descriptions")?;
     end(&mut w, "EtherCATInfo")?;
     let mut out = w.into_inner();

@@ -57,4 +57,5 @@
     )
 )]
 
+pub mod device;
 pub mod telegram;

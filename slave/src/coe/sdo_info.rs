@@ -469,11 +469,7 @@ impl SdoInfoServer {
         }
         let mut cursor = cursor;
         while w.len + 2 <= room {
-            let next = objects
-                .get(cursor..)
-                .unwrap_or(&[])
-                .iter()
-                .position(listed);
+            let next = objects.get(cursor..).unwrap_or(&[]).iter().position(listed);
             let Some(skip) = next else {
                 cursor = objects.len();
                 break;
@@ -681,7 +677,9 @@ mod tests {
         let mut server = SdoInfoServer::new();
         let mut out = vec![0u8; size];
         let mut frames = Vec::new();
-        let n = server.handle(req, &mut out, ObjectView::all(&DICT)).expect("a response");
+        let n = server
+            .handle(req, &mut out, ObjectView::all(&DICT))
+            .expect("a response");
         frames.push(out[..n].to_vec());
         while let Some(n) = server.next_fragment(&mut out, ObjectView::all(&DICT)) {
             frames.push(out[..n].to_vec());
@@ -748,11 +746,23 @@ mod tests {
             .collect();
         assert_eq!(got, want);
         let rx = data(&run(&request(1, &2u16.to_le_bytes())));
-        assert_eq!(rx, [2, 0], "the RxPDO-mappable objects are all in empty slots");
+        assert_eq!(
+            rx,
+            [2, 0],
+            "the RxPDO-mappable objects are all in empty slots"
+        );
         let lengths = data(&run(&request(1, &0u16.to_le_bytes())));
-        assert_eq!(&lengths[2..6], &[want.len() as u8, 0, 0, 0], "all; RxPDO list empty");
+        assert_eq!(
+            &lengths[2..6],
+            &[want.len() as u8, 0, 0, 0],
+            "all; RxPDO list empty"
+        );
         let f = &run(&request(3, &[0x10, 0x70]))[0];
-        assert_eq!(&f[4..8], &0x0602_0000u32.to_le_bytes(), "object does not exist");
+        assert_eq!(
+            &f[4..8],
+            &0x0602_0000u32.to_le_bytes(),
+            "object does not exist"
+        );
         let f = &run(&request(3, &[0x00, 0x60]))[0];
         assert_eq!(f[0] & 0x7F, 4, "a device object is still described");
     }

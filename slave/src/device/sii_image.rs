@@ -74,6 +74,11 @@ impl DeviceDescription {
                 Direction::Inputs => set.tx,
             };
             for &pdo in list {
+                // A modular device's EEPROM cannot know which modules are
+                // plugged: their PDOs are found over CoE (ETG.5001).
+                if self.modules.is_some_and(|m| m.slot_of(pdo).is_some()) {
+                    continue;
+                }
                 if !all.iter().any(|(p, _)| *p == pdo) {
                     let _ = all.push((pdo, (n == 0).then_some(sm)));
                 }
@@ -94,6 +99,7 @@ impl DeviceDescription {
         };
         let bits: usize = list
             .iter()
+            .filter(|&&pdo| !self.modules.is_some_and(|m| m.slot_of(pdo).is_some()))
             .flat_map(|&pdo| mapping_entries(self.dictionary, pdo))
             .map(|(_, _, b)| usize::from(b))
             .sum();
@@ -176,14 +182,16 @@ impl DeviceDescription {
             start: layout.pd_out,
             length: out_len,
             control: SM_CONTROL[2],
-            enable: u8::from(out_len > 0),
+            // A modular device's process data depend on its modules: the
+            // SyncManagers are enabled and sized by the master.
+            enable: u8::from(out_len > 0 || self.modules.is_some()),
             sm_type: sii::SmType::ProcessOut,
         });
         let _ = sms.push(sii::SiiSyncManager {
             start: layout.pd_in,
             length: in_len,
             control: SM_CONTROL[3],
-            enable: u8::from(in_len > 0),
+            enable: u8::from(in_len > 0 || self.modules.is_some()),
             sm_type: sii::SmType::ProcessIn,
         });
         let fmmus = [

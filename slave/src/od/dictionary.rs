@@ -399,14 +399,16 @@ const fn check_entry(
                 return Err(DescriptionError::DefaultOutOfRange { index, sub });
             }
             if sub == 0 && !matches!(code, ObjectCode::Var) {
-                let assignment = index == 0x1C12 || index == 0x1C13;
+                // Lists the master writes in PRE-OP: the PDO assignments
+                // and the configured module ident list (ETG.5001).
+                let list = matches!(index, 0x1C12 | 0x1C13 | 0xF030);
                 let ok = matches!(e.data_type, DataType::UInt8)
                     && v == highest as i64
                     && (matches!(e.access, Access::Ro)
-                        || (assignment && matches!(e.access, Access::RwPreOp)));
-                // A PDO assignment's subindex 0 is the number of assigned
-                // PDOs, not the capacity.
-                let ok = ok || (assignment && v <= highest as i64);
+                        || (list && matches!(e.access, Access::RwPreOp)));
+                // A list's subindex 0 is the number of entries in use,
+                // not the capacity.
+                let ok = ok || (list && v <= highest as i64);
                 if !ok {
                     return Err(DescriptionError::SubIndexZero { index });
                 }

@@ -1,0 +1,179 @@
+use ecat_slave::device::SoftSlave;
+
+use super::model::{id, status};
+use super::*;
+
+fn node3() -> SoftSlave<Dma22Node<3>> {
+    SoftSlave::new(Dma22Node::<3>::default())
+}
+
+#[test]
+fn power_on_detects_the_modules_and_assigns_their_pdos() {
+    let s = node3();
+    let od = s.slave().od();
+    assert_eq!(od.get(0xF050, 0), Some(3));
+    assert_eq!(od.get(0xF050, 3), Some(i64::from(MODULE_IDENT)));
+    assert_eq!(od.get(0xF050, 4), Some(0));
+    assert_eq!(od.get(0x1C12, 0), Some(3));
+    assert_eq!(od.get(0x1C12, 3), Some(0x1602));
+    assert_eq!(od.get(0x1C13, 0), Some(3));
+    assert_eq!(od.get(0x1C13, 1), Some(0x1A00));
+    assert_eq!(model::get(od, 2, id::E22), 3, "E22 = module address");
+    assert_eq!(model::get(od, 0, id::E00), 3, "mode 3");
+    assert_eq!(model::get(od, 0, 0x00), 1001, "Vers 10.01");
+    assert_eq!(od.get(0xF030, 0), Some(0), "nothing configured yet");
+}
+
+#[test]
+fn every_parameter_id_maps_to_its_entry_and_back() {
+    let dict = &od::DICT;
+    let mut found = 0;
+    for pid in 0..=0x109u16 {
+        let (index, sub) = od::parameter(0, pid).unwrap();
+        if let Some((_, e)) = dict.find_entry(index, sub) {
+            found += 1;
+            let name = e.name.split(' ').next().unwrap();
+            assert!(!name.is_empty(), "ID {pid:#x}");
+        }
+    }
+    assert_eq!(found, 180, "every implemented row of chapter 7");
+    assert_eq!(od::parameter(0, 0x10A), None);
+    let (i, s) = od::parameter(2, id::A1_01).unwrap();
+    assert_eq!((i, s), (0x8020, 0x20));
+    assert_eq!(
+        dict.find_entry(i, s).unwrap().1.name,
+        "A1.01 Ethernet set value (Branch 1)"
+    );
+}
+
+fn run(
+    m: &mut model::Module,
+    od: &mut Od,
+    slot: u8,
+    mode: u8,
+    t_ms: u64,
+    valid: bool,
+) -> Option<u8> {
+    m.tick(od, slot, mode, t_ms * 1_000_000, valid)
+}
+
+fn outputs(od: &mut Od, slot: u8, control: u8, pv1: i16, pv2: i16) {
+    let o = od::slot_index(od::OUTPUTS, slot);
+    od.set(o, 1, i64::from(control));
+    od.set(o, 2, i64::from(pv1));
+    od.set(o, 3, i64::from(pv2));
+}
+
+fn inputs(od: &Od, slot: u8) -> (u16, i16, i16) {
+    let i = od::slot_index(od::INPUTS, slot);
+    (
+        od.get(i, 1).unwrap() as u16,
+        od.get(i, 2).unwrap() as i16,
+        od.get(i, 3).unwrap() as i16,
+    )
+}
+
+#[test]
+fn manual_5_4_2_three_modules_in_mode_3_answer_their_set_values() {
+    let mut s = node3();
+    let od = s.slave_mut().od_mut();
+    let mut ms = [model::Module::new(); 3];
+    for (slot, sv) in [(0u8, 1000i16), (1, 2000), (2, -3000)] {
+        outputs(od, slot, 0x00, sv, 0);
+        run(&mut ms[usize::from(slot)], od, slot, 3, 0, true);
+        // VALUE1 = d1.11 = 0, VALUE2 = d1.10 = the set value, HW enable.
+        assert_eq!(
+            inputs(od, slot),
+            (status::HW_ENABLE, 0, sv),
+            "module {}",
+            slot + 1
+        );
+        assert_eq!(model::get(od, slot, id::A1_01), i64::from(sv));
+    }
+}
+
+#[test]
+fn bus_disable_drops_the_output_and_shows_in_the_status_word() {
+    let mut s = node3();
+    let od = s.slave_mut().od_mut();
+    let mut m = model::Module::new();
+    // Mode 1: value 1 and 2 are the currents A and B.
+    outputs(od, 0, 0x00, 5000, 0);
+    run(&mut m, od, 0, 1, 0, true);
+    let (_, ia, ib) = inputs(od, 0);
+    // 50 % of the 2.7 A solenoid (E03 = 6, E10 = 100 %).
+    assert_eq!((ia, ib), (1350, 0));
+    outputs(od, 0, 0x80, 5000, 0);
+    run(&mut m, od, 0, 1, 1, true);
+    assert_eq!(
+        inputs(od, 0),
+        (status::HW_ENABLE | status::BUS_DISABLE, 0, 0)
+    );
+    outputs(od, 0, 0x00, -5000, 0);
+    run(&mut m, od, 0, 1, 2, true);
+    assert_eq!(inputs(od, 0), (status::HW_ENABLE, 0, 1350), "solenoid B");
+}
+
+#[test]
+fn ramps_move_the_desired_value_at_the_configured_rate() {
+    let mut s = node3();
+    let od = s.slave_mut().od_mut();
+    let mut m = model::Module::new();
+    // r1.03 (0 -> +) = 100: 1 s for 10 V, 1 V per 100 ms.
+    model::set(od, 0, id::R1_01 + 2, 100);
+    outputs(od, 0, 0, 5000, 0);
+    run(&mut m, od, 0, 3, 0, true);
+    assert_eq!(model::get(od, 0, id::D1_10), 0);
+    run(&mut m, od, 0, 3, 100, true);
+    assert_eq!(model::get(od, 0, id::D1_10), 1000);
+    run(&mut m, od, 0, 3, 1000, true);
+    assert_eq!(model::get(od, 0, id::D1_10), 5000, "reached, not passed");
+}
+
+#[test]
+fn timeout_e23_with_e26_0_resumes_and_with_e26_1_needs_an_acknowledge() {
+    for e26 in [0, 1] {
+        let mut s = node3();
+        let od = s.slave_mut().od_mut();
+        let mut m = model::Module::new();
+        model::set(od, 0, id::E23, 5); // 50 ms
+        model::set(od, 0, id::E26, e26);
+        outputs(od, 0, 0, 1000, 0);
+        assert_eq!(run(&mut m, od, 0, 3, 0, true), None);
+        assert_eq!(run(&mut m, od, 0, 3, 40, false), None, "within E23");
+        assert_eq!(inputs(od, 0).2, 1000, "set value held within the window");
+        assert_eq!(
+            run(&mut m, od, 0, 3, 60, false),
+            Some(model::error::TIMEOUT)
+        );
+        let (st, _, v2) = inputs(od, 0);
+        assert_eq!(st, status::HW_ENABLE | status::ERROR | 0x0A);
+        assert_eq!(v2, 0, "set values discarded");
+        outputs(od, 0, 0, 1000, 0);
+        run(&mut m, od, 0, 3, 70, true);
+        if e26 == 0 {
+            assert_eq!(inputs(od, 0), (status::HW_ENABLE, 0, 1000), "resumes");
+        } else {
+            assert_eq!(inputs(od, 0).0 & status::ERROR, status::ERROR, "latched");
+            outputs(od, 0, 0x80, 1000, 0);
+            run(&mut m, od, 0, 3, 80, true);
+            outputs(od, 0, 0x00, 1000, 0);
+            run(&mut m, od, 0, 3, 90, true);
+            assert_eq!(inputs(od, 0), (status::HW_ENABLE, 0, 1000), "acknowledged");
+            assert_eq!(m.errors, 1);
+        }
+    }
+}
+
+#[test]
+fn without_hw_enable_the_control_byte_is_reset_and_nothing_drives() {
+    let mut s = node3();
+    let od = s.slave_mut().od_mut();
+    let mut m = model::Module::new();
+    m.hw_enable = false;
+    outputs(od, 0, 0x81, 2000, 0);
+    run(&mut m, od, 0, 3, 0, true);
+    assert_eq!(m.control(), 0);
+    assert_eq!(inputs(od, 0), (0, 0, 0));
+    assert_eq!(model::get(od, 0, id::D1_07), 0);
+}
