@@ -32,14 +32,15 @@ cd "$(dirname "$0")/.."
 
 mode="${1:-smoke}"
 shift || true
-all_targets=(line_frames mailbox sii esi efw)
+all_targets=(line_frames mailbox sii esi efw hcs_telegram)
 if [ $# -gt 0 ]; then targets=("$@"); else targets=("${all_targets[@]}"); fi
 
 sanitizer="${FUZZ_SANITIZER:-none}"
 log_dir="${FUZZ_LOG_DIR:-fuzz/logs}"
 
 # Largest input per target: several frames, a bootstrap mailbox, a 4 KiB
-# SII image as Intel HEX, an ESI of a small device.
+# SII image as Intel HEX, an ESI of a small device, an HCS telegram (at
+# most 28 bytes) in a process-data buffer.
 max_len() {
     case "$1" in
         line_frames) echo 16384 ;;
@@ -47,6 +48,7 @@ max_len() {
         sii) echo 16384 ;;
         esi) echo 65536 ;;
         efw) echo 8192 ;;
+        hcs_telegram) echo 128 ;;
         *) echo 4096 ;;
     esac
 }

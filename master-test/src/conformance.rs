@@ -750,6 +750,21 @@ async fn sii_checks(r: &mut Run<'_>, esi: Option<&str>) {
     } else {
         let mut diffs = Vec::new();
         let mut compared = 0;
+        // A modular device (ETG.5001, 0xF050 readable): its modules' PDOs
+        // are not in the SII but in the ESI's `Modules`, moved into their
+        // slots.
+        let modules = detected_modules(c).await;
+        let module_pdos = match (&modules, esi) {
+            (Some(idents), Some(xml)) => match esi_module_pdos(xml, idents) {
+                Ok(p) => p,
+                Err(e) => {
+                    diffs.push(format!("the ESI's modules cannot be read: {e}"));
+                    Vec::new()
+                }
+            },
+            _ => Vec::new(),
+        };
+        let mut unchecked = 0;
         for (assign, dir) in [
             (0x1C12u16, ecat_slave::sii::PdoDirection::Rx),
             (0x1C13, ecat_slave::sii::PdoDirection::Tx),
@@ -766,12 +781,39 @@ async fn sii_checks(r: &mut Run<'_>, esi: Option<&str>) {
                     v.first().copied().unwrap_or(0),
                     v.get(1).copied().unwrap_or(0),
                 ]);
-                let Some(info) = ins
+                let described: Option<Vec<u32>> = ins
                     .pdos
                     .iter()
                     .find(|p| p.index == pdo && p.direction == dir)
-                else {
-                    diffs.push(format!("PDO {pdo:#06x} assigned but not in the SII"));
+                    .map(|info| {
+                        info.entries
+                            .iter()
+                            .map(|e| {
+                                (u32::from(e.index) << 16)
+                                    | (u32::from(e.sub) << 8)
+                                    | u32::from(e.bit_len)
+                            })
+                            .collect()
+                    })
+                    .or_else(|| {
+                        module_pdos
+                            .iter()
+                            .find(|(p, _)| *p == pdo)
+                            .map(|(_, e)| e.clone())
+                    });
+                let Some(sii) = described else {
+                    if modules.is_some() && esi.is_none() {
+                        unchecked += 1;
+                    } else {
+                        diffs.push(format!(
+                            "PDO {pdo:#06x} assigned but not in the SII{}",
+                            if modules.is_some() {
+                                " nor in the ESI's modules"
+                            } else {
+                                ""
+                            }
+                        ));
+                    }
                     continue;
                 };
                 let mut live = Vec::new();
@@ -788,21 +830,24 @@ async fn sii_checks(r: &mut Run<'_>, esi: Option<&str>) {
                         live.push(u32::from_le_bytes([v[0], v[1], v[2], v[3]]));
                     }
                 }
-                let sii: Vec<u32> = info
-                    .entries
-                    .iter()
-                    .map(|e| {
-                        (u32::from(e.index) << 16) | (u32::from(e.sub) << 8) | u32::from(e.bit_len)
-                    })
-                    .collect();
                 compared += 1;
                 if live != sii {
-                    diffs.push(format!("PDO {pdo:#06x}: SII {sii:08x?}, live {live:08x?}"));
+                    diffs.push(format!(
+                        "PDO {pdo:#06x}: described {sii:08x?}, live {live:08x?}"
+                    ));
                 }
             }
         }
         if diffs.is_empty() {
-            Outcome::Pass(format!("{compared} assigned PDO(s) agree"))
+            let modular = match (&modules, unchecked) {
+                (Some(m), 0) => format!(" ({} module(s): their PDOs from the ESI)", m.len()),
+                (Some(m), n) => format!(
+                    " ({} module(s): {n} module PDO(s) unchecked without an ESI)",
+                    m.len()
+                ),
+                (None, _) => String::new(),
+            };
+            Outcome::Pass(format!("{compared} assigned PDO(s) agree{modular}"))
         } else {
             Outcome::Fail(diffs.join("; "))
         }
@@ -1831,30 +1876,32 @@ async fn coe_checks(r: &mut Run<'_>, esi: Option<&str>) {
     let o = match (esi, list.is_empty()) {
         (None, _) => Outcome::NotApplicable("no ESI given (--esi FILE)".into()),
         (Some(_), true) => Outcome::NotApplicable("no OD list".into()),
-        (Some(xml), false) => match esi_objects(xml) {
-            Err(e) => Outcome::Fail(format!("the ESI cannot be read: {e}")),
-            Ok(esi) => {
-                let missing: Vec<String> = esi
-                    .iter()
-                    .filter(|i| !list.contains(i))
-                    .map(|i| format!("{i:#06x}"))
-                    .collect();
-                let extra: Vec<String> = list
-                    .iter()
-                    .filter(|i| !esi.contains(i))
-                    .map(|i| format!("{i:#06x}"))
-                    .collect();
-                if missing.is_empty() && extra.is_empty() {
-                    Outcome::Pass(format!("{} objects", list.len()))
-                } else {
-                    Outcome::Fail(format!(
-                        "in the ESI only: [{}]; in the OD list only: [{}]",
-                        missing.join(", "),
-                        extra.join(", ")
-                    ))
+        (Some(xml), false) => {
+            match esi_objects(xml, &detected_modules(&mut c).await.unwrap_or_default()) {
+                Err(e) => Outcome::Fail(format!("the ESI cannot be read: {e}")),
+                Ok(esi) => {
+                    let missing: Vec<String> = esi
+                        .iter()
+                        .filter(|i| !list.contains(i))
+                        .map(|i| format!("{i:#06x}"))
+                        .collect();
+                    let extra: Vec<String> = list
+                        .iter()
+                        .filter(|i| !esi.contains(i))
+                        .map(|i| format!("{i:#06x}"))
+                        .collect();
+                    if missing.is_empty() && extra.is_empty() {
+                        Outcome::Pass(format!("{} objects", list.len()))
+                    } else {
+                        Outcome::Fail(format!(
+                            "in the ESI only: [{}]; in the OD list only: [{}]",
+                            missing.join(", "),
+                            extra.join(", ")
+                        ))
+                    }
                 }
             }
-        },
+        }
     };
     r.record(ids[9].0, ids[9].1, ids[9].2, o);
 
@@ -1877,8 +1924,108 @@ async fn coe_checks(r: &mut Run<'_>, esi: Option<&str>) {
     r.record(emergency_id.0, emergency_id.1, emergency_id.2, o);
 }
 
-/// The object indices of an ESI's dictionary (first device).
-fn esi_objects(xml: &str) -> Result<Vec<u16>, String> {
+/// The module idents of a modular device's detected module list (0xF050),
+/// or `None` for a device without one.
+async fn detected_modules(c: &mut MailboxClient<'_>) -> Option<Vec<u32>> {
+    let n = c.sdo_upload(0xF050, 0, false).await.ok()?;
+    let mut idents = Vec::new();
+    for s in 1..=n.first().copied().unwrap_or(0) {
+        let v = c.sdo_upload(0xF050, s, false).await.ok()?;
+        idents.push(u32::from_le_bytes(v.get(..4)?.try_into().ok()?));
+    }
+    Some(idents)
+}
+
+/// An ESI's `Slots` increments and its module types.
+struct EsiModules<'a> {
+    /// `SlotIndexIncrement`.
+    index_step: u16,
+    /// `SlotPdoIncrement`.
+    pdo_step: u16,
+    /// `(ModuleIdent, Module)`.
+    modules: Vec<(u32, &'a ecat_esi::xml::Element)>,
+}
+
+/// The ESI's `Slots` increments (index, PDO) and its modules by ident.
+fn esi_modules(root: &ecat_esi::xml::Element) -> Result<EsiModules<'_>, String> {
+    let slots = root
+        .path("Descriptions/Devices/Device/Slots")
+        .ok_or("no Device/Slots")?;
+    let inc = |name: &str| {
+        slots
+            .attr(name)
+            .and_then(ecat_esi::xml::hex_dec)
+            .and_then(|v| u16::try_from(v).ok())
+            .ok_or(format!("Slots without a valid {name}"))
+    };
+    let (index_step, pdo_step) = (inc("SlotIndexIncrement")?, inc("SlotPdoIncrement")?);
+    let modules = root
+        .path("Descriptions/Modules")
+        .ok_or("no Descriptions/Modules")?
+        .children_named("Module")
+        .map(|m| {
+            m.path("Type")
+                .and_then(|t| t.attr("ModuleIdent"))
+                .and_then(ecat_esi::xml::hex_dec)
+                .and_then(|v| u32::try_from(v).ok())
+                .map(|id| (id, m))
+                .ok_or_else(|| "a Module without a valid ModuleIdent".to_string())
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(EsiModules {
+        index_step,
+        pdo_step,
+        modules,
+    })
+}
+
+/// The PDOs the ESI's modules give a modular device with `idents` in its
+/// slots (in order): `(PDO index, mapping entries index << 16 | sub << 8 |
+/// bits)`, moved into each slot by `SlotPdoIncrement` and
+/// `SlotIndexIncrement` (ETG.2000 `Slots`, ETG.5001).
+fn esi_module_pdos(xml: &str, idents: &[u32]) -> Result<Vec<(u16, Vec<u32>)>, String> {
+    let root = ecat_esi::xml::parse(xml).map_err(|e| e.to_string())?;
+    let EsiModules {
+        index_step,
+        pdo_step,
+        modules,
+    } = esi_modules(&root)?;
+    let mut out = Vec::new();
+    for (slot, ident) in idents.iter().enumerate() {
+        let slot = u16::try_from(slot).map_err(|_| "too many slots")?;
+        let (_, m) = modules
+            .iter()
+            .find(|(id, _)| id == ident)
+            .ok_or(format!("no Module with ident {ident:#010x}"))?;
+        for pdo in m.children_named("RxPdo").chain(m.children_named("TxPdo")) {
+            let hex = |e: &ecat_esi::xml::Element, p: &str| {
+                e.text_at(p)
+                    .and_then(ecat_esi::xml::hex_dec)
+                    .and_then(|v| u32::try_from(v).ok())
+            };
+            let index = hex(pdo, "Index").ok_or("a module PDO without an Index")?;
+            let mut entries = Vec::new();
+            for e in pdo.children_named("Entry") {
+                let i = hex(e, "Index").ok_or("a PDO entry without an Index")?;
+                let sub = hex(e, "SubIndex").unwrap_or(0);
+                let bits = hex(e, "BitLen").ok_or("a PDO entry without a BitLen")?;
+                let i = if i == 0 {
+                    0
+                } else {
+                    i + u32::from(index_step) * u32::from(slot)
+                };
+                entries.push((i << 16) | (sub << 8) | bits);
+            }
+            let moved = index as u16 + pdo_step * slot;
+            out.push((moved, entries));
+        }
+    }
+    Ok(out)
+}
+
+/// The object indices of an ESI's dictionary (first device); of a modular
+/// device also its modules' objects for the modules `idents` in its slots.
+fn esi_objects(xml: &str, idents: &[u32]) -> Result<Vec<u16>, String> {
     let root = ecat_esi::xml::parse(xml).map_err(|e| e.to_string())?;
     let device = root
         .path("Descriptions/Devices/Device")
@@ -1886,15 +2033,44 @@ fn esi_objects(xml: &str) -> Result<Vec<u16>, String> {
     let objects = device
         .path("Profile/Dictionary/Objects")
         .ok_or("no Profile/Dictionary/Objects")?;
-    objects
+    let index_of = |o: &ecat_esi::xml::Element| {
+        o.text_at("Index")
+            .and_then(ecat_esi::xml::hex_dec)
+            .and_then(|v| u16::try_from(v).ok())
+            .ok_or_else(|| "an Object without a valid Index".to_string())
+    };
+    let mut out: Vec<u16> = objects
         .children_named("Object")
-        .map(|o| {
-            o.text_at("Index")
-                .and_then(ecat_esi::xml::hex_dec)
-                .and_then(|v| u16::try_from(v).ok())
-                .ok_or_else(|| "an Object without a valid Index".to_string())
-        })
-        .collect()
+        .map(index_of)
+        .collect::<Result<_, _>>()?;
+    if !idents.is_empty() {
+        let EsiModules {
+            index_step,
+            pdo_step,
+            modules,
+        } = esi_modules(&root)?;
+        for (slot, ident) in idents.iter().enumerate() {
+            let slot = u16::try_from(slot).map_err(|_| "too many slots")?;
+            let (_, m) = modules
+                .iter()
+                .find(|(id, _)| id == ident)
+                .ok_or(format!("no Module with ident {ident:#010x}"))?;
+            let objs = m
+                .path("Profile/Dictionary/Objects")
+                .ok_or("a Module without Profile/Dictionary/Objects")?;
+            for o in objs.children_named("Object") {
+                let i = index_of(o)?;
+                let step = if (0x1600..=0x1BFF).contains(&i) {
+                    pdo_step
+                } else {
+                    index_step
+                };
+                out.push(i + step * slot);
+            }
+        }
+        out.sort_unstable();
+    }
+    Ok(out)
 }
 
 // ---------------------------------------------------------------- FoE --
@@ -2071,8 +2247,8 @@ mod tests {
     #[test]
     fn esi_objects_come_from_the_dictionary_of_the_first_device() {
         let xml = ecat_esi::esi::generate(&pam_199_p_etc::DEVICE).unwrap();
-        let objects = esi_objects(std::str::from_utf8(&xml).unwrap()).unwrap();
+        let objects = esi_objects(std::str::from_utf8(&xml).unwrap(), &[]).unwrap();
         assert!(objects.contains(&0x1018) && objects.contains(&0x800D));
-        assert!(esi_objects("<EtherCATInfo/>").is_err());
+        assert!(esi_objects("<EtherCATInfo/>", &[]).is_err());
     }
 }

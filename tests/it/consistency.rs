@@ -37,10 +37,55 @@ struct EsiEntry {
     default: Option<Vec<u8>>,
 }
 
-/// index -> (object name, sub -> entry)
-fn esi_dictionary(doc: &Element) -> BTreeMap<u16, (String, BTreeMap<u8, EsiEntry>)> {
+type EsiDictionary = BTreeMap<u16, (String, BTreeMap<u8, EsiEntry>)>;
+
+/// The device's objects as its ESI describes them; for a modular device
+/// (ETG.2000 `Slots`) also the objects of the module in each slot of
+/// `modules` (its `ModuleIdent`, in slot order), at the slot-0 index plus
+/// slot × `SlotIndexIncrement`.
+fn esi_dictionary(doc: &Element, modules: &[u32]) -> EsiDictionary {
     let dev = doc.path("Descriptions/Devices/Device").expect("device");
-    let dict = dev.path("Profile/Dictionary").expect("dictionary");
+    let mut out = profile_dictionary(dev.path("Profile/Dictionary").expect("dictionary"), 0, 0);
+    if let Some(slots) = dev.path("Slots") {
+        let step = hex_dec(
+            slots
+                .attr("SlotIndexIncrement")
+                .expect("SlotIndexIncrement"),
+        )
+        .unwrap();
+        let pdo_step = hex_dec(slots.attr("SlotPdoIncrement").expect("SlotPdoIncrement")).unwrap();
+        let types: Vec<&Element> = doc
+            .path("Descriptions/Modules")
+            .expect("Modules")
+            .children_named("Module")
+            .collect();
+        for (slot, ident) in modules.iter().enumerate() {
+            let module = types
+                .iter()
+                .find(|m| {
+                    m.path("Type")
+                        .and_then(|t| t.attr("ModuleIdent"))
+                        .and_then(hex_dec)
+                        == Some(i64::from(*ident))
+                })
+                .unwrap_or_else(|| panic!("no ESI module with ident {ident:#x}"));
+            let dict = module
+                .path("Profile/Dictionary")
+                .expect("module dictionary");
+            out.extend(profile_dictionary(
+                dict,
+                (step as usize * slot) as u16,
+                (pdo_step as usize * slot) as u16,
+            ));
+        }
+    }
+    out
+}
+
+/// The objects of one ESI `Dictionary`, their indices moved by `shift`
+/// (PDO mapping objects by `pdo_shift`, the objects they map by `shift`,
+/// as a configurator places a module into a slot, ETG.2000 `Slots`).
+fn profile_dictionary(dict: &Element, shift: u16, pdo_shift: u16) -> EsiDictionary {
     let types: BTreeMap<String, &Element> = dict
         .path("DataTypes")
         .expect("data types")
@@ -54,6 +99,8 @@ fn esi_dictionary(doc: &Element) -> BTreeMap<u16, (String, BTreeMap<u8, EsiEntry
         .children_named("Object")
     {
         let index = hex_dec(obj.text_at("Index").unwrap()).unwrap() as u16;
+        let mapping = (0x1600..=0x1BFF).contains(&index);
+        let index = index + if mapping { pdo_shift } else { shift };
         let name = obj.text_at("Name").unwrap().to_string();
         let type_name = obj.text_at("Type").unwrap().to_string();
         let mut entries = BTreeMap::new();
@@ -159,6 +206,16 @@ fn esi_dictionary(doc: &Element) -> BTreeMap<u16, (String, BTreeMap<u8, EsiEntry
                 }
             }
         }
+        if mapping && shift != 0 {
+            // A mapping entry is index << 16 | sub << 8 | bits, LE.
+            for e in entries.values_mut().filter(|e| e.bit_size == 32) {
+                if let Some(d) = e.default.as_mut().filter(|d| d.len() == 4) {
+                    let v = u32::from_le_bytes([d[0], d[1], d[2], d[3]]);
+                    let moved = v.wrapping_add(u32::from(shift) << 16);
+                    d.copy_from_slice(&moved.to_le_bytes());
+                }
+            }
+        }
         out.insert(index, (name, entries));
     }
     out
@@ -175,6 +232,8 @@ fn access_bits(esi: &str) -> Option<u16> {
 
 /// What the comparison of one device's ESI with its live slave covered.
 struct Compared {
+    /// Modules detected (0xF050) of a modular device.
+    modules: u8,
     entries: usize,
     gaps: usize,
     ranges: usize,
@@ -188,17 +247,38 @@ fn esi_equals_sdo_information(key: &str) -> Compared {
     let dev = entry.description;
     let xml = ecat_esi::generate(dev).expect("ESI");
     let doc = ecat_esi::xml::parse(std::str::from_utf8(&xml).unwrap()).expect("parse");
-    let esi = esi_dictionary(&doc);
     smol::block_on(async {
         let bus = VirtualBus::line(key, master_test::link::Clock::real()).expect("bus");
         let md = &*bus.maindevice;
         let group = bus.init().await.expect("init");
         let station = group.subdevice(md, 0).expect("slave").configured_address();
         let mut c = MailboxClient::new(md, station, MailboxGeometry::of(&dev.layout()));
+        // A modular device: the modules it detected, as a master reads them.
+        let mut modules = Vec::new();
+        if dev.modules.is_some() {
+            let n = c.sdo_upload(0xF050, 0, false).await.expect("0xF050:00")[0];
+            for s in 1..=n {
+                let v = c.sdo_upload(0xF050, s, false).await.expect("0xF050");
+                modules.push(u32::from_le_bytes(v[..4].try_into().unwrap()));
+            }
+        }
+        let esi = esi_dictionary(&doc, &modules);
+        let slots = modules.len() as u8;
+        let visible = |index: u16| {
+            dev.modules
+                .and_then(|m| m.slot_of(index))
+                .is_none_or(|s| s < slots)
+        };
         let live: Vec<u16> = od_list(&mut c, 1).await.expect("OD list");
         let esi_indices: Vec<u16> = esi.keys().copied().collect();
         assert_eq!(live, esi_indices, "{key}: object lists");
-        let model_indices: Vec<u16> = dev.dictionary.objects().iter().map(|o| o.index).collect();
+        let model_indices: Vec<u16> = dev
+            .dictionary
+            .objects()
+            .iter()
+            .map(|o| o.index)
+            .filter(|i| visible(*i))
+            .collect();
         assert_eq!(live, model_indices, "{key}");
         let mut checked = 0;
         let mut gaps = 0;
@@ -261,7 +341,7 @@ fn esi_equals_sdo_information(key: &str) -> Compared {
         // Ranges: every entry with a min/max in the model reports exactly
         // those through SDO Information (value info: minimum | maximum).
         let mut ranges = 0;
-        for obj in dev.dictionary.objects() {
+        for obj in dev.dictionary.objects().iter().filter(|o| visible(o.index)) {
             for e in obj.entries {
                 let (Some(min), Some(max)) = (e.min, e.max) else {
                     continue;
@@ -288,6 +368,7 @@ fn esi_equals_sdo_information(key: &str) -> Compared {
             }
         }
         Compared {
+            modules: slots,
             entries: checked,
             gaps,
             ranges,
@@ -310,15 +391,29 @@ fn every_catalog_device_reports_over_sdo_information_what_its_esi_says() {
         let c = esi_equals_sdo_information(d.key);
         let dict = d.description.dictionary;
         assert_eq!(
+            c.modules > 0,
+            d.description.modules.is_some(),
+            "{}: a modular device's module objects were compared",
+            d.key
+        );
+        // Of a modular device, the objects of the slots that hold a module.
+        let shown = || {
+            dict.entries().filter(|(_, o, _)| {
+                d.description
+                    .modules
+                    .and_then(|m| m.slot_of(o.index))
+                    .is_none_or(|s| s < c.modules)
+            })
+        };
+        assert_eq!(
             c.entries,
-            dict.entry_count(),
+            shown().count(),
             "{}: every entry compared",
             d.key
         );
-        let want_gaps = dict.entries().filter(|(_, _, e)| e.gap).count();
+        let want_gaps = shown().filter(|(_, _, e)| e.gap).count();
         assert_eq!(c.gaps, want_gaps, "{}", d.key);
-        let want_ranges = dict
-            .entries()
+        let want_ranges = shown()
             .filter(|(_, _, e)| e.min.is_some() && e.max.is_some())
             .count();
         assert_eq!(c.ranges, want_ranges, "{}", d.key);

@@ -11,6 +11,7 @@ mod common;
 mod conformance;
 mod consistency;
 mod dc;
+mod dma22;
 mod failsafe;
 mod faults;
 mod foe;

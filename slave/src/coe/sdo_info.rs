@@ -349,7 +349,13 @@ impl SdoInfoServer {
     /// on) of the first response fragment into `out` and returns its
     /// length; `None` if `out` cannot hold even the smallest response.
     /// A response still in progress is abandoned.
-    pub fn handle(&mut self, request: &[u8], out: &mut [u8], view: ObjectView) -> Option<usize> {
+    pub fn handle(
+        &mut self,
+        request: &[u8],
+        out: &mut [u8],
+        view: impl Into<ObjectView>,
+    ) -> Option<usize> {
+        let view = view.into();
         self.state = InfoState::Idle;
         match self.start(request, view) {
             Ok(()) => self.next_fragment(out, view),
@@ -360,7 +366,8 @@ impl SdoInfoServer {
     /// Writes the next fragment of the response in progress into `out` and
     /// returns its length; `None` when no response is in progress. If `out`
     /// cannot carry any service data the response is abandoned.
-    pub fn next_fragment(&mut self, out: &mut [u8], view: ObjectView) -> Option<usize> {
+    pub fn next_fragment(&mut self, out: &mut [u8], view: impl Into<ObjectView>) -> Option<usize> {
+        let view = view.into();
         let state = self.state;
         let written = match state {
             InfoState::Idle => None,

@@ -99,7 +99,7 @@ impl DeviceDescription {
         };
         let bits: usize = list
             .iter()
-            .filter(|&&pdo| !self.modules.is_some_and(|m| m.slot_of(pdo).is_some()))
+            .filter(|&&pdo| self.modules.is_none_or(|m| m.slot_of(pdo).is_none()))
             .flat_map(|&pdo| mapping_entries(self.dictionary, pdo))
             .map(|(_, _, b)| usize::from(b))
             .sum();

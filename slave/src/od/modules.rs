@@ -167,6 +167,12 @@ impl ModularLayout {
     }
 }
 
+impl From<&'static Dictionary> for ObjectView {
+    fn from(dict: &'static Dictionary) -> Self {
+        ObjectView::all(dict)
+    }
+}
+
 /// What of a dictionary a master sees: every object of a compact device;
 /// of a modular device, the device's own objects and those of the slots
 /// that hold a module.

@@ -38,8 +38,8 @@ pub const REVISION: u32 = 1;
 pub const MODULE_IDENT: u32 = 0x0022_0001;
 /// Slots of the node (CMD 15 addresses at most 5 modules, 000 5.1).
 pub const SLOTS: u8 = 5;
-/// Device name (0x1008).
-pub const DEVICE_NAME: &str = "DMA-22(A) EtherCAT node";
+/// Device name (0x1008; the SII's device type, string 1, which SOEM shows).
+pub const DEVICE_NAME: &str = "DMA-22(A)-ECAT";
 
 /// The node, described once.
 pub const DEVICE: DeviceDescription = DeviceDescription {
@@ -51,8 +51,8 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
     },
     names: DeviceNames {
         vendor: "HCS Hydraulic Control Systems GmbH",
-        type_name: "DMA-22(A)-ECAT",
-        name: DEVICE_NAME,
+        type_name: DEVICE_NAME,
+        name: "DMA-22(A) EtherCAT node",
         group_type: "DMA",
         group_name: "HCS digital amplifiers",
     },

@@ -160,6 +160,10 @@ const TX3: [Entry; 4] = tx_map(3);
 const TX4: [Entry; 4] = tx_map(4);
 
 /// 0xF030 / 0xF050 entries: count and one ident per slot.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "evaluated only in const items: an index out of range fails the build"
+)]
 const fn ident_list(access: Access) -> [Entry; 6] {
     let mut l = [
         sub0(SLOTS),
@@ -281,6 +285,10 @@ const fn copy(o: &Object) -> Object {
     }
 }
 
+#[allow(
+    clippy::indexing_slicing,
+    reason = "evaluated only in const items: an index out of range fails the build"
+)]
 const fn join<const N: usize>(parts: &[&[Object]]) -> [Object; N] {
     let mut out = [const {
         Object {
