@@ -399,6 +399,60 @@ def dc(iface, count):
     m.close()
 
 
+MODULE_IDENT = 0x0022_0001
+
+
+def dma22(iface):
+    """HCS DMA-22(A) node, 3 modules in mode 3 (modular device, ETG.5001):
+    a wrong configured module list (0xF030) is refused at SAFE-OP with
+    AL status 0x0070; with the right one the node reaches OP and the
+    manual's 5.4.2 set values (1.000 V, 2.000 V, -3.000 V) come back as
+    each module's desired value d1.10 with HW enable set."""
+    m, n = open_master(iface)
+    check(n == 1, f"SOEM config_init found {n} slave(s) (1 expected)")
+    s = m.slaves[0]
+    check(s.name == "DMA-22(A)-ECAT", f"SII name {s.name!r}")
+    detected = s.sdo_read(0xF050, 0)[0]
+    idents = [struct.unpack("<I", s.sdo_read(0xF050, k))[0] for k in range(1, detected + 1)]
+    check(detected == 3 and idents == [MODULE_IDENT] * 3,
+          f"0xF050 detected module list: {detected} x {[hex(i) for i in idents]}")
+    set_sm_watchdog(m, LONG_WATCHDOG_MS)
+    for k in (1, 2):
+        s.sdo_write(0xF030, k, struct.pack("<I", MODULE_IDENT))
+    s.sdo_write(0xF030, 0, bytes([2]))
+    size = m.config_map()
+    log(f"      config_map: I/O map {size} bytes, outputs {len(s.output)}, inputs {len(s.input)}")
+    check((len(s.output), len(s.input)) == (15, 18),
+          "3 module PDOs each way: 5 bytes out and 6 bytes in per module")
+    st, code = request_state(m, s, pysoem.SAFEOP_STATE)
+    check(st == 0x12 and code == 0x0070,
+          f"2 modules configured, 3 detected: AL status {st:#06x}, code {code:#06x} (0x0012, 0x0070)")
+    st, code = request_state(m, s, pysoem.PREOP_STATE | 0x10)
+    check(st == 0x02, f"error acknowledged: AL status {st:#06x}")
+    # The refusal also came as a CoE Emergency (0xA000 "transition
+    # refused", the AL status code in its data); SOEM hands it over with
+    # the next mailbox exchange.
+    try:
+        s.sdo_read(0x1000, 0)
+        emcy = None
+    except pysoem.Emergency as e:
+        emcy = e
+    check(emcy is not None and emcy.error_code == 0xA000 and emcy.b1 == 0x70,
+          f"Emergency for the refusal: {emcy}")
+    s.sdo_write(0xF030, 3, struct.pack("<I", MODULE_IDENT))
+    s.sdo_write(0xF030, 0, bytes([3]))
+    check(to_op(m), "OP with the configured module list equal to the detected one")
+    values = [1000, 2000, -3000]
+    s.output = b"".join(struct.pack("<Bhh", 0, v, 0) for v in values)
+    wkcs = cycles(m, 50)
+    check(all(w == m.expected_wkc for w in wkcs[5:]), f"50 cycles with WKC {m.expected_wkc}")
+    got = [struct.unpack_from("<Hhh", s.input, 6 * k) for k in range(3)]
+    log(f"      modules answer (status, value 1 = d1.11, value 2 = d1.10): {got}")
+    check(got == [(0x0400, 0, v) for v in values],
+          "each module: HW enable, feedback 0, desired value = its set value (manual 5.4.2)")
+    m.close()
+
+
 def main():
     if len(sys.argv) < 3:
         print(__doc__)
@@ -412,6 +466,8 @@ def main():
         chain(*sys.argv[2:4])
     elif sys.argv[1] == "dc":
         dc(*sys.argv[2:4])
+    elif sys.argv[1] == "dma22":
+        dma22(*sys.argv[2:3])
     else:
         print(__doc__)
         return 2

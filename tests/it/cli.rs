@@ -510,3 +510,39 @@ fn binary_output_is_refused_on_a_terminal_but_not_in_a_pipe() {
     assert!(read.status.success());
     assert_eq!(read.stdout, image.stdout[..read.stdout.len()]);
 }
+
+#[test]
+fn master_test_hcs_sends_cmd3_cmd6_cmd15_through_the_dma22_channel() {
+    let mt = master_test();
+    let dev = ["--device", "dma22", "hcs"];
+    let args =
+        |rest: &[&'static str]| -> Vec<&'static str> { dev.iter().chain(rest).copied().collect() };
+    // CMD 3: software version (ID 0x00, "10.01") of module 1.
+    let (o, _) = expect(&mt, &args(&["read", "--module", "1", "0x00"]), 0);
+    assert!(o.contains("response 01 01 03 02 03 e9"), "{o}");
+    assert!(o.contains("module 1: word 0: 1001"), "{o}");
+    // CMD 6: A1.01 of module 3 = -9.999 V, answered with the request.
+    let (o, _) = expect(&mt, &args(&["write", "--module", "3", "0x1F", "-9999"]), 0);
+    assert!(o.contains("module 3: ID 0x001F written: -9999"), "{o}");
+    // A read-only parameter: the node's exception 4, exit 1.
+    let (_, e) = expect(&mt, &args(&["write", "0x07", "5"]), 1);
+    assert!(e.contains("EXCE 4: Writing of ID failed"), "{e}");
+    // A module that is not plugged: exception 5.
+    let (_, e) = expect(&mt, &args(&["read", "--module", "5", "0x07"]), 1);
+    assert!(e.contains("EXCE 5"), "{e}");
+    // CMD 15 for three modules: module 1 answers first, HW enable set.
+    let (o, _) = expect(&mt, &args(&["multi", "--values", "1000,2000,-3000"]), 0);
+    assert!(o.contains("module 1: status 0x0400"), "{o}");
+    // Bad input is refused before anything is sent.
+    let (_, e) = expect(&mt, &args(&["read", "0x07", "--words", "9"]), 2);
+    assert!(e.contains("CMD 3"), "{e}");
+    let (_, e) = expect(&mt, &args(&["multi", "--values", "1,2,3,4,5,6"]), 2);
+    assert!(e.contains("CMD 15"), "{e}");
+    for bad in ["zz", "a\u{e9}1", "123"] {
+        let (_, e) = expect(&mt, &args(&["raw", bad]), 2);
+        assert!(e.contains("hex"), "{bad}: {e}");
+    }
+    // A device without the channel says so.
+    let (_, e) = expect(&mt, &["--device", "io8", "hcs", "read", "0x07"], 1);
+    assert!(e.contains("no HCS telegram channel"), "{e}");
+}

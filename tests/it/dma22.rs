@@ -231,3 +231,43 @@ fn the_dma22_esi_describes_slots_and_modules_and_validates() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// Writes `telegram` into the node's request object (complete access from
+/// subindex 1: length, bytes) and reads its answer.
+async fn exchange(c: &mut master_test::mailbox::MailboxClient<'_>, telegram: &[u8]) -> Vec<u8> {
+    let mut data = vec![telegram.len() as u8];
+    data.extend_from_slice(telegram);
+    data.resize(33, 0);
+    c.sdo_download(0x2000, 1, true, &data)
+        .await
+        .expect("request");
+    let a = c.sdo_upload(0x2001, 1, true).await.expect("response");
+    a[1..1 + usize::from(a[0])].to_vec()
+}
+
+#[test]
+fn hcs_telegrams_through_the_coe_channel_reach_the_module_parameters() {
+    use master_test::mailbox::{MailboxClient, MailboxGeometry};
+    smol::block_on(async {
+        let bus = VirtualBus::line("dma22", Clock::real()).expect("bus");
+        let md: &Md = &bus.maindevice;
+        let group = bus.init().await.expect("PRE-OP");
+        let station = group.subdevice(md, 0).expect("node").configured_address();
+        let layout = hcs_dma22::device::DEVICE.layout();
+        let mut c = MailboxClient::new(md, station, MailboxGeometry::of(&layout));
+        // Manual 6.3: read the software version of module 1.
+        assert_eq!(
+            exchange(&mut c, &[0x01, 0x01, 0x03, 0x00, 0x00, 0x00, 0x01]).await,
+            [0x01, 0x01, 0x03, 0x02, 0x03, 0xE9]
+        );
+        // CMD 6: A1.01 of module 2 = 1.500 V, then the same parameter
+        // over CoE (0x8010:20 = ID 0x1F of slot 1).
+        let write = [0x02, 0x02, 0x06, 0x00, 0x1F, 0x05, 0xDC];
+        assert_eq!(exchange(&mut c, &write).await, write);
+        let v = c.sdo_upload(0x8010, 0x20, false).await.expect("A1.01");
+        assert_eq!(i16::from_le_bytes([v[0], v[1]]), 1500);
+        // The same request again is not answered (3.3).
+        assert_eq!(exchange(&mut c, &write).await, [] as [u8; 0]);
+        drop(group);
+    });
+}

@@ -80,6 +80,12 @@ const NOT_INDICES: &[(&str, &[u16])] = &[
     // CiA 301 emergency codes: communication (SM watchdog), refused state
     // change.
     ("coe/emergency.rs", &[0x8100, 0xA000]),
+    // ETG.5001 Modular Device Profile objects, the same for every modular
+    // device (like 0x1C12 for every device with PDO assignment).
+    ("od/modules.rs", &[0xF000, 0xF030, 0xF050]),
+    ("od/dictionary.rs", &[0xF030]),
+    // ETG.1000.6 text of AL status code 0x0070, which names both lists.
+    ("al.rs", &[0xF030, 0xF050]),
 ];
 
 #[test]

@@ -386,3 +386,45 @@ fn soem_configures_distributed_clocks_and_runs_the_line_dc_synchronous() {
     stop_runner(guard.runner.take().expect("runner"));
     assert!(ok, "SOEM DC phase failed (log above)");
 }
+
+#[test]
+fn soem_brings_a_dma22_node_with_three_modules_to_op_after_writing_0xf030() {
+    let Some(py) = pysoem_python() else {
+        return skip(
+            "no Python with pysoem (pip install pysoem, or set PAM_PYSOEM_PYTHON); .ci/run installs it",
+        );
+    };
+    let Some(bin) = runner_binary() else {
+        return skip("pam-slave binary not built next to the test binary");
+    };
+    let _serial = crate::common::NET_TESTS
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
+    let (mut guard, host_if, slave_if) = match setup("h") {
+        Ok(x) => x,
+        Err(e) => {
+            return skip(&format!(
+                "cannot create a network namespace and veth pair here ({e}); needs root and iproute2"
+            ));
+        }
+    };
+    let dir = TempDir(std::env::temp_dir().join(format!("pam-soem-dma22-{}", std::process::id())));
+    std::fs::create_dir_all(&dir.0).expect("temp dir");
+    let file = |n: &str| dir.0.join(n);
+    let runner = start_runner_with(
+        &guard.name,
+        &bin,
+        "dma22",
+        &slave_if,
+        &file("state"),
+        &file("dma22.pcap"),
+        &file("runner.log"),
+        &[],
+    );
+    guard.runner = Some(runner);
+    let (ok, out) = run_python(&py, &["dma22", &host_if]);
+    keep_log("soem-dma22.log", &format!("--- SOEM dma22 ---\n{out}"));
+    eprintln!("--- SOEM dma22 ---\n{out}");
+    stop_runner(guard.runner.take().expect("runner"));
+    assert!(ok, "SOEM DMA-22 phase failed (log above)");
+}

@@ -32,7 +32,9 @@
 //! ```
 
 use crate::od::dictionary::{DescriptionError, Dictionary};
-use crate::od::modules::ModularLayout;
+use crate::od::modules::{
+    CONFIGURED_MODULES, DETECTED_MODULES, MODULAR_DEVICE_PROFILE, ModularLayout,
+};
 use crate::od::{DefaultValue, Object, PdoMapping};
 use crate::pdo::{Direction, MAX_IMAGE, MAX_MAPPED};
 
@@ -358,7 +360,7 @@ impl DeviceDescription {
         }
         if self.modules.is_some() {
             let mut k = 0;
-            let needed = [0xF000u16, 0xF030, 0xF050];
+            let needed = [MODULAR_DEVICE_PROFILE, CONFIGURED_MODULES, DETECTED_MODULES];
             while k < needed.len() {
                 if find_object(objects, needed[k]).is_none() {
                     return Err(DescriptionError::MissingObject { index: needed[k] });

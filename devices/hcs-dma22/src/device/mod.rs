@@ -12,6 +12,7 @@
 //! assert_eq!(slave.slave().od().get(0xF050, 0), Some(3));
 //! ```
 
+pub mod channel;
 pub mod model;
 pub mod od;
 pub mod params;
@@ -86,6 +87,7 @@ const _: () = DEVICE.assert_valid();
 pub struct Dma22Node<const N: usize> {
     modes: [u8; N],
     modules: [Module; N],
+    channel: channel::Channel,
 }
 
 impl<const N: usize> Default for Dma22Node<N> {
@@ -103,6 +105,7 @@ impl<const N: usize> Dma22Node<N> {
         Dma22Node {
             modes: modes.map(|m| if MODES.contains(&m) { m } else { 3 }),
             modules: [Module::new(); N],
+            channel: channel::Channel::new(),
         }
     }
 
@@ -141,7 +144,23 @@ impl<const N: usize> Application for Dma22Node<N> {
         Ok(())
     }
 
-    fn sdo_download(&mut self, _od: &mut Od, d: &Download<'_>) -> Result<Write, SdoAbortCode> {
+    fn sdo_download(&mut self, od: &mut Od, d: &Download<'_>) -> Result<Write, SdoAbortCode> {
+        // The HCS telegram channel: writing the request's length hands it
+        // to the node, which answers into 0x2001.
+        if d.index == channel::REQUEST {
+            d.apply(od);
+            if d.value(1).is_some() {
+                let n = usize::from(Self::count());
+                self.channel.serve_od(
+                    od,
+                    channel::Modules {
+                        modules: self.modules.get_mut(..n).unwrap_or(&mut []),
+                        modes: self.modes.get(..n).unwrap_or(&[]),
+                    },
+                );
+            }
+            return Ok(Write::Done);
+        }
         // E Int (ID 0xB0, subindex 0xB1 of 0x80n0): only Din_1, Din_2 and
         // Bus disable are writable; the value shown is the module's.
         if d.index & 0xFF8F == od::PARAMS_LOW
@@ -182,6 +201,7 @@ impl<const N: usize> Application for Dma22Node<N> {
 
     fn power_cycle(&mut self) {
         self.modules = [Module::new(); N];
+        self.channel = channel::Channel::new();
     }
 }
 

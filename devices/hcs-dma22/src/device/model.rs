@@ -266,6 +266,8 @@ pub struct Module {
     last_ns: Option<u64>,
     /// Last time cyclic outputs were valid.
     last_valid_ns: Option<u64>,
+    /// The previous tick had valid cyclic outputs.
+    was_valid: bool,
 }
 
 impl Default for Module {
@@ -292,6 +294,7 @@ impl Module {
             }; 2],
             last_ns: None,
             last_valid_ns: None,
+            was_valid: false,
         }
     }
 
@@ -306,6 +309,14 @@ impl Module {
             } else {
                 0
             });
+    }
+
+    /// A CMD 15 control byte that came through the telegram channel: its
+    /// Din_1, TST_CMP, Din_2 and BUS_DISABLE bits act like the cyclic
+    /// control byte's until the next one.
+    pub fn write_control(&mut self, control: u8) {
+        self.sdo_control =
+            control & (control::DIN_1 | control::TST_CMP | control::DIN_2 | control::BUS_DISABLE);
     }
 
     /// The control byte in effect (0 while the hardware enable is off).
@@ -390,16 +401,26 @@ impl Module {
                 self.ack_armed = false;
             }
         }
-        if timeout_ms > 0 && stale {
-            if self.raise(error::TIMEOUT) {
+        let discard = if timeout_ms > 0 && stale {
+            let new = self.raise(error::TIMEOUT);
+            if new {
                 raised = Some(error::TIMEOUT);
             }
-        } else if self.error == error::TIMEOUT && outputs_valid && get(od, n, id::E26) == 0 {
+            new
+        } else {
+            // E23 = 0: the cyclic set values go when the cyclic data stop
+            // (the EtherCAT safe state); set values written acyclically
+            // (SDO, CMD 6) outside OP stay, as A1.01 "when written, always
+            // active" (chapter 7).
+            self.was_valid && !outputs_valid && timeout_ms == 0
+        };
+        self.was_valid = outputs_valid;
+        if self.error == error::TIMEOUT && outputs_valid && get(od, n, id::E26) == 0 {
             // E26 = 0: work continues with the next valid telegram.
             self.error = 0;
         }
-        // Without valid cyclic data the set values are discarded.
-        if !outputs_valid && (timeout_ms == 0 || stale) {
+        // 5.5.1.1: "the electronic discards every set point in error case".
+        if discard {
             set(od, n, id::A1_01, 0);
             set(od, n, id::A1_02, 0);
             set(od, n, id::A2_01, 0);

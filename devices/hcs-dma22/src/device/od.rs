@@ -23,6 +23,7 @@ use ecat_slave::od::build::{
 use ecat_slave::od::modules::{ModularLayout, ModuleType, SlotRange};
 use ecat_slave::od::{Access, DataType, Entry, Object, ObjectCode, PdoMapping};
 
+use super::channel;
 use super::params::{PARAMETERS_HIGH, PARAMETERS_LOW};
 use super::{MODULE_IDENT, PRODUCT_CODE, REVISION, SLOTS, VENDOR_ID};
 
@@ -251,6 +252,8 @@ const HEAD: &[Object] = &[
     ] },
     Object { index: 0x1C32, name: "SM output parameter", code: Record, entries: SYNC_PARAMETER_ENTRIES },
     Object { index: 0x1C33, name: "SM input parameter", code: Record, entries: SYNC_PARAMETER_ENTRIES },
+    Object { index: channel::REQUEST, name: "HCS telegram request", code: Record, entries: &channel::REQUEST_ENTRIES },
+    Object { index: channel::RESPONSE, name: "HCS telegram response", code: Record, entries: &channel::RESPONSE_ENTRIES },
 ];
 
 const INPUT_OBJECTS: [Object; 5] = per_slot!(INPUTS, "DMA-22 inputs", INPUT_ENTRIES);

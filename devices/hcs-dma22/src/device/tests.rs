@@ -177,3 +177,129 @@ fn without_hw_enable_the_control_byte_is_reset_and_nothing_drives() {
     assert_eq!(inputs(od, 0), (0, 0, 0));
     assert_eq!(model::get(od, 0, id::D1_07), 0);
 }
+
+/// Serves one telegram through the channel of a fresh node with `N`
+/// modules (after one tick, so the modules' inputs are current).
+struct Bench<const N: usize> {
+    slave: SoftSlave<Dma22Node<N>>,
+    channel: channel::Channel,
+    modules: [model::Module; N],
+}
+
+impl<const N: usize> Bench<N> {
+    fn new() -> Self {
+        let mut slave = SoftSlave::new(Dma22Node::<N>::default());
+        let mut modules = [model::Module::new(); N];
+        for (k, m) in modules.iter_mut().enumerate() {
+            m.tick(slave.slave_mut().od_mut(), k as u8, 3, 0, false);
+        }
+        Bench {
+            slave,
+            channel: channel::Channel::new(),
+            modules,
+        }
+    }
+
+    fn send(&mut self, request: &[u8]) -> Vec<u8> {
+        let mut out = [0u8; channel::MAX_TELEGRAM];
+        let modes = [3u8; N];
+        let n = self.channel.serve(
+            self.slave.slave_mut().od_mut(),
+            request,
+            channel::Modules {
+                modules: &mut self.modules,
+                modes: &modes,
+            },
+            &mut out,
+        );
+        out[..n].to_vec()
+    }
+
+    fn od(&mut self) -> &mut Od {
+        self.slave.slave_mut().od_mut()
+    }
+}
+
+#[test]
+fn channel_cmd3_reads_parameters_and_answers_a_changed_request_only() {
+    let mut b = Bench::<3>::new();
+    // Manual 4.2: read d1.07 (ID 7) of module 1; one word.
+    model::set(b.od(), 0, id::D1_07, 0x0133);
+    let req = [0x24, 0x01, 0x03, 0x00, 0x07, 0x00, 0x01];
+    assert_eq!(b.send(&req), [0x24, 0x01, 0x03, 0x02, 0x01, 0x33]);
+    assert_eq!(b.send(&req), [] as [u8; 0], "unchanged: no answer (3.3)");
+    let mut again = req;
+    again[0] = 0x25;
+    assert_eq!(
+        b.send(&again)[..4],
+        [0x25, 0x01, 0x03, 0x02],
+        "TADR changed"
+    );
+    // Three words from ID 0x2C (C1.03 gain A, C1.04, C1.05): defaults 100.
+    let three = b.send(&[0x26, 0x02, 0x03, 0x00, 0x2C, 0x00, 0x03]);
+    assert_eq!(three, [0x26, 0x02, 0x03, 0x06, 0, 100, 0, 100, 0, 100]);
+    // A reserved ID (S1.08, 0x1A) and a module that is not plugged.
+    assert_eq!(
+        b.send(&[0x27, 0x01, 0x03, 0x00, 0x1A, 0x00, 0x01]),
+        [0x27, 0x01, 0x83, 0x02]
+    );
+    assert_eq!(
+        b.send(&[0x28, 0x04, 0x03, 0x00, 0x07, 0x00, 0x01]),
+        [0x28, 0x04, 0x83, 0x05]
+    );
+}
+
+#[test]
+fn channel_cmd6_writes_with_the_parameter_rules() {
+    let mut b = Bench::<3>::new();
+    // Manual 4.4.2, 4.): set value A2.01 (ID 0x27) = -9.999 V.
+    let req = [0x12, 0x01, 0x06, 0x00, 0x27, 0xD8, 0xF1];
+    assert_eq!(b.send(&req), req, "CMD 6 answers with the request");
+    assert_eq!(model::get(b.od(), 0, id::A2_01), -9999);
+    // Read-only d1.07: writing failed (4); C1.00 = 5 > 4: wrong value (3).
+    assert_eq!(
+        b.send(&[0x13, 0x01, 0x06, 0x00, 0x07, 0x00, 0x01]),
+        [0x13, 0x01, 0x86, 0x04]
+    );
+    assert_eq!(
+        b.send(&[0x14, 0x02, 0x06, 0x00, 0x29, 0x00, 0x05]),
+        [0x14, 0x02, 0x86, 0x03]
+    );
+    assert_eq!(model::get(b.od(), 1, id::C1_00), 1, "unchanged");
+    assert_eq!(
+        b.send(&[0x15, 0x02, 0x06, 0x01, 0x10, 0x00, 0x00]),
+        [0x15, 0x02, 0x86, 0x02]
+    );
+}
+
+#[test]
+fn channel_cmd15_answers_module_by_module_and_refuses_a_missing_module() {
+    let mut b = Bench::<3>::new();
+    let req = [
+        0x23, 0x03, 0x0F, 0x00, 0x03, 0xE8, 0x00, 0x00, 0x00, 0x07, 0xD0, 0x00, 0x00, 0x00, 0xF4,
+        0x48, 0x00, 0x00,
+    ];
+    let first = b.send(&req);
+    assert_eq!(first[..3], [0x23, 0x01, 0x0F], "module 1 answers first");
+    assert_eq!(
+        model::get(b.od(), 2, id::A1_01),
+        -3000,
+        "module 3's set value"
+    );
+    let mut next = req;
+    next[0] = 0x24;
+    assert_eq!(b.send(&next)[..3], [0x24, 0x02, 0x0F], "then module 2");
+    // Manual 5.3: module 3 is not installed and SNUM is 3.
+    let mut two = Bench::<2>::new();
+    assert_eq!(two.send(&req), [0x23, 0x03, 0x8F, 0x08]);
+    // SNUM 0 is exception 7 (5.3), with the telegram's header.
+    assert_eq!(two.send(&[0x30, 0x00, 0x0F]), [0x30, 0x00, 0x8F, 0x07]);
+    // A CMD 15 shorter than SNUM says: exception 9 from the node (SADR 0).
+    assert_eq!(
+        two.send(&[0x31, 0x02, 0x0F, 0x00, 0x03, 0xE8, 0x00, 0x00]),
+        [0x31, 0x00, 0x8F, 0x09]
+    );
+    // Not a telegram at all: no answer.
+    assert_eq!(two.send(&[0x32]), [] as [u8; 0]);
+    assert_eq!(two.send(&[0x33, 0x01, 0x42, 0x00]), [] as [u8; 0]);
+}

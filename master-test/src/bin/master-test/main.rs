@@ -12,6 +12,7 @@ mod demo;
 mod eeprom_cmd;
 mod failure;
 mod foe_cmd;
+mod hcs;
 mod output;
 mod scan;
 mod sdo;
@@ -150,6 +151,13 @@ enum Cmd {
     /// SyncManager registers (restored), every writable object entry (with
     /// the value it had), and with --foe-file the file in BOOT.
     Conformance(conformance_cmd::ConformanceArgs),
+    /// HCS telegrams (CMD 3 read, CMD 6 write, CMD 15 multi-write)
+    /// through the telegram channel of an HCS DMA-22(A) node (objects
+    /// 0x2000/0x2001), e.g. `--device dma22 hcs read --module 2 0x07`.
+    Hcs {
+        #[command(subcommand)]
+        op: hcs::HcsCmd,
+    },
     /// Firmware image tools (no bus).
     Firmware {
         #[command(subcommand)]
@@ -225,6 +233,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Cmd::Eeprom { op } => smol::block_on(eeprom_cmd::eeprom(&w, op)),
         Cmd::Esi { op } => smol::block_on(eeprom_cmd::esi(&w, op)),
         Cmd::Conformance(args) => smol::block_on(conformance_cmd::conformance(&w, &args)),
+        Cmd::Hcs { op } => smol::block_on(hcs::hcs(&w, op)),
         Cmd::Firmware { op } => {
             let dev = device.unwrap_or(&device_catalog::DEVICES[0]);
             foe_cmd::firmware(dev, op)
