@@ -303,3 +303,27 @@ fn channel_cmd15_answers_module_by_module_and_refuses_a_missing_module() {
     assert_eq!(two.send(&[0x32]), [] as [u8; 0]);
     assert_eq!(two.send(&[0x33, 0x01, 0x42, 0x00]), [] as [u8; 0]);
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(2000))]
+
+    /// Any bytes through the channel: never a panic; an answer is always a
+    /// telegram the codec reads back, from a plugged module or the node.
+    #[test]
+    fn the_channel_answers_any_bytes_with_a_valid_telegram_or_nothing(
+        telegrams in proptest::collection::vec(
+            proptest::collection::vec(proptest::prelude::any::<u8>(), 0..=32),
+            1..8,
+        )
+    ) {
+        let mut b = Bench::<2>::new();
+        for t in &telegrams {
+            let answer = b.send(t);
+            if !answer.is_empty() {
+                let r = crate::telegram::ResponseRepr::parse(&answer);
+                proptest::prop_assert!(r.is_ok(), "{t:02x?} -> {answer:02x?}");
+                proptest::prop_assert_eq!(answer[0], t[0], "TADR echoed");
+            }
+        }
+    }
+}

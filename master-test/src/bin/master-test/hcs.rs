@@ -87,7 +87,11 @@ fn hex_bytes(parts: &[String]) -> Result<Vec<u8>, Failure> {
         .filter(|c| !c.is_whitespace())
         .collect();
     let text = text.trim_start_matches("0x");
-    if !text.is_ascii() || text.is_empty() || !text.len().is_multiple_of(2) || text.len() / 2 > MAX_TELEGRAM {
+    if !text.is_ascii()
+        || text.is_empty()
+        || !text.len().is_multiple_of(2)
+        || text.len() / 2 > MAX_TELEGRAM
+    {
         return Err(input(format!(
             "a telegram is 1..={MAX_TELEGRAM} bytes in hex (two digits each)"
         )));
