@@ -271,3 +271,61 @@ fn hcs_telegrams_through_the_coe_channel_reach_the_module_parameters() {
         drop(group);
     });
 }
+
+#[test]
+fn a_mixed_line_pam_dma22_io8_reaches_op_and_the_hw_enable_input_acts() {
+    use hcs_dma22::device::Dma22Node;
+    use master_test::link::lock;
+    use std::time::Duration;
+    smol::block_on(async {
+        let bus = VirtualBus::line("pam,dma22x1,io8", Clock::simulated()).expect("bus");
+        let md: &Md = &bus.maindevice;
+        let group = bus.init().await.expect("PRE-OP");
+        let names: Vec<String> = group.iter(md).map(|s| s.name().to_string()).collect();
+        assert_eq!(names, ["PAM-199-P-ETC", "DMA-22(A)-ECAT", "IO8"]);
+        let sd = group.subdevice(md, 1).expect("node");
+        configure!(sd, &[MODULE_IDENT]);
+        let group = group.into_op(md).await.expect("OP");
+        let sizes: Vec<(usize, usize)> = group
+            .iter(md)
+            .map(|s| (s.outputs_raw().len(), s.inputs_raw().len()))
+            .collect();
+        assert_eq!(sizes, [(5, 14), (5, 6), (1, 1)], "one module: 5 out, 6 in");
+        let sd = group.subdevice(md, 1).expect("node");
+        sd.outputs_raw_mut()[1..3].copy_from_slice(&2500i16.to_le_bytes());
+        let cycle = async |n: usize| {
+            for _ in 0..n {
+                bus.clock.advance(Duration::from_millis(1));
+                group.tx_rx(md).await.expect("cycle");
+            }
+        };
+        cycle(5).await;
+        let inp = sd.inputs_raw().to_vec();
+        assert_eq!(
+            (
+                u16::from_le_bytes([inp[0], inp[1]]),
+                i16::from_le_bytes([inp[4], inp[5]])
+            ),
+            (hcs_status::HW_ENABLE, 2500)
+        );
+        // The module's hardware enable input (X3/1) goes low: no enable,
+        // no output, the control byte reset (5.5.1.2).
+        lock(&bus.chain)
+            .slave_mut::<Dma22Node<1>>(1)
+            .expect("slave 1 is the node")
+            .slave_mut()
+            .app_mut()
+            .module_mut(0)
+            .expect("module 1")
+            .hw_enable = false;
+        cycle(5).await;
+        let inp = sd.inputs_raw().to_vec();
+        assert_eq!(
+            (
+                u16::from_le_bytes([inp[0], inp[1]]),
+                i16::from_le_bytes([inp[4], inp[5]])
+            ),
+            (0, 0)
+        );
+    });
+}

@@ -2,7 +2,7 @@
 //! descriptions, fragmented responses.
 //!
 //! Layer 3 (`coe`). The server reads only the static description
-//! the device's [`Dictionary`]; it holds no object values, knows nothing of the ESC
+//! the device's [`Dictionary`](crate::od::Dictionary); it holds no object values, knows nothing of the ESC
 //! or the mailbox, and allocates nothing. Frames are read and written with
 //! the views of [`crate::wire::coe`].
 //!
