@@ -1979,6 +1979,18 @@ fn esi_modules(root: &ecat_esi::xml::Element) -> Result<EsiModules<'_>, String> 
     })
 }
 
+/// The ESI module with `ident`.
+fn esi_module<'a>(
+    modules: &[(u32, &'a ecat_esi::xml::Element)],
+    ident: u32,
+) -> Result<&'a ecat_esi::xml::Element, String> {
+    modules
+        .iter()
+        .find(|(id, _)| *id == ident)
+        .map(|(_, m)| *m)
+        .ok_or(format!("no Module with ident {ident:#010x}"))
+}
+
 /// The PDOs the ESI's modules give a modular device with `idents` in its
 /// slots (in order): `(PDO index, mapping entries index << 16 | sub << 8 |
 /// bits)`, moved into each slot by `SlotPdoIncrement` and
@@ -1993,10 +2005,7 @@ fn esi_module_pdos(xml: &str, idents: &[u32]) -> Result<Vec<(u16, Vec<u32>)>, St
     let mut out = Vec::new();
     for (slot, ident) in idents.iter().enumerate() {
         let slot = u16::try_from(slot).map_err(|_| "too many slots")?;
-        let (_, m) = modules
-            .iter()
-            .find(|(id, _)| id == ident)
-            .ok_or(format!("no Module with ident {ident:#010x}"))?;
+        let m = esi_module(&modules, *ident)?;
         for pdo in m.children_named("RxPdo").chain(m.children_named("TxPdo")) {
             let hex = |e: &ecat_esi::xml::Element, p: &str| {
                 e.text_at(p)
@@ -2051,10 +2060,7 @@ fn esi_objects(xml: &str, idents: &[u32]) -> Result<Vec<u16>, String> {
         } = esi_modules(&root)?;
         for (slot, ident) in idents.iter().enumerate() {
             let slot = u16::try_from(slot).map_err(|_| "too many slots")?;
-            let (_, m) = modules
-                .iter()
-                .find(|(id, _)| id == ident)
-                .ok_or(format!("no Module with ident {ident:#010x}"))?;
+            let m = esi_module(&modules, *ident)?;
             let objs = m
                 .path("Profile/Dictionary/Objects")
                 .ok_or("a Module without Profile/Dictionary/Objects")?;

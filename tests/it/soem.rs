@@ -335,6 +335,61 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
     );
 }
 
+/// Starts the runner with `line` (and `runner_args`) in a fresh namespace
+/// `tag`, runs the script's `phase` with `phase_args` after the host-side
+/// interface, keeps its output as `target/interop-logs/soem-{name}.log`
+/// and asserts that every check passed.
+fn soem_phase(tag: &str, name: &str, line: &str, runner_args: &[&str], phase: &[&str]) {
+    let Some(py) = pysoem_python() else {
+        return skip(
+            "no Python with pysoem (pip install pysoem, or set PAM_PYSOEM_PYTHON); .ci/run installs it",
+        );
+    };
+    let Some(bin) = runner_binary() else {
+        return skip("pam-slave binary not built next to the test binary");
+    };
+    let _serial = crate::common::NET_TESTS
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
+    let (mut guard, host_if, slave_if) = match setup(tag) {
+        Ok(x) => x,
+        Err(e) => {
+            return skip(&format!(
+                "cannot create a network namespace and veth pair here ({e}); needs root and iproute2"
+            ));
+        }
+    };
+    let dir = TempDir(std::env::temp_dir().join(format!("pam-soem-{name}-{}", std::process::id())));
+    std::fs::create_dir_all(&dir.0).expect("temp dir");
+    let file = |n: &str| dir.0.join(n);
+    let runner = start_runner_with(
+        &guard.name,
+        &bin,
+        line,
+        &slave_if,
+        &file("state"),
+        &file(&format!("{name}.pcap")),
+        &file("runner.log"),
+        runner_args,
+    );
+    guard.runner = Some(runner);
+    let log = format!("soem-{name}.log");
+    let _ = std::fs::remove_file(
+        std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../target/interop-logs"
+        ))
+        .join(&log),
+    );
+    let mut args = vec![phase[0], host_if.as_str()];
+    args.extend_from_slice(&phase[1..]);
+    let (ok, out) = run_python(&py, &args);
+    keep_log(&log, &format!("--- SOEM {name} ---\n{out}"));
+    eprintln!("--- SOEM {name} ---\n{out}");
+    stop_runner(guard.runner.take().expect("runner"));
+    assert!(ok, "SOEM {name} phase failed (log above)");
+}
+
 /// SOEM's Distributed Clocks against the runner: `config_dc`, `dcsync0`
 /// on every slave, OP with SOEM's cycle (which distributes the reference
 /// time), the slaves within 1 us of the reference, 0x1C32 in DC mode,
@@ -342,89 +397,20 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
 /// phase of the script).
 #[test]
 fn soem_configures_distributed_clocks_and_runs_the_line_dc_synchronous() {
-    let Some(py) = pysoem_python() else {
-        return skip(
-            "no Python with pysoem (pip install pysoem, or set PAM_PYSOEM_PYTHON); .ci/run installs it",
-        );
-    };
-    let Some(bin) = runner_binary() else {
-        return skip("pam-slave binary not built next to the test binary");
-    };
-    let _serial = crate::common::NET_TESTS
-        .lock()
-        .unwrap_or_else(|e| e.into_inner());
-    let (mut guard, host_if, slave_if) = match setup("d") {
-        Ok(x) => x,
-        Err(e) => {
-            return skip(&format!(
-                "cannot create a network namespace and veth pair here ({e}); needs root and iproute2"
-            ));
-        }
-    };
-    let dir = TempDir(std::env::temp_dir().join(format!("pam-soem-dc-{}", std::process::id())));
-    std::fs::create_dir_all(&dir.0).expect("temp dir");
-    let file = |n: &str| dir.0.join(n);
     // Oscillators up to ±30 ppm apart: SOEM's cycle must steer them.
-    let runner = start_runner_with(
-        &guard.name,
-        &bin,
+    soem_phase(
+        "d",
+        "dc",
         "pam,io8,pam,io8",
-        &slave_if,
-        &file("state"),
-        &file("dc.pcap"),
-        &file("runner.log"),
         &["--oscillators", "30"],
+        &["dc", "4"],
     );
-    guard.runner = Some(runner);
-    let _ = std::fs::remove_file(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../target/interop-logs/soem-dc.log"
-    ));
-    let (ok, out) = run_python(&py, &["dc", &host_if, "4"]);
-    keep_log("soem-dc.log", &format!("--- SOEM dc ---\n{out}"));
-    eprintln!("--- SOEM dc ---\n{out}");
-    stop_runner(guard.runner.take().expect("runner"));
-    assert!(ok, "SOEM DC phase failed (log above)");
 }
 
+/// The HCS DMA-22 node of 3 modules (the script's `dma22` phase): 0xF050,
+/// a wrong 0xF030 refused with 0x0070 and its Emergency, OP with the right
+/// one, the manual's 5.4.2 set values back from every module.
 #[test]
 fn soem_brings_a_dma22_node_with_three_modules_to_op_after_writing_0xf030() {
-    let Some(py) = pysoem_python() else {
-        return skip(
-            "no Python with pysoem (pip install pysoem, or set PAM_PYSOEM_PYTHON); .ci/run installs it",
-        );
-    };
-    let Some(bin) = runner_binary() else {
-        return skip("pam-slave binary not built next to the test binary");
-    };
-    let _serial = crate::common::NET_TESTS
-        .lock()
-        .unwrap_or_else(|e| e.into_inner());
-    let (mut guard, host_if, slave_if) = match setup("h") {
-        Ok(x) => x,
-        Err(e) => {
-            return skip(&format!(
-                "cannot create a network namespace and veth pair here ({e}); needs root and iproute2"
-            ));
-        }
-    };
-    let dir = TempDir(std::env::temp_dir().join(format!("pam-soem-dma22-{}", std::process::id())));
-    std::fs::create_dir_all(&dir.0).expect("temp dir");
-    let file = |n: &str| dir.0.join(n);
-    let runner = start_runner_with(
-        &guard.name,
-        &bin,
-        "dma22",
-        &slave_if,
-        &file("state"),
-        &file("dma22.pcap"),
-        &file("runner.log"),
-        &[],
-    );
-    guard.runner = Some(runner);
-    let (ok, out) = run_python(&py, &["dma22", &host_if]);
-    keep_log("soem-dma22.log", &format!("--- SOEM dma22 ---\n{out}"));
-    eprintln!("--- SOEM dma22 ---\n{out}");
-    stop_runner(guard.runner.take().expect("runner"));
-    assert!(ok, "SOEM DMA-22 phase failed (log above)");
+    soem_phase("h", "dma22", "dma22", &[], &["dma22"]);
 }

@@ -257,8 +257,6 @@ fn emit(answer: ResponseRepr, out: &mut [u8; MAX_TELEGRAM]) -> usize {
 /// Parameter `id` of the module in `slot`, if it exists.
 fn read(od: &Od, slot: u8, id: u16) -> Option<i64> {
     let (index, sub) = parameter(slot, id)?;
-    let (_, e) = od.dictionary().find_entry(index, sub)?;
-    let _ = e;
     od.get(index, sub)
 }
 

@@ -17,10 +17,10 @@ pub mod model;
 pub mod od;
 pub mod params;
 
-use ecat_slave::al::{AlState, AlStatusCode};
+use ecat_slave::al::AlState;
 use ecat_slave::device::{
-    Application, CoeServices, DeviceDescription, DeviceNames, Download, EscConfig, Identity,
-    MailboxConfig, PdoSet, ProcessData, StateChange, Tick, Write,
+    Application, DeviceDescription, DeviceNames, Download, EscConfig, Identity, MailboxConfig,
+    PdoSet, ProcessData, Tick, Write,
 };
 use ecat_slave::od::Od;
 use ecat_slave::wire::coe::SdoAbortCode;
@@ -65,17 +65,9 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
             tx: &[0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x1A04],
         }],
     },
-    mailbox: MailboxConfig {
-        size: 128,
-        boot_size: None,
-        coe: CoeServices {
-            sdo_info: true,
-            pdo_assign: true,
-            pdo_config: false,
-            complete_access: true,
-        },
-        foe: false,
-    },
+    // 128-byte mailbox, SDO Information, PDO assignment, complete
+    // access; no BOOT, no FoE.
+    mailbox: MailboxConfig::STANDARD,
     esc: EscConfig::DEFAULT,
     modules: Some(&od::LAYOUT),
 };
@@ -138,10 +130,6 @@ impl<const N: usize> Application for Dma22Node<N> {
             model::set(od, s, model::id::E00, i64::from(*mode));
             model::set(od, s, model::id::E22, i64::from(s) + 1);
         }
-    }
-
-    fn state_change(&mut self, _od: &mut Od, _change: &StateChange) -> Result<(), AlStatusCode> {
-        Ok(())
     }
 
     fn sdo_download(&mut self, od: &mut Od, d: &Download<'_>) -> Result<Write, SdoAbortCode> {

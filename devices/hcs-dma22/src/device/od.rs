@@ -17,8 +17,8 @@
 //! operation mode E00 (5.5.2-5.5.6, see [`super::model`]).
 
 use ecat_slave::od::build::{
-    SYNC_PARAMETER_ENTRIES, assign, assign_count, base, constant, input, map_to, output, string,
-    sub_name, sub0, var,
+    SYNC_PARAMETER_ENTRIES, assign, assign_count, base, constant, input, map_to, output, ranged,
+    string, sub_name, sub0, var,
 };
 use ecat_slave::od::modules::{ModularLayout, ModuleType, SlotRange};
 use ecat_slave::od::{Access, DataType, Entry, Object, ObjectCode, PdoMapping};
@@ -39,10 +39,10 @@ pub const fn ro(
     unit: &'static str,
 ) -> Entry {
     Entry {
-        min: Some(min),
-        max: Some(max),
-        unit,
-        ..base(sub, name, t, Access::Ro, PdoMapping::None, default)
+        access: Access::Ro,
+        backup: false,
+        setting: false,
+        ..rw(sub, name, t, default, min, max, unit)
     }
 }
 
@@ -57,14 +57,7 @@ pub const fn rw(
     max: i64,
     unit: &'static str,
 ) -> Entry {
-    Entry {
-        min: Some(min),
-        max: Some(max),
-        unit,
-        backup: true,
-        setting: true,
-        ..base(sub, name, t, Access::Rw, PdoMapping::None, default)
-    }
+    ranged(sub, name, t, default, min, max, unit)
 }
 
 /// Index of slot `n`'s copy of `base`.
