@@ -259,7 +259,17 @@ async fn dc_sync0_line(spec: &str) {
         smol::Timer::at(now + next_cycle_wait).await;
     }
     assert!(op, "{n} slaves reach OP in DC mode");
+    // The SYNC0 units run when the link touches them; bring each up to
+    // the instant measured, so the count does not depend on when the
+    // link last passed (a loaded machine).
+    let up_to = |t: u64| {
+        let mut chain = lock(&bus.chain);
+        for s in chain.slaves_mut() {
+            s.esc_mut().update_dc(t);
+        }
+    };
     let t_op = bus.clock.now_ns();
+    up_to(t_op);
     let pulses_at_op: Vec<u64> = lock(&bus.chain)
         .slaves()
         .iter()
@@ -276,6 +286,7 @@ async fn dc_sync0_line(spec: &str) {
         smol::Timer::at(now + next_cycle_wait).await;
     }
     let t_end = bus.clock.now_ns();
+    up_to(t_end);
     let chain = lock(&bus.chain);
     let cycle = period.as_nanos() as u64;
     // Pulses due between OP and the end, in the reference's system time
