@@ -24,7 +24,9 @@ pub mod check;
 pub mod esi;
 pub mod ihex;
 pub mod inspect;
-pub mod xml;
+/// The XML element tree the readers use (it lives in `ecat-twin`, which
+/// also reads ESI files).
+pub use ecat_twin::xml;
 
 use ecat_slave::device::DeviceDescription;
 pub use esi::generate;

@@ -25,4 +25,5 @@ mod sii;
 mod soem;
 mod spi_pdi;
 mod state;
+mod twins;
 mod veth;

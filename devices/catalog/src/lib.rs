@@ -19,6 +19,7 @@ use ecat_slave::device::{Application, DeviceDescription, SoftSlave};
 use ecat_slave::host::chain::LineSlave;
 
 pub mod spi_pdi;
+pub mod twins;
 
 pub use spi_pdi::{Et1100Pdi, Lan9252Pdi};
 

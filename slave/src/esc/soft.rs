@@ -21,6 +21,10 @@ pub const MEM_SIZE: usize = 0x3000;
 pub const SM_COUNT: usize = 8;
 /// Number of FMMUs implemented.
 pub const FMMU_COUNT: usize = 8;
+/// ESC configuration register 0x0141 bit 0, "device emulation": the AL
+/// status follows the AL control register (ESCs without a firmware).
+pub const ESC_CONFIG_DEVICE_EMULATION: u8 = 0x01;
+
 /// Size of the emulated SII EEPROM in bytes (16 Kbit).
 pub const SII_SIZE: usize = 2048;
 /// Longest datagram payload the ESC processes (an Ethernet frame's worth).
@@ -244,6 +248,20 @@ impl SoftEsc {
         }
         esc.power_on();
         esc
+    }
+
+    /// Programs the station alias into the SII image (word 4, checksum of
+    /// words 0..6 recomputed), as a configurator writes it to a device's
+    /// EEPROM. The ESC loads it into 0x0012 at its next power-on (the
+    /// alias register is loaded from the EEPROM only then).
+    pub fn program_sii_alias(&mut self, alias: u16) {
+        if let Some(w) = self.sii.get_mut(8..10) {
+            w.copy_from_slice(&alias.to_le_bytes());
+        }
+        let crc = self.sii.get(..14).map_or(0, crate::sii::crc8);
+        if let Some(c) = self.sii.get_mut(14) {
+            *c = crc;
+        }
     }
 
     /// Makes PDI accesses fail as `fault` says (`None`: the PDI works).
@@ -1152,6 +1170,16 @@ impl SoftEsc {
             }
         }
         if al_control {
+            if self.mem_u8(reg::ESC_CONFIG) & ESC_CONFIG_DEVICE_EMULATION != 0 {
+                // Device emulation (ET1100 Section II, 0x0141 bit 0): an
+                // ESC without a firmware (digital I/O terminals, couplers)
+                // takes the requested state as its AL status. Only the
+                // state bits are copied: such a device never indicates an
+                // error, so an Error Ind Ack (bit 4) does not become an
+                // error indication.
+                let requested = self.mem_u16(reg::AL_CONTROL) & 0x000F;
+                self.set_u16(reg::AL_STATUS, requested);
+            }
             self.raise_al_event(reg::AL_EVENT_AL_CONTROL);
         }
         if dc_latch {
@@ -1694,6 +1722,35 @@ mod tests {
         assert_eq!(e.read_u32(reg::AL_EVENT_REQUEST).unwrap() & 1, 1);
         assert_eq!(e.read_u16(reg::AL_CONTROL).unwrap(), 0x0002);
         assert_eq!(e.read_u32(reg::AL_EVENT_REQUEST).unwrap() & 1, 0);
+    }
+
+    #[test]
+    fn device_emulation_makes_the_al_status_follow_al_control_without_error_bit() {
+        // PDI control word 0x0104 of an EL2004 dump: digital I/O PDI, ESC
+        // configuration 0x01 (device emulation).
+        let mut sii = [0xFFu8; 128];
+        sii[..16].fill(0);
+        sii[0] = 0x04;
+        sii[1] = 0x01;
+        let mut e = SoftEsc::new(&sii);
+        let (mut f, _) = frame(&[(Command::Bwr, phys(0, reg::AL_CONTROL), &[0x12, 0x00])]);
+        e.process_frame(&mut f);
+        assert_eq!(
+            e.mem_u16(reg::AL_STATUS),
+            0x0002,
+            "PRE-OP, ack bit not copied"
+        );
+        let (mut f, _) = frame(&[(Command::Bwr, phys(0, reg::AL_CONTROL), &[0x08, 0x00])]);
+        e.process_frame(&mut f);
+        assert_eq!(e.mem_u16(reg::AL_STATUS), 0x0008);
+    }
+
+    #[test]
+    fn without_device_emulation_al_control_leaves_the_status_to_the_firmware() {
+        let mut e = esc();
+        let (mut f, _) = frame(&[(Command::Bwr, phys(0, reg::AL_CONTROL), &[0x02, 0x00])]);
+        e.process_frame(&mut f);
+        assert_eq!(e.mem_u16(reg::AL_STATUS), 0x0001);
     }
 
     #[test]

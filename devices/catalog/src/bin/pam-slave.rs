@@ -6,6 +6,8 @@
 //! pam-slave --iface veth-slave --device io8 --count 4
 //! pam-slave --iface veth-slave --line pam,io8,pam
 //! pam-slave --iface veth-a0 --line pam,io8 --forward veth-a1
+//! pam-slave --iface veth-slave --esi EL2004.xml --count 2
+//! pam-slave --iface veth-slave --eni machine.xml --esi-dir esi/ --dry-run
 //! ```
 
 use clap::Parser;
@@ -30,7 +32,7 @@ struct Cli {
     #[arg(long)]
     iface: String,
     /// Device of every slave (see --list); default the PAM-199-P-ETC.
-    #[arg(long, default_value = "pam", conflicts_with = "line")]
+    #[arg(long, default_value = "pam", conflicts_with_all = ["line", "esi", "eni"])]
     device: String,
     /// Number of slaves on the line (1..=4096).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=4096), conflicts_with = "line")]
@@ -38,8 +40,35 @@ struct Cli {
     /// A mixed line, first to last: e.g. pam,io8,pam or pam*3,io8 (at
     /// most 4096 slaves); `pam@et1100`, `io8@lan9252` run a slave's
     /// firmware through that SPI driver and an emulated chip.
-    #[arg(long)]
+    #[arg(long, conflicts_with_all = ["esi", "eni"])]
     line: Option<String>,
+    /// Twins of a device of this ESI file (ETG.2000) instead of a catalog
+    /// device: --count of them. Devices with a mailbox are not supported
+    /// yet (an error says so).
+    #[arg(long, value_name = "FILE", conflicts_with = "eni")]
+    esi: Option<PathBuf>,
+    /// With --esi: the device's type (order code) when the file has several.
+    #[arg(long = "type", value_name = "NAME", requires = "esi")]
+    type_name: Option<String>,
+    /// With --esi: the device's revision (decimal or 0x hex); default the
+    /// highest of the type.
+    #[arg(long, value_name = "R", requires = "esi")]
+    revision: Option<String>,
+    /// The line an ENI file (ETG.2100) describes, in its order: each slave
+    /// from the catalog (by vendor ID and product code) or from an ESI file
+    /// of --esi-dir.
+    #[arg(long, value_name = "FILE")]
+    eni: Option<PathBuf>,
+    /// Directory of ESI files for --eni.
+    #[arg(long, value_name = "DIR", requires = "eni")]
+    esi_dir: Option<PathBuf>,
+    /// What the inputs of ESI twins do: hold (zeros), loopback (their own
+    /// outputs), counter.
+    #[arg(long, value_name = "RULE", default_value = "hold", value_parser = parse_rule)]
+    inputs: ecat_twin::InputRule,
+    /// Load and check everything, print the line, serve nothing.
+    #[arg(long)]
+    dry_run: bool,
     /// Write every frame, both directions, to this pcap file.
     #[arg(long)]
     pcap: Option<PathBuf>,
@@ -77,13 +106,17 @@ fn main() -> ExitCode {
         Some(l) => l.clone(),
         None => format!("{}*{}", cli.device, cli.count),
     };
-    let entries = match device_catalog::parse_line(&spec) {
-        Ok(e) => e,
+    let line = match build_line(&cli, &spec) {
+        Ok(l) => l,
         Err(e) => {
             eprintln!("pam-slave: {e}");
             return ExitCode::from(2);
         }
     };
+    if cli.dry_run {
+        println!("{}", line.report.join("\n"));
+        return ExitCode::SUCCESS;
+    }
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
     if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::Release)) {
@@ -112,13 +145,6 @@ fn main() -> ExitCode {
         faults: cli.faults,
         forward: cli.forward,
     };
-    let names: Vec<String> = entries
-        .iter()
-        .map(|d| match d.pdi {
-            device_catalog::Pdi::Direct => d.description.names.type_name.to_string(),
-            pdi => format!("{}@{}", d.description.names.type_name, pdi.name()),
-        })
-        .collect();
     let onward = cfg
         .forward
         .as_ref()
@@ -126,11 +152,11 @@ fn main() -> ExitCode {
         .unwrap_or_default();
     eprintln!(
         "pam-slave: {} slave(s) on {}: {}{onward} (Ctrl-C stops)",
-        entries.len(),
+        line.slaves.len(),
         cfg.iface,
-        summarize(&names)
+        line.summary
     );
-    let mut slaves = device_catalog::slaves(&entries);
+    let mut slaves = line.slaves;
     for (i, s) in slaves.iter_mut().enumerate() {
         s.esc_mut()
             .set_dc_oscillator(device_catalog::oscillator_ppb(i, cli.oscillators));
@@ -158,6 +184,70 @@ fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// The slaves to serve and what to say about them.
+struct Line {
+    slaves: Vec<Box<dyn ecat_slave::host::chain::LineSlave>>,
+    summary: String,
+    report: Vec<String>,
+}
+
+fn build_line(cli: &Cli, spec: &str) -> Result<Line, String> {
+    use device_catalog::twins;
+    if let Some(eni) = &cli.eni {
+        let (slaves, placed) =
+            twins::from_eni(eni, cli.esi_dir.as_deref(), cli.inputs).map_err(|e| e.to_string())?;
+        let names: Vec<String> = slaves
+            .iter()
+            .map(|s| s.description().names.type_name.to_string())
+            .collect();
+        return Ok(Line {
+            slaves,
+            summary: format!("the line of {}: {}", eni.display(), summarize(&names)),
+            report: placed.iter().map(|p| p.report()).collect(),
+        });
+    }
+    if let Some(esi) = &cli.esi {
+        let revision = cli
+            .revision
+            .as_deref()
+            .map(twins::parse_revision)
+            .transpose()
+            .map_err(|e| e.to_string())?;
+        let (label, slaves) = twins::from_esi(
+            esi,
+            cli.type_name.as_deref(),
+            revision,
+            cli.inputs,
+            usize::from(cli.count),
+        )
+        .map_err(|e| e.to_string())?;
+        let what = format!("{label} from {}", esi.display());
+        return Ok(Line {
+            report: vec![format!("{} x {what}", slaves.len())],
+            summary: format!("{what} x{}", slaves.len()),
+            slaves,
+        });
+    }
+    let entries = device_catalog::parse_line(spec).map_err(|e| e.to_string())?;
+    let names: Vec<String> = entries
+        .iter()
+        .map(|d| match d.pdi {
+            device_catalog::Pdi::Direct => d.description.names.type_name.to_string(),
+            pdi => format!("{}@{}", d.description.names.type_name, pdi.name()),
+        })
+        .collect();
+    Ok(Line {
+        slaves: device_catalog::slaves(&entries),
+        summary: summarize(&names),
+        report: names,
+    })
+}
+
+fn parse_rule(s: &str) -> Result<ecat_twin::InputRule, String> {
+    ecat_twin::InputRule::parse(s)
+        .ok_or_else(|| format!("unknown input rule '{s}' (known: hold, loopback, counter)"))
 }
 
 fn parse_faults(s: &str) -> Result<ecat_slave::host::faults::FaultConfig, String> {

@@ -1,19 +1,23 @@
 //! A tiny read-only XML element tree over quick-xml's reader (host tool).
 //!
-//! Used by `check` and the tests to read an ESI back. It keeps element
-//! names, attributes, the concatenated text and the children in document
-//! order; comments, processing instructions and namespaces are dropped.
-//! It writes nothing: generation uses quick-xml's writer directly.
+//! Used to read ESI and ENI files (the twin loader, `ecat-esi`'s `check`,
+//! the tests). It keeps element names, attributes, the concatenated text,
+//! the children in document order and the line each element starts on (for
+//! messages that name the element and the line); comments, processing
+//! instructions and namespaces are dropped. It writes nothing: generation
+//! uses quick-xml's writer directly.
 
 use quick_xml::Reader;
 use quick_xml::events::{BytesStart, Event};
 
 /// An XML document could not be parsed.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("XML error at byte {position}: {message}")]
+#[error("XML error at line {line} (byte {position}): {message}")]
 pub struct XmlError {
     /// Byte offset where the reader stopped.
     pub position: u64,
+    /// Line (1-based) of that byte.
+    pub line: u32,
     /// What went wrong.
     pub message: String,
 }
@@ -29,6 +33,8 @@ pub struct Element {
     pub text: String,
     /// Child elements in document order.
     pub children: Vec<Element>,
+    /// Line (1-based) of the element's start tag (0 when built by hand).
+    pub line: u32,
 }
 
 impl Element {
@@ -63,8 +69,38 @@ impl Element {
     }
 }
 
-fn start_element(start: &BytesStart<'_>, position: u64) -> Result<Element, XmlError> {
-    let err = |message: String| XmlError { position, message };
+/// Line numbers of byte offsets of one document.
+struct Lines<'a>(&'a str);
+
+impl Lines<'_> {
+    /// The 1-based line of byte `position`.
+    fn of(&self, position: u64) -> u32 {
+        let end = usize::try_from(position)
+            .unwrap_or(usize::MAX)
+            .min(self.0.len());
+        let newlines = self
+            .0
+            .as_bytes()
+            .get(..end)
+            .map_or(0, |b| b.iter().filter(|c| **c == b'\n').count());
+        u32::try_from(newlines + 1).unwrap_or(u32::MAX)
+    }
+
+    fn error(&self, position: u64, message: String) -> XmlError {
+        XmlError {
+            position,
+            line: self.of(position),
+            message,
+        }
+    }
+}
+
+fn start_element(
+    start: &BytesStart<'_>,
+    position: u64,
+    lines: &Lines<'_>,
+) -> Result<Element, XmlError> {
+    let err = |message: String| lines.error(position, message);
     let name = String::from_utf8_lossy(start.name().as_ref()).into_owned();
     let mut attrs = Vec::new();
     for a in start.attributes() {
@@ -76,6 +112,7 @@ fn start_element(start: &BytesStart<'_>, position: u64) -> Result<Element, XmlEr
     Ok(Element {
         name,
         attrs,
+        line: lines.of(position),
         ..Element::default()
     })
 }
@@ -83,16 +120,17 @@ fn start_element(start: &BytesStart<'_>, position: u64) -> Result<Element, XmlEr
 /// Parses `text` into its root element.
 pub fn parse(text: &str) -> Result<Element, XmlError> {
     let mut reader = Reader::from_str(text);
+    let lines = Lines(text);
     let mut stack: Vec<Element> = Vec::new();
     let mut root: Option<Element> = None;
     loop {
         let position = reader.buffer_position();
-        let err = |message: String| XmlError { position, message };
+        let err = |message: String| lines.error(position, message);
         let event = reader.read_event().map_err(|e| err(e.to_string()))?;
         match event {
-            Event::Start(s) => stack.push(start_element(&s, position)?),
+            Event::Start(s) => stack.push(start_element(&s, position, &lines)?),
             Event::Empty(s) => {
-                let e = start_element(&s, position)?;
+                let e = start_element(&s, position, &lines)?;
                 match stack.last_mut() {
                     Some(parent) => parent.children.push(e),
                     None if root.is_none() => root = Some(e),
@@ -126,18 +164,16 @@ pub fn parse(text: &str) -> Result<Element, XmlError> {
         }
     }
     if !stack.is_empty() {
-        return Err(XmlError {
-            position: reader.buffer_position(),
-            message: format!(
+        let position = reader.buffer_position();
+        return Err(lines.error(
+            position,
+            format!(
                 "unclosed element <{}>",
                 stack.last().map_or("", |e| &e.name)
             ),
-        });
+        ));
     }
-    root.ok_or(XmlError {
-        position: 0,
-        message: "no root element".into(),
-    })
+    root.ok_or_else(|| lines.error(0, "no root element".into()))
 }
 
 /// Parses an ETG `HexDecValue`: `#x`-prefixed hex or signed decimal.
@@ -176,6 +212,16 @@ mod tests {
         assert_eq!(doc.text_at("b"), Some("t < u"));
         assert_eq!(doc.children_named("b").count(), 2);
         assert!(doc.child("c").is_some());
+    }
+
+    #[test]
+    fn elements_and_errors_carry_their_line() {
+        let doc = parse("<a>\n  <b/>\n  <c>\n    <d x=\"1\"/>\n  </c>\n</a>").unwrap();
+        assert_eq!(doc.line, 1);
+        assert_eq!(doc.child("b").unwrap().line, 2);
+        assert_eq!(doc.path("c/d").unwrap().line, 4);
+        let e = parse("<a>\n<b>\n</a>").unwrap_err();
+        assert_eq!(e.line, 3, "{e}");
     }
 
     #[test]

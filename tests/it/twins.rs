@@ -1,0 +1,415 @@
+//! Software twins from ESI files and a line from an ENI (`ecat-twin`):
+//! the twins' SII agrees with the real devices' SII dumps, ethercrab brings
+//! the ENI line EK1100, EL2004, EL2828, EL1008, PAM-199-P-ETC to OP with
+//! the identities and process-image sizes of the real devices and
+//! exchanges process data with every slave, and a broken ESI names the
+//! element and line and starts nothing.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use device_catalog::twins;
+use ecat_esi::inspect::{Inspection, inspect};
+use ecat_slave::host::chain::Chain;
+use ecat_slave::sii::PdoDirection;
+use ecat_twin::{EscTwin, EsiFile, InputRule};
+use master_test::VirtualBus;
+use master_test::link::{Clock, lock};
+
+fn testdata(p: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../twin/testdata")
+        .join(p)
+}
+
+/// A real device's SII dump from `../shared/reference/sii-dumps`.
+fn dump(name: &str) -> Vec<u8> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../shared/reference/sii-dumps")
+        .join(name);
+    std::fs::read(&p).unwrap_or_else(|e| {
+        panic!(
+            "{}: {e} (../shared must be beside the checkout)",
+            p.display()
+        )
+    })
+}
+
+/// Output and input bytes a master gives the device of this SII: its
+/// PDOs' bits per SyncManager, rounded up to bytes.
+fn image_bytes(i: &Inspection) -> (usize, usize) {
+    let mut out = std::collections::BTreeMap::<(bool, u8), u32>::new();
+    for p in i.pdos.iter().filter(|p| p.sm_raw != 0xFF) {
+        let bits: u32 = p.entries.iter().map(|e| u32::from(e.bit_len)).sum();
+        *out.entry((p.direction == PdoDirection::Rx, p.sm_raw))
+            .or_default() += bits;
+    }
+    let sum = |rx: bool| {
+        out.iter()
+            .filter(|((r, _), _)| *r == rx)
+            .map(|(_, b)| b.div_ceil(8) as usize)
+            .sum()
+    };
+    (sum(true), sum(false))
+}
+
+/// What a master reads from an SII and the twin must show as the real
+/// device does.
+fn visible(i: &Inspection) -> String {
+    let g = i.general.as_ref().map(|(raw, s)| {
+        format!(
+            "group {:?} order {:?} name {:?} coe {:#x} ebus {} ports {:#06x}",
+            s[0], s[2], s[3], raw.coe_details, raw.current_on_ebus, raw.physical_port
+        )
+    });
+    let pdos: Vec<String> = i
+        .pdos
+        .iter()
+        .map(|p| {
+            let e: Vec<String> = p
+                .entries
+                .iter()
+                .map(|e| {
+                    format!(
+                        "{:#06x}:{} {:?} t{} b{}",
+                        e.index, e.sub, e.name, e.data_type, e.bit_len
+                    )
+                })
+                .collect();
+            format!(
+                "{:?} {:#06x} {:?} sm{} f{:#x} [{}]",
+                p.direction,
+                p.index,
+                p.name,
+                p.sm_raw,
+                p.flags,
+                e.join(", ")
+            )
+        })
+        .collect();
+    let fmmus: Vec<u8> = i
+        .fmmus
+        .iter()
+        .copied()
+        .filter(|u| *u != 0xFF && *u != 0)
+        .collect();
+    format!(
+        "pdi {:04x?}\nidentity {:x?}\nmailbox {:#x} {:?}\ngeneral {g:?}\nfmmus {fmmus:?}\nsms {:?}\npdos {pdos:#?}\neeprom {}",
+        i.pdi, i.identity, i.mailbox_protocols, i.standard_mailbox, i.sync_managers, i.eeprom_bytes
+    )
+}
+
+#[test]
+fn twins_from_the_synthetic_esi_files_show_what_the_real_devices_sii_dumps_show() {
+    let dir = testdata("esi");
+    for (file, ty, dump_name) in [
+        ("EK1100.xml", "EK1100", "ek1100-eeprom-dump.bin"),
+        ("EL2xxx.xml", "EL2004", "el2004-eeprom-dump.bin"),
+        ("EL2xxx.xml", "EL2828", "el2828.bin"),
+    ] {
+        let esi = ecat_twin::load_esi(&dir.join(file)).expect("ESI loads");
+        let dev = esi.device(Some(ty), None).expect("device");
+        let twin = ecat_twin::twin(dev, None, InputRule::Hold).expect("twin");
+        let ours = inspect(twin.esc().sii()).expect("twin SII decodes");
+        let real = inspect(&dump(dump_name)).expect("dump decodes");
+        assert!(ours.problems.is_empty(), "{ty}: {:?}", ours.problems);
+        assert!(ours.crc_ok(), "{ty}: checksum");
+        assert_eq!(
+            visible(&ours),
+            visible(&real),
+            "{ty}: twin SII vs the real device's dump"
+        );
+        assert_eq!(
+            image_bytes(&ours),
+            image_bytes(&real),
+            "{ty}: process image"
+        );
+    }
+}
+
+use ecat_slave::host::chain::LineSlave as _;
+
+#[test]
+fn an_esi_carrying_the_eeprom_data_is_served_byte_for_byte() {
+    // The real EL2889's EEPROM as `<Eeprom><Data>` of an ESI made here:
+    // the twin serves exactly the real device's image.
+    let real = dump("el2889.bin");
+    let hex: String = real.iter().map(|b| format!("{b:02X}")).collect();
+    let esi = format!(
+        r##"<?xml version="1.0"?>
+<EtherCATInfo><Vendor><Id>#x2</Id><Name>V</Name></Vendor><Descriptions><Devices>
+<Device Physics="KK"><Type ProductCode="#x0b493052" RevisionNo="#x00110000">EL2889</Type><Name>EL2889</Name>
+<Sm StartAddress="#x0f00" ControlByte="#x44" Enable="1">Outputs</Sm>
+<Sm StartAddress="#x0f01" ControlByte="#x44" Enable="1">Outputs</Sm>
+<Eeprom><Data>{hex}</Data></Eeprom></Device></Devices></Descriptions></EtherCATInfo>"##
+    );
+    let file = EsiFile::parse(&esi).expect("parses");
+    let dev = &file.devices[0];
+    let twin = ecat_twin::twin(dev, None, InputRule::Hold).expect("twin");
+    assert_eq!(&twin.esc().sii()[..real.len()], &real[..]);
+    // With an alias from a line, only word 4 and the checksum change.
+    let aliased = ecat_twin::sii::image(dev, Some(0x1234)).expect("image");
+    assert_eq!(&aliased[8..10], &[0x34, 0x12]);
+    let i = inspect(&aliased).expect("decodes");
+    assert!(i.crc_ok());
+    assert_eq!(&aliased[16..real.len()], &real[16..]);
+}
+
+#[test]
+fn ethercrab_brings_the_eni_line_to_op_with_the_real_devices_identities_and_images() {
+    let (slaves, placed) = twins::from_eni(
+        &testdata("machine.xml"),
+        Some(&testdata("esi")),
+        InputRule::Hold,
+    )
+    .expect("line from the ENI");
+    assert_eq!(placed.len(), 5);
+    // From the dumps: identity and process image of the real devices; the
+    // EL1008 (no dump) and the PAM from their own descriptions.
+    let real: Vec<(u32, u32, (usize, usize))> = [
+        "ek1100-eeprom-dump.bin",
+        "el2004-eeprom-dump.bin",
+        "el2828.bin",
+    ]
+    .iter()
+    .map(|n| {
+        let i = inspect(&dump(n)).expect("dump");
+        (
+            i.identity.vendor_id,
+            i.identity.product_code,
+            image_bytes(&i),
+        )
+    })
+    .collect();
+    smol::block_on(async {
+        let bus = VirtualBus::with_chain(Chain::with_slaves(slaves), Clock::simulated(), None)
+            .expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init to PRE-OP");
+        assert_eq!(group.len(), 5);
+        let names: Vec<String> = group.iter(md).map(|sd| sd.name().to_string()).collect();
+        eprintln!("ethercrab sees: {names:?}");
+        for (k, (sd, (vendor, product, _))) in group.iter(md).zip(&real).enumerate() {
+            let id = sd.identity();
+            assert_eq!(
+                (id.vendor_id, id.product_id),
+                (*vendor, *product),
+                "slave {k}"
+            );
+        }
+        let pam = group.iter(md).nth(4).expect("PAM");
+        assert_eq!(pam.name(), "PAM-199-P-ETC");
+        assert_eq!(
+            pam.alias_address(),
+            42,
+            "the ENI's alias is in the PAM's SII"
+        );
+        let group = group.into_op(md).await.expect("into OP");
+        let sizes: Vec<(usize, usize)> = group
+            .iter(md)
+            .map(|sd| (sd.outputs_raw().len(), sd.inputs_raw().len()))
+            .collect();
+        assert_eq!(
+            &sizes[..3],
+            &real.iter().map(|r| r.2).collect::<Vec<_>>()[..],
+            "EK1100, EL2004, EL2828 images as their dumps say"
+        );
+        assert_eq!(&sizes[3..], &[(0, 1), (5, 14)], "EL1008 and PAM");
+        // Outputs to both output terminals, an input pattern on the EL1008.
+        for (k, sd) in group.iter(md).enumerate() {
+            let mut out = sd.outputs_raw_mut();
+            match k {
+                1 => out[0] = 0x0A,
+                2 => out[0] = 0xA5,
+                _ => {}
+            }
+        }
+        {
+            let mut chain = lock(&bus.chain);
+            let el1008 = chain.slaves_mut()[3]
+                .as_any_mut()
+                .downcast_mut::<EscTwin>()
+                .expect("slave 3 is an ESI twin");
+            el1008.set_inputs(&[0x5C]);
+        }
+        for _ in 0..10 {
+            bus.clock.advance(Duration::from_millis(1));
+            group.tx_rx(md).await.expect("tx_rx");
+        }
+        let el1008_in = group.iter(md).nth(3).expect("EL1008").inputs_raw().to_vec();
+        assert_eq!(
+            el1008_in,
+            [0x5C],
+            "the EL1008 twin's inputs reach the master"
+        );
+        let chain = lock(&bus.chain);
+        let outs = |k: usize| {
+            chain.slaves()[k]
+                .as_any()
+                .downcast_ref::<EscTwin>()
+                .expect("ESI twin")
+                .outputs()
+                .to_vec()
+        };
+        assert_eq!(outs(1), [0x0A], "EL2004 outputs");
+        assert_eq!(outs(2), [0xA5], "EL2828 outputs");
+        for k in 0..5 {
+            assert_eq!(
+                chain.slaves()[k].al_status().state,
+                ecat_slave::al::AlState::Op,
+                "slave {k} in OP"
+            );
+        }
+    });
+}
+
+#[test]
+fn a_counter_twin_changes_its_inputs_every_cycle() {
+    let esi = ecat_twin::load_esi(&testdata("esi/EL1008.xml")).expect("ESI");
+    let dev = esi.device(None, None).expect("one device");
+    let twin = ecat_twin::twin(dev, None, InputRule::Counter).expect("twin");
+    smol::block_on(async {
+        let bus = VirtualBus::with_chain(
+            Chain::with_slaves(vec![Box::new(twin)]),
+            Clock::simulated(),
+            None,
+        )
+        .expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus
+            .init()
+            .await
+            .expect("init")
+            .into_op(md)
+            .await
+            .expect("OP");
+        let mut seen = std::collections::BTreeSet::new();
+        for _ in 0..5 {
+            bus.clock.advance(Duration::from_millis(1));
+            group.tx_rx(md).await.expect("tx_rx");
+            seen.insert(group.iter(md).next().expect("slave").inputs_raw()[0]);
+        }
+        assert!(seen.len() >= 3, "counter values seen: {seen:?}");
+    });
+}
+
+/// A copy of the EL2xxx ESI with one text replaced.
+fn broken(from: &str, to: &str) -> String {
+    let text = std::fs::read_to_string(testdata("esi/EL2xxx.xml")).expect("ESI");
+    assert!(text.contains(from), "{from}");
+    text.replacen(from, to, 1)
+}
+
+fn line_of(text: &str, needle: &str) -> u32 {
+    text.lines()
+        .position(|l| l.contains(needle))
+        .expect("needle") as u32
+        + 1
+}
+
+#[test]
+fn an_esi_with_an_unknown_data_type_names_the_element_and_line() {
+    let text = broken(
+        "<Name>Output</Name><DataType>BOOL</DataType></Entry>\n        </RxPdo>\n        <RxPdo Fixed=\"1\" Mandatory=\"1\" Sm=\"0\">\n          <Index>#x1601</Index>",
+        "<Name>Output</Name><DataType>BOOLEAN9</DataType></Entry>\n        </RxPdo>\n        <RxPdo Fixed=\"1\" Mandatory=\"1\" Sm=\"0\">\n          <Index>#x1601</Index>",
+    );
+    let e = EsiFile::parse(&text).unwrap_err();
+    let line = line_of(&text, "BOOLEAN9");
+    assert_eq!(
+        e.to_string(),
+        format!("<DataType> at line {line}: unknown data type 'BOOLEAN9'")
+    );
+}
+
+#[test]
+fn an_esi_pdo_entry_outside_the_dictionary_names_the_element_and_line() {
+    let text = broken(
+        "<GroupType>DigOut</GroupType>\n        <Fmmu>Outputs</Fmmu>\n        <Sm ControlByte=\"#x44\" StartAddress=\"#x0f00\" Enable=\"1\" OpOnly=\"1\">",
+        "<GroupType>DigOut</GroupType>\n        <Profile><Dictionary><Objects><Object><Index>#x7000</Index><Name>Ch 1</Name><Type>BOOL</Type><BitSize>1</BitSize></Object></Objects></Dictionary></Profile>\n        <Fmmu>Outputs</Fmmu>\n        <Sm ControlByte=\"#x44\" StartAddress=\"#x0f00\" Enable=\"1\" OpOnly=\"1\">",
+    );
+    let e = EsiFile::parse(&text).unwrap_err();
+    // The first entry maps 0x7000:01; the dictionary has only 0x7000:00.
+    let line = line_of(&text, "<Entry><Index>#x7000</Index>");
+    assert_eq!(
+        e.to_string(),
+        format!("<Entry> at line {line}: PDO entry 0x7000:01 is not an object of the dictionary")
+    );
+}
+
+#[test]
+fn an_esi_sm_too_small_for_its_pdos_names_the_element_and_line() {
+    // Four 1-bit PDOs fit one byte; make the EL2828's 8 need 2 bytes.
+    let text = broken(
+        "<Entry><Index>#x7070</Index><SubIndex>1</SubIndex><BitLen>1</BitLen>",
+        "<Entry><Index>#x7070</Index><SubIndex>1</SubIndex><BitLen>2</BitLen>",
+    );
+    let text = text.replacen(
+        "<DataType>BOOL</DataType></Entry></RxPdo>\n      </Device>",
+        "<DataType>BIT2</DataType></Entry></RxPdo>\n      </Device>",
+        1,
+    );
+    let e = EsiFile::parse(&text).unwrap_err();
+    let line = line_of(&text, "DefaultSize=\"1\"");
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "<Sm> at line {line}: SM0 DefaultSize 1 bytes is too small for 2 bytes (the PDOs assigned to it)"
+        )
+    );
+}
+
+#[test]
+fn pam_slave_refuses_a_broken_esi_before_serving_with_exit_2() {
+    let Some(bin) = crate::common::runner_binary() else {
+        return crate::common::skip("pam-slave binary not built next to the test binary");
+    };
+    let dir = std::env::temp_dir().join(format!("twin-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let bad = dir.join("bad.xml");
+    let text = broken("<DataType>BOOL</DataType>", "<DataType>FLOAT7</DataType>");
+    std::fs::write(&bad, &text).expect("write");
+    // No --dry-run: it must stop before opening the (missing) interface.
+    let out = std::process::Command::new(&bin)
+        .args(["--iface", "no-such-if0", "--esi"])
+        .arg(&bad)
+        .args(["--type", "EL2004"])
+        .output()
+        .expect("run");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    let line = line_of(&text, "FLOAT7");
+    assert!(
+        err.contains(&format!(
+            "<DataType> at line {line}: unknown data type 'FLOAT7'"
+        )),
+        "{err}"
+    );
+    assert!(err.contains("bad.xml"), "names the file: {err}");
+    // An ENI slave no device matches: listed, nothing starts.
+    let eni = dir.join("eni.xml");
+    std::fs::write(
+        &eni,
+        std::fs::read_to_string(testdata("machine.xml"))
+            .expect("ENI")
+            .replace(
+                "<ProductCode>66072658</ProductCode>",
+                "<ProductCode>99</ProductCode>",
+            ),
+    )
+    .expect("write");
+    let out = std::process::Command::new(&bin)
+        .args(["--iface", "no-such-if0", "--eni"])
+        .arg(&eni)
+        .arg("--esi-dir")
+        .arg(testdata("esi"))
+        .output()
+        .expect("run");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("no device for slave 3 'Term 4 (EL1008)'"),
+        "{err}"
+    );
+    assert!(err.contains("product 0x00000063"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

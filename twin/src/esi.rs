@@ -1,0 +1,880 @@
+//! Loading one device of an ESI file (ETG.2000) for a software twin.
+//!
+//! [`EsiFile::parse`] reads the vendor and every `Descriptions/Devices/Device`
+//! of a file; [`EsiFile::device`] picks one by type name and revision. What a
+//! twin needs is read into [`EsiDevice`]: identity, names, group, physics,
+//! FMMUs, SyncManagers, PDOs (with `Sm`, `Fixed`, `Mandatory`, `Exclude`),
+//! mailbox protocols, `<Eeprom>` (`<Data>` or `<ByteSize>`/`<ConfigData>`),
+//! E-Bus current, DC op modes and, when the device has one, the object
+//! dictionary's objects and data types (to check the PDO entries).
+//!
+//! Every error names the element and the line it starts on
+//! ([`EsiError`]); a file that has one starts nothing.
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+use ecat_slave::sii::{FmmuUsage, SmType, pdo_flags, protocols};
+
+use crate::xml::{self, Element, hex_binary};
+
+/// Where in the file something is: the element name and its line.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct At {
+    /// Element name (`RxPdo`, `Entry`, `Sm`).
+    pub element: String,
+    /// Line of its start tag (1-based).
+    pub line: u32,
+}
+
+impl At {
+    fn of(e: &Element) -> Self {
+        At {
+            element: e.name.clone(),
+            line: e.line,
+        }
+    }
+}
+
+impl fmt::Display for At {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "<{}> at line {}", self.element, self.line)
+    }
+}
+
+/// Why an ESI file cannot describe a twin.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum EsiError {
+    /// The file is not well-formed XML.
+    #[error("not well-formed XML: {0}")]
+    Xml(#[from] xml::XmlError),
+    /// The root element is not `EtherCATInfo`.
+    #[error("root element is <{0}>, not <EtherCATInfo>")]
+    NotEsi(String),
+    /// A required element or attribute is missing.
+    #[error("{at}: missing {what}")]
+    Missing {
+        /// The element that lacks it.
+        at: At,
+        /// What is missing.
+        what: &'static str,
+    },
+    /// A value cannot be read.
+    #[error("{at}: bad {what} '{value}'")]
+    BadValue {
+        /// The element holding it.
+        at: At,
+        /// What the value is.
+        what: &'static str,
+        /// The text found.
+        value: String,
+    },
+    /// A PDO entry or object uses a data type the twin does not know.
+    #[error("{at}: unknown data type '{name}'")]
+    UnknownDataType {
+        /// The element.
+        at: At,
+        /// The type name.
+        name: String,
+    },
+    /// A PDO entry maps an object the device's dictionary does not have.
+    #[error("{at}: PDO entry {index:#06x}:{sub:02x} is not an object of the dictionary")]
+    EntryNotInDictionary {
+        /// The `Entry` element.
+        at: At,
+        /// Object index.
+        index: u16,
+        /// Subindex.
+        sub: u8,
+    },
+    /// A SyncManager is smaller than what is assigned to it.
+    #[error("{at}: SM{sm} DefaultSize {size} bytes is too small for {needed} bytes ({what})")]
+    SmTooSmall {
+        /// The `Sm` element.
+        at: At,
+        /// SyncManager number.
+        sm: u8,
+        /// Its size.
+        size: u16,
+        /// Bytes needed.
+        needed: u16,
+        /// What needs them.
+        what: &'static str,
+    },
+    /// A PDO names a SyncManager the device does not have, or one of the
+    /// wrong direction.
+    #[error("{at}: PDO {index:#06x} is assigned to SM{sm}, which is {problem}")]
+    BadPdoSm {
+        /// The PDO element.
+        at: At,
+        /// PDO index.
+        index: u16,
+        /// The SyncManager.
+        sm: u8,
+        /// What is wrong with it.
+        problem: &'static str,
+    },
+    /// No device of the file matches the type and revision asked for.
+    #[error("no device {wanted} in the file (it has: {known})")]
+    NoSuchDevice {
+        /// What was asked for.
+        wanted: String,
+        /// `type rev` of every device of the file.
+        known: String,
+    },
+    /// Several devices match and none was chosen.
+    #[error("the file has {count} devices; choose one with --type (it has: {known})")]
+    Ambiguous {
+        /// How many.
+        count: usize,
+        /// `type rev` of every device.
+        known: String,
+    },
+}
+
+/// One SyncManager of the ESI (`Device/Sm`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EsiSm {
+    /// Physical start address.
+    pub start: u16,
+    /// `DefaultSize` (0 when absent: the master sizes it).
+    pub default_size: u16,
+    /// Control register byte.
+    pub control: u8,
+    /// SII enable byte: bit 0 enable, bit 1 fixed, bit 2 virtual, bit 3 OpOnly.
+    pub enable: u8,
+    /// Usage from the text (`MBoxOut`, `MBoxIn`, `Outputs`, `Inputs`).
+    pub kind: SmType,
+    /// Where it is.
+    pub at: At,
+}
+
+/// One entry of a PDO.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EsiPdoEntry {
+    /// Object index (0: padding).
+    pub index: u16,
+    /// Subindex.
+    pub sub: u8,
+    /// Bit length.
+    pub bit_len: u8,
+    /// Name.
+    pub name: String,
+    /// CoE data type code (0 for padding).
+    pub data_type: u8,
+}
+
+/// One PDO (`Device/RxPdo` or `Device/TxPdo`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EsiPdo {
+    /// PDO index.
+    pub index: u16,
+    /// Name.
+    pub name: String,
+    /// Default SyncManager (`Sm` attribute).
+    pub sm: Option<u8>,
+    /// SII PDO flags (mandatory, fixed, ...).
+    pub flags: u16,
+    /// PDOs this one excludes.
+    pub excludes: Vec<u16>,
+    /// Mapped entries.
+    pub entries: Vec<EsiPdoEntry>,
+    /// Where it is.
+    pub at: At,
+}
+
+impl EsiPdo {
+    /// Total bit length of the entries.
+    pub fn bits(&self) -> u32 {
+        self.entries.iter().map(|e| u32::from(e.bit_len)).sum()
+    }
+}
+
+/// One DC operation mode (`Device/Dc/OpMode`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EsiDcMode {
+    /// Name.
+    pub name: String,
+    /// `AssignActivate` (register 0x0980 value).
+    pub assign_activate: u16,
+}
+
+/// One device of an ESI file, as far as a twin needs it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EsiDevice {
+    /// Vendor ID.
+    pub vendor_id: u32,
+    /// Vendor name.
+    pub vendor_name: String,
+    /// Order code (`Type`).
+    pub type_name: String,
+    /// Product code.
+    pub product_code: u32,
+    /// Revision number.
+    pub revision: u32,
+    /// Device name (`Name`, the first one).
+    pub name: String,
+    /// Group type.
+    pub group_type: String,
+    /// Group name (from `Descriptions/Groups`).
+    pub group_name: String,
+    /// `Physics` attribute (`YY`, `KK`, `YKY`).
+    pub physics: String,
+    /// FMMU usages in order.
+    pub fmmus: Vec<FmmuUsage>,
+    /// SyncManagers in order.
+    pub sms: Vec<EsiSm>,
+    /// RxPDOs (master to slave).
+    pub rx_pdos: Vec<EsiPdo>,
+    /// TxPDOs (slave to master).
+    pub tx_pdos: Vec<EsiPdo>,
+    /// Mailbox protocols (SII word 0x1C bits); 0 without a mailbox.
+    pub mailbox_protocols: u16,
+    /// CoE details byte for the SII General category.
+    pub coe_details: u8,
+    /// `Eeprom/Data`: the whole SII image, served verbatim.
+    pub eeprom_data: Option<Vec<u8>>,
+    /// `Eeprom/ByteSize`.
+    pub eeprom_bytes: Option<u32>,
+    /// `Eeprom/ConfigData`: SII words 0x00.. (PDI control, config, ...).
+    pub config_data: Vec<u8>,
+    /// `Electrical/EBusCurrent`, mA (negative: the device feeds the E-Bus).
+    pub ebus_current_ma: i16,
+    /// DC operation modes.
+    pub dc_modes: Vec<EsiDcMode>,
+    /// Objects of the dictionary: `(index, sub)` → bit length; empty when
+    /// the ESI has no `Profile/Dictionary`.
+    pub objects: BTreeMap<(u16, u8), u16>,
+    /// Where the device is.
+    pub at: At,
+}
+
+impl EsiDevice {
+    /// `TYPE rev 0x...`, for messages.
+    pub fn label(&self) -> String {
+        format!("{} rev {:#010x}", self.type_name, self.revision)
+    }
+
+    /// Whether the device has a mailbox (and so a firmware behind its ESC).
+    pub fn has_mailbox(&self) -> bool {
+        self.sms
+            .iter()
+            .any(|s| matches!(s.kind, SmType::MailboxOut | SmType::MailboxIn))
+    }
+
+    /// Bytes of process data the default PDO assignment puts on `sm`.
+    pub fn sm_bytes(&self, sm: u8) -> u16 {
+        let bits: u32 = self
+            .rx_pdos
+            .iter()
+            .chain(&self.tx_pdos)
+            .filter(|p| p.sm == Some(sm))
+            .map(EsiPdo::bits)
+            .sum();
+        u16::try_from(bits.div_ceil(8)).unwrap_or(u16::MAX)
+    }
+
+    /// Output (RxPDO) bytes of the default assignment.
+    pub fn output_bytes(&self) -> u16 {
+        self.pd_bytes(&self.rx_pdos)
+    }
+
+    /// Input (TxPDO) bytes of the default assignment.
+    pub fn input_bytes(&self) -> u16 {
+        self.pd_bytes(&self.tx_pdos)
+    }
+
+    fn pd_bytes(&self, pdos: &[EsiPdo]) -> u16 {
+        // Per SyncManager, rounded up to whole bytes (as a master sizes
+        // the SMs).
+        let mut sms: Vec<u8> = pdos.iter().filter_map(|p| p.sm).collect();
+        sms.sort_unstable();
+        sms.dedup();
+        sms.iter().map(|sm| self.sm_bytes(*sm)).sum()
+    }
+}
+
+/// A parsed ESI file: its vendor and devices.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EsiFile {
+    /// Every device of the file, in file order.
+    pub devices: Vec<EsiDevice>,
+}
+
+fn number(e: &Element, text: &str, what: &'static str) -> Result<i64, EsiError> {
+    let t = text.trim();
+    let v = if let Some(h) = t
+        .strip_prefix("#x")
+        .or_else(|| t.strip_prefix("#X"))
+        .or_else(|| t.strip_prefix("0x"))
+        .or_else(|| t.strip_prefix("0X"))
+    {
+        i64::from_str_radix(h, 16).ok()
+    } else {
+        t.parse().ok()
+    };
+    v.ok_or_else(|| EsiError::BadValue {
+        at: At::of(e),
+        what,
+        value: t.to_string(),
+    })
+}
+
+fn ranged<T: TryFrom<i64>>(e: &Element, text: &str, what: &'static str) -> Result<T, EsiError> {
+    let v = number(e, text, what)?;
+    T::try_from(v).map_err(|_| EsiError::BadValue {
+        at: At::of(e),
+        what,
+        value: text.trim().to_string(),
+    })
+}
+
+fn attr_num<T: TryFrom<i64>>(
+    e: &Element,
+    name: &str,
+    what: &'static str,
+) -> Result<Option<T>, EsiError> {
+    e.attr(name).map(|v| ranged(e, v, what)).transpose()
+}
+
+fn child_num<T: TryFrom<i64>>(
+    e: &Element,
+    name: &str,
+    what: &'static str,
+) -> Result<Option<T>, EsiError> {
+    e.child(name).map(|c| ranged(c, &c.text, what)).transpose()
+}
+
+fn required<T>(v: Option<T>, e: &Element, what: &'static str) -> Result<T, EsiError> {
+    v.ok_or_else(|| EsiError::Missing {
+        at: At::of(e),
+        what,
+    })
+}
+
+fn flag(e: &Element, name: &str) -> bool {
+    matches!(e.attr(name), Some("1" | "true"))
+}
+
+/// The CoE code of a base data type name of ETG.2000 (`BOOL`, `UINT`,
+/// `BIT3`, `STRING(8)`...), `None` for a name it does not know.
+pub fn base_type_code(name: &str) -> Option<u8> {
+    let n = name.trim();
+    if let Some(bits) = n.strip_prefix("BIT") {
+        let b: u8 = bits.parse().ok()?;
+        return (1..=8).contains(&b).then(|| 0x2F + b);
+    }
+    if n.starts_with("STRING(") && n.ends_with(')') {
+        return Some(0x09);
+    }
+    Some(match n {
+        "BOOL" => 0x01,
+        "SINT" => 0x02,
+        "INT" => 0x03,
+        "DINT" => 0x04,
+        "USINT" | "BYTE" => 0x05,
+        "UINT" | "WORD" => 0x06,
+        "UDINT" | "DWORD" => 0x07,
+        "REAL" => 0x08,
+        "LREAL" => 0x11,
+        "INT24" => 0x10,
+        "UINT24" => 0x16,
+        "LINT" => 0x15,
+        "ULINT" => 0x1B,
+        _ => return None,
+    })
+}
+
+/// Device-specific data types of a dictionary: name → base type code.
+fn dictionary_types(dict: &Element) -> BTreeMap<String, u8> {
+    let mut types = BTreeMap::new();
+    let Some(dts) = dict.child("DataTypes") else {
+        return types;
+    };
+    // A named type resolves to its BaseType, or to itself when it is an
+    // array/record/enum (the code of the PDO entry is then the base of
+    // its elements, which the SII does not need exactly).
+    for dt in dts.children_named("DataType") {
+        let Some(name) = dt.text_at("Name") else {
+            continue;
+        };
+        let base = dt
+            .text_at("BaseType")
+            .and_then(base_type_code)
+            .or_else(|| base_type_code(name));
+        match base {
+            Some(code) => {
+                types.insert(name.to_string(), code);
+            }
+            None if dt.child("EnumInfo").is_some() || dt.child("SubItem").is_some() => {
+                // Enumerations and records: known, an unsigned of their size.
+                types.insert(name.to_string(), 0x07);
+            }
+            None => {}
+        }
+    }
+    types
+}
+
+/// `(index, sub)` → bit length of every object of a dictionary.
+fn dictionary_objects(dict: &Element) -> Result<BTreeMap<(u16, u8), u16>, EsiError> {
+    let mut out = BTreeMap::new();
+    let Some(objs) = dict.child("Objects") else {
+        return Ok(out);
+    };
+    // Bit sizes of the named record/array types, per subindex.
+    let mut type_subs: BTreeMap<&str, Vec<(u8, u16)>> = BTreeMap::new();
+    if let Some(dts) = dict.child("DataTypes") {
+        for dt in dts.children_named("DataType") {
+            let Some(name) = dt.text_at("Name") else {
+                continue;
+            };
+            let mut subs = Vec::new();
+            for si in dt.children_named("SubItem") {
+                let sub = child_num::<u8>(si, "SubIdx", "SubIdx")?.unwrap_or(0);
+                let bits = child_num::<u16>(si, "BitSize", "BitSize")?.unwrap_or(0);
+                subs.push((sub, bits));
+            }
+            type_subs.insert(name, subs);
+        }
+    }
+    for o in objs.children_named("Object") {
+        let index: u16 = required(child_num(o, "Index", "object Index")?, o, "<Index>")?;
+        let bits: u16 = child_num(o, "BitSize", "BitSize")?.unwrap_or(0);
+        let ty = o.text_at("Type").unwrap_or("");
+        match type_subs.get(ty).filter(|s| !s.is_empty()) {
+            Some(subs) => {
+                for (sub, b) in subs {
+                    out.insert((index, *sub), *b);
+                }
+                // Array types list one element; the object's Info says
+                // how many subindices exist.
+                if let Some(info) = o.child("Info") {
+                    for si in info.children_named("SubItem") {
+                        if let Some(n) = si.text_at("Name")
+                            && let Some(s) = n
+                                .strip_prefix("SubIndex ")
+                                .and_then(|s| s.trim().parse::<u8>().ok())
+                        {
+                            let b = subs.last().map_or(0, |l| l.1);
+                            out.entry((index, s)).or_insert(b);
+                        }
+                    }
+                }
+            }
+            None => {
+                out.insert((index, 0), bits);
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn sm_kind(e: &Element) -> Result<SmType, EsiError> {
+    Ok(match e.text.trim() {
+        "MBoxOut" => SmType::MailboxOut,
+        "MBoxIn" => SmType::MailboxIn,
+        "Outputs" => SmType::ProcessOut,
+        "Inputs" => SmType::ProcessIn,
+        "" => SmType::Unused,
+        other => {
+            return Err(EsiError::BadValue {
+                at: At::of(e),
+                what: "SyncManager type",
+                value: other.to_string(),
+            });
+        }
+    })
+}
+
+fn parse_pdo(
+    p: &Element,
+    types: &BTreeMap<String, u8>,
+    objects: &BTreeMap<(u16, u8), u16>,
+) -> Result<EsiPdo, EsiError> {
+    let index: u16 = required(child_num(p, "Index", "PDO Index")?, p, "<Index>")?;
+    let sm: Option<u8> = attr_num(p, "Sm", "Sm")?;
+    let mut flags = 0u16;
+    if flag(p, "Mandatory") {
+        flags |= pdo_flags::MANDATORY;
+    }
+    if flag(p, "Fixed") {
+        flags |= pdo_flags::FIXED_CONTENT;
+    }
+    if flag(p, "Virtual") {
+        flags |= pdo_flags::VIRTUAL_CONTENT;
+    }
+    let mut excludes = Vec::new();
+    for x in p.children_named("Exclude") {
+        excludes.push(ranged(x, &x.text, "Exclude")?);
+    }
+    let mut entries = Vec::new();
+    for en in p.children_named("Entry") {
+        let eindex: u16 = required(child_num(en, "Index", "entry Index")?, en, "<Index>")?;
+        let bit_len: u8 = required(child_num(en, "BitLen", "BitLen")?, en, "<BitLen>")?;
+        let sub: u8 = child_num(en, "SubIndex", "SubIndex")?.unwrap_or(0);
+        let name = en.text_at("Name").unwrap_or("").to_string();
+        let data_type = if eindex == 0 {
+            0
+        } else {
+            let dt = required(en.child("DataType"), en, "<DataType>")?;
+            match base_type_code(&dt.text).or_else(|| types.get(dt.text.trim()).copied()) {
+                Some(c) => c,
+                None => {
+                    return Err(EsiError::UnknownDataType {
+                        at: At::of(dt),
+                        name: dt.text.trim().to_string(),
+                    });
+                }
+            }
+        };
+        if eindex != 0 && !objects.is_empty() && !objects.contains_key(&(eindex, sub)) {
+            return Err(EsiError::EntryNotInDictionary {
+                at: At::of(en),
+                index: eindex,
+                sub,
+            });
+        }
+        entries.push(EsiPdoEntry {
+            index: eindex,
+            sub,
+            bit_len,
+            name,
+            data_type,
+        });
+    }
+    Ok(EsiPdo {
+        index,
+        name: p.text_at("Name").unwrap_or("").to_string(),
+        sm,
+        flags,
+        excludes,
+        entries,
+        at: At::of(p),
+    })
+}
+
+fn first_name(e: &Element) -> String {
+    // Several `Name`s with LcId: prefer English (1033), else the first.
+    e.children_named("Name")
+        .find(|n| n.attr("LcId") == Some("1033"))
+        .or_else(|| e.child("Name"))
+        .map(|n| n.text.clone())
+        .unwrap_or_default()
+}
+
+fn parse_device(
+    d: &Element,
+    vendor_id: u32,
+    vendor_name: &str,
+    groups: &BTreeMap<String, String>,
+) -> Result<EsiDevice, EsiError> {
+    let ty = required(d.child("Type"), d, "<Type>")?;
+    let product_code: u32 = attr_num(ty, "ProductCode", "ProductCode")?.unwrap_or(0);
+    let revision: u32 = attr_num(ty, "RevisionNo", "RevisionNo")?.unwrap_or(0);
+    let group_type = d.text_at("GroupType").unwrap_or("").to_string();
+    let dict = d.path("Profile/Dictionary");
+    let types = dict.map(dictionary_types).unwrap_or_default();
+    let objects = match dict {
+        Some(di) => dictionary_objects(di)?,
+        None => BTreeMap::new(),
+    };
+    let mut fmmus = Vec::new();
+    for f in d.children_named("Fmmu") {
+        fmmus.push(match f.text.trim() {
+            "Outputs" => FmmuUsage::Outputs,
+            "Inputs" => FmmuUsage::Inputs,
+            "MBoxState" => FmmuUsage::SyncMStatus,
+            "" => FmmuUsage::NotUsed,
+            other => {
+                return Err(EsiError::BadValue {
+                    at: At::of(f),
+                    what: "FMMU usage",
+                    value: other.to_string(),
+                });
+            }
+        });
+    }
+    let mut sms = Vec::new();
+    for s in d.children_named("Sm") {
+        let start: u16 = required(
+            attr_num(s, "StartAddress", "StartAddress")?,
+            s,
+            "StartAddress attribute",
+        )?;
+        let mut enable: u8 = attr_num::<u8>(s, "Enable", "Enable")?.unwrap_or(0) & 0x01;
+        if flag(s, "Virtual") {
+            enable |= 0x04;
+        }
+        if flag(s, "OpOnly") {
+            enable |= 0x08;
+        }
+        sms.push(EsiSm {
+            start,
+            default_size: attr_num(s, "DefaultSize", "DefaultSize")?.unwrap_or(0),
+            control: attr_num(s, "ControlByte", "ControlByte")?.unwrap_or(0),
+            enable,
+            kind: sm_kind(s)?,
+            at: At::of(s),
+        });
+    }
+    let mut rx_pdos = Vec::new();
+    for p in d.children_named("RxPdo") {
+        rx_pdos.push(parse_pdo(p, &types, &objects)?);
+    }
+    let mut tx_pdos = Vec::new();
+    for p in d.children_named("TxPdo") {
+        tx_pdos.push(parse_pdo(p, &types, &objects)?);
+    }
+    let mut mailbox_protocols = 0u16;
+    let mut coe_details = 0u8;
+    if let Some(m) = d.child("Mailbox") {
+        for (name, bit) in [
+            ("AoE", protocols::AOE),
+            ("EoE", protocols::EOE),
+            ("CoE", protocols::COE),
+            ("FoE", protocols::FOE),
+            ("SoE", protocols::SOE),
+            ("VoE", protocols::VOE),
+        ] {
+            if m.child(name).is_some() {
+                mailbox_protocols |= bit;
+            }
+        }
+        if let Some(c) = m.child("CoE") {
+            coe_details = 0x01
+                | u8::from(flag(c, "SdoInfo")) << 1
+                | u8::from(flag(c, "PdoAssign")) << 2
+                | u8::from(flag(c, "PdoConfig")) << 3
+                | u8::from(flag(c, "PdoUpload")) << 4
+                | u8::from(flag(c, "CompleteAccess")) << 5;
+        }
+    }
+    let ee = d.child("Eeprom");
+    let eeprom_data = match ee.and_then(|e| e.child("Data")) {
+        Some(data) => Some(hex_binary(&data.text).ok_or_else(|| EsiError::BadValue {
+            at: At::of(data),
+            what: "hexBinary",
+            value: data.text.chars().take(16).collect(),
+        })?),
+        None => None,
+    };
+    let config_data = match ee.and_then(|e| e.child("ConfigData")) {
+        Some(cd) => hex_binary(&cd.text).ok_or_else(|| EsiError::BadValue {
+            at: At::of(cd),
+            what: "hexBinary",
+            value: cd.text.clone(),
+        })?,
+        None => Vec::new(),
+    };
+    let eeprom_bytes = match ee {
+        Some(e) => child_num(e, "ByteSize", "ByteSize")?,
+        None => None,
+    };
+    let ebus_current_ma = match d.child("Electrical") {
+        Some(el) => child_num(el, "EBusCurrent", "EBusCurrent")?.unwrap_or(0),
+        None => 0,
+    };
+    let mut dc_modes = Vec::new();
+    if let Some(dc) = d.child("Dc") {
+        for m in dc.children_named("OpMode") {
+            let aa = m
+                .child("AssignActivate")
+                .map(|a| ranged::<u16>(a, &a.text, "AssignActivate"))
+                .transpose()?
+                .unwrap_or(0);
+            dc_modes.push(EsiDcMode {
+                name: m.text_at("Name").unwrap_or("").to_string(),
+                assign_activate: aa,
+            });
+        }
+    }
+    let dev = EsiDevice {
+        vendor_id,
+        vendor_name: vendor_name.to_string(),
+        type_name: ty.text.clone(),
+        product_code,
+        revision,
+        name: first_name(d),
+        group_name: groups.get(&group_type).cloned().unwrap_or_default(),
+        group_type,
+        physics: d.attr("Physics").unwrap_or("").to_string(),
+        fmmus,
+        sms,
+        rx_pdos,
+        tx_pdos,
+        mailbox_protocols,
+        coe_details,
+        eeprom_data,
+        eeprom_bytes,
+        config_data,
+        ebus_current_ma,
+        dc_modes,
+        objects,
+        at: At::of(d),
+    };
+    check_sms(&dev)?;
+    Ok(dev)
+}
+
+/// The smallest mailbox: a 6-byte header and a 10-byte CoE SDO.
+const MIN_MAILBOX: u16 = 16;
+
+fn check_sms(dev: &EsiDevice) -> Result<(), EsiError> {
+    for (i, s) in dev.sms.iter().enumerate() {
+        let sm = u8::try_from(i).unwrap_or(u8::MAX);
+        match s.kind {
+            SmType::MailboxOut | SmType::MailboxIn if s.default_size < MIN_MAILBOX => {
+                return Err(EsiError::SmTooSmall {
+                    at: s.at.clone(),
+                    sm,
+                    size: s.default_size,
+                    needed: MIN_MAILBOX,
+                    what: "a mailbox header and one CoE SDO",
+                });
+            }
+            SmType::ProcessOut | SmType::ProcessIn => {
+                let needed = dev.sm_bytes(sm);
+                if s.default_size != 0 && s.default_size < needed {
+                    return Err(EsiError::SmTooSmall {
+                        at: s.at.clone(),
+                        sm,
+                        size: s.default_size,
+                        needed,
+                        what: "the PDOs assigned to it",
+                    });
+                }
+            }
+            _ => {}
+        }
+    }
+    for (pdos, kind, dir) in [
+        (
+            &dev.rx_pdos,
+            SmType::ProcessOut,
+            "not an output SyncManager",
+        ),
+        (&dev.tx_pdos, SmType::ProcessIn, "not an input SyncManager"),
+    ] {
+        for p in pdos {
+            let Some(sm) = p.sm else { continue };
+            match dev.sms.get(usize::from(sm)) {
+                None => {
+                    return Err(EsiError::BadPdoSm {
+                        at: p.at.clone(),
+                        index: p.index,
+                        sm,
+                        problem: "not described by an <Sm>",
+                    });
+                }
+                Some(s) if s.kind != kind => {
+                    return Err(EsiError::BadPdoSm {
+                        at: p.at.clone(),
+                        index: p.index,
+                        sm,
+                        problem: dir,
+                    });
+                }
+                Some(_) => {}
+            }
+        }
+    }
+    Ok(())
+}
+
+impl EsiFile {
+    /// Parses every device of an ESI document.
+    pub fn parse(text: &str) -> Result<Self, EsiError> {
+        let root = xml::parse(text)?;
+        if root.name != "EtherCATInfo" {
+            return Err(EsiError::NotEsi(root.name));
+        }
+        let vendor = required(root.child("Vendor"), &root, "<Vendor>")?;
+        let vendor_id: u32 = required(child_num(vendor, "Id", "vendor Id")?, vendor, "<Id>")?;
+        let vendor_name = first_name(vendor);
+        let desc = required(root.child("Descriptions"), &root, "<Descriptions>")?;
+        let mut groups = BTreeMap::new();
+        if let Some(gs) = desc.child("Groups") {
+            for g in gs.children_named("Group") {
+                if let Some(t) = g.text_at("Type") {
+                    groups.insert(t.to_string(), first_name(g));
+                }
+            }
+        }
+        let devs = required(desc.child("Devices"), desc, "<Devices>")?;
+        let mut devices = Vec::new();
+        for d in devs.children_named("Device") {
+            devices.push(parse_device(d, vendor_id, &vendor_name, &groups)?);
+        }
+        if devices.is_empty() {
+            return Err(EsiError::Missing {
+                at: At::of(devs),
+                what: "<Device>",
+            });
+        }
+        Ok(EsiFile { devices })
+    }
+
+    fn known(&self) -> String {
+        self.devices
+            .iter()
+            .map(EsiDevice::label)
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// The device of type `type_name` (any case) and `revision`; either may
+    /// be left out when the file leaves no doubt (the highest revision of
+    /// a type is taken when no revision is given).
+    pub fn device(
+        &self,
+        type_name: Option<&str>,
+        revision: Option<u32>,
+    ) -> Result<&EsiDevice, EsiError> {
+        let matching: Vec<&EsiDevice> = self
+            .devices
+            .iter()
+            .filter(|d| type_name.is_none_or(|t| d.type_name.eq_ignore_ascii_case(t.trim())))
+            .filter(|d| revision.is_none_or(|r| d.revision == r))
+            .collect();
+        let types: std::collections::BTreeSet<&str> =
+            matching.iter().map(|d| d.type_name.as_str()).collect();
+        match (matching.is_empty(), types.len()) {
+            (true, _) => Err(EsiError::NoSuchDevice {
+                wanted: format!(
+                    "{}{}",
+                    type_name.unwrap_or("(any type)"),
+                    revision.map_or(String::new(), |r| format!(" rev {r:#010x}"))
+                ),
+                known: self.known(),
+            }),
+            (false, 1) => matching
+                .iter()
+                .max_by_key(|d| d.revision)
+                .copied()
+                .ok_or_else(|| EsiError::NoSuchDevice {
+                    wanted: String::new(),
+                    known: self.known(),
+                }),
+            _ => Err(EsiError::Ambiguous {
+                count: matching.len(),
+                known: self.known(),
+            }),
+        }
+    }
+
+    /// The device with this vendor, product code and revision (ENI
+    /// matching); `revision` `None` takes the highest.
+    pub fn find_identity(
+        &self,
+        vendor_id: u32,
+        product_code: u32,
+        revision: Option<u32>,
+    ) -> Option<&EsiDevice> {
+        self.devices
+            .iter()
+            .filter(|d| d.vendor_id == vendor_id && d.product_code == product_code)
+            .filter(|d| revision.is_none_or(|r| d.revision == r))
+            .max_by_key(|d| d.revision)
+    }
+}

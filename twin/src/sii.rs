@@ -1,0 +1,210 @@
+//! The SII EEPROM image of a twin, from its ESI device.
+//!
+//! When the ESI carries the image (`<Eeprom><Data>`), that is served
+//! verbatim (only the station alias, word 4, is replaced when the line
+//! gives one, and the checksum recomputed). Otherwise the image is encoded
+//! with the core's SII encoder (ETG.2010) from the ESI: the header from
+//! `<ConfigData>` (PDI control, PDI configuration, SYNC impulse, PDI
+//! configuration 2, alias), the EEPROM size from `<ByteSize>`, identity,
+//! mailbox offsets from the mailbox SyncManagers, the General category
+//! (group, type, name, CoE details, E-Bus current, physical ports from
+//! `Physics`), FMMU, SyncM, TxPDO and RxPDO categories.
+
+use ecat_slave::sii::{
+    self, SiiConfig, SiiGeneral, SiiIdentity, SiiMailbox, SiiPdo, SiiPdoEntry, SiiSyncManager,
+    SmType,
+};
+
+use crate::esi::{EsiDevice, EsiPdo};
+
+/// Bytes of EEPROM the software ESC emulates.
+pub const EEPROM_BYTES: usize = 2048;
+
+/// Why the SII image cannot be made.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum SiiBuildError {
+    /// The core's encoder refused the content.
+    #[error("{device}: the SII image cannot be encoded: {source}")]
+    Encode {
+        /// The device.
+        device: String,
+        /// The encoder's reason.
+        source: sii::SiiError,
+    },
+    /// `<Eeprom><Data>` is shorter than the SII header.
+    #[error("{device}: <Eeprom><Data> holds {len} bytes, less than the 128-byte SII header")]
+    DataTooShort {
+        /// The device.
+        device: String,
+        /// Its length.
+        len: usize,
+    },
+}
+
+/// SII "physical port" word from the ESI `Physics` string: one nibble per
+/// port, `Y` (100BASE-TX) 1, `K` (E-Bus, LVDS) 3, `H` (fast hot connect)
+/// 4, anything else 0.
+pub fn physical_port(physics: &str) -> u16 {
+    physics
+        .chars()
+        .take(4)
+        .enumerate()
+        .map(|(i, c)| {
+            let nibble: u16 = match c {
+                'Y' => 1,
+                'K' => 3,
+                'H' => 4,
+                _ => 0,
+            };
+            nibble << (4 * i)
+        })
+        .sum()
+}
+
+fn word(data: &[u8], w: usize) -> u16 {
+    let lo = data.get(2 * w).copied().unwrap_or(0);
+    let hi = data.get(2 * w + 1).copied().unwrap_or(0);
+    u16::from_le_bytes([lo, hi])
+}
+
+/// A PDO's fields with its entries borrowed for the encoder.
+type PdoParts<'a> = (u16, Option<u8>, &'a str, u16, Vec<SiiPdoEntry<'a>>);
+
+fn to_pdos<'a>(v: &'a [PdoParts<'a>]) -> Vec<SiiPdo<'a>> {
+    v.iter()
+        .map(|(index, sm, name, flags, entries)| SiiPdo {
+            index: *index,
+            sm: *sm,
+            name,
+            flags: *flags,
+            entries,
+        })
+        .collect()
+}
+
+fn sii_pdos(pdos: &[EsiPdo]) -> Vec<PdoParts<'_>> {
+    pdos.iter()
+        .map(|p| {
+            let entries = p
+                .entries
+                .iter()
+                .map(|e| SiiPdoEntry {
+                    index: e.index,
+                    sub: e.sub,
+                    name: &e.name,
+                    data_type: e.data_type,
+                    bit_len: e.bit_len,
+                })
+                .collect();
+            (p.index, p.sm, p.name.as_str(), p.flags, entries)
+        })
+        .collect()
+}
+
+/// The SII image of `dev` with station alias `alias` (`None`: as the ESI
+/// says), [`EEPROM_BYTES`] long.
+pub fn image(dev: &EsiDevice, alias: Option<u16>) -> Result<Vec<u8>, SiiBuildError> {
+    let mut out = match &dev.eeprom_data {
+        Some(data) => {
+            if data.len() < 128 {
+                return Err(SiiBuildError::DataTooShort {
+                    device: dev.label(),
+                    len: data.len(),
+                });
+            }
+            let mut img = data.clone();
+            img.resize(EEPROM_BYTES.max(img.len()), 0xFF);
+            img
+        }
+        None => encode(dev)?,
+    };
+    if let Some(a) = alias {
+        if let Some(w) = out.get_mut(8..10) {
+            w.copy_from_slice(&a.to_le_bytes());
+        }
+        let crc = out.get(..14).map(sii::crc8).unwrap_or(0);
+        if let Some(c) = out.get_mut(14) {
+            *c = crc;
+        }
+    }
+    Ok(out)
+}
+
+fn mailbox_area(dev: &EsiDevice, kind: SmType) -> (u16, u16) {
+    dev.sms
+        .iter()
+        .find(|s| s.kind == kind)
+        .map_or((0, 0), |s| (s.start, s.default_size))
+}
+
+fn encode(dev: &EsiDevice) -> Result<Vec<u8>, SiiBuildError> {
+    let cd = &dev.config_data;
+    let kbit = dev
+        .eeprom_bytes
+        .map_or(16, |b| {
+            u16::try_from(b.saturating_mul(8) / 1024).unwrap_or(u16::MAX)
+        })
+        .max(1);
+    let (rx_offset, rx_size) = mailbox_area(dev, SmType::MailboxOut);
+    let (tx_offset, tx_size) = mailbox_area(dev, SmType::MailboxIn);
+    let sms: Vec<SiiSyncManager> = dev
+        .sms
+        .iter()
+        .map(|s| SiiSyncManager {
+            start: s.start,
+            length: s.default_size,
+            control: s.control,
+            enable: s.enable,
+            sm_type: s.kind,
+        })
+        .collect();
+    let rx = sii_pdos(&dev.rx_pdos);
+    let tx = sii_pdos(&dev.tx_pdos);
+    let rx_pdos = to_pdos(&rx);
+    let tx_pdos = to_pdos(&tx);
+    let cfg = SiiConfig {
+        pdi_control: word(cd, 0),
+        pdi_config: word(cd, 1),
+        sync_impulse: word(cd, 2),
+        pdi_config2: word(cd, 3),
+        station_alias: word(cd, 4),
+        identity: SiiIdentity {
+            vendor_id: dev.vendor_id,
+            product_code: dev.product_code,
+            revision: dev.revision,
+            serial: 0,
+        },
+        bootstrap_mailbox: SiiMailbox::default(),
+        standard_mailbox: SiiMailbox {
+            rx_offset,
+            rx_size,
+            tx_offset,
+            tx_size,
+        },
+        mailbox_protocols: dev.mailbox_protocols,
+        eeprom_kbit: kbit,
+        general: SiiGeneral {
+            group: &dev.group_type,
+            image: "",
+            order: &dev.type_name,
+            name: &dev.name,
+            coe_details: dev.coe_details,
+            foe_details: u8::from(dev.mailbox_protocols & sii::protocols::FOE != 0),
+            eoe_details: u8::from(dev.mailbox_protocols & sii::protocols::EOE != 0),
+            flags: 0,
+            current_on_ebus: dev.ebus_current_ma,
+            physical_port: physical_port(&dev.physics),
+        },
+        fmmus: &dev.fmmus,
+        sync_managers: &sms,
+        tx_pdos: &tx_pdos,
+        rx_pdos: &rx_pdos,
+    };
+    let mut out = vec![0xFFu8; usize::from(kbit) * 128];
+    sii::encode(&cfg, &mut out).map_err(|source| SiiBuildError::Encode {
+        device: dev.label(),
+        source,
+    })?;
+    out.resize(EEPROM_BYTES.max(out.len()), 0xFF);
+    Ok(out)
+}
