@@ -49,7 +49,13 @@ fn start_runner_with(
         .args(["netns", "exec", ns])
         .arg(bin)
         .args(extra)
-        .args(["--iface", iface, "--line", line, "--state-dir"])
+        .args(["--iface", iface])
+        .args(if line.is_empty() {
+            vec![]
+        } else {
+            vec!["--line", line]
+        })
+        .arg("--state-dir")
         .arg(state)
         .arg("--pcap")
         .arg(pcap)
@@ -413,4 +419,30 @@ fn soem_configures_distributed_clocks_and_runs_the_line_dc_synchronous() {
 #[test]
 fn soem_brings_a_dma22_node_with_three_modules_to_op_after_writing_0xf030() {
     soem_phase("h", "dma22", "dma22", &[], &["dma22"]);
+}
+
+/// A line built from an ENI (`pam-slave --eni`, the script's `twins`
+/// phase): EK1100, EL2004, EL2828 twins from their ESI files, an EL1008
+/// twin counting, the PAM built in; SOEM sees the identities, names and
+/// image sizes of the real devices' SII dumps and runs the line in OP.
+#[test]
+fn soem_runs_an_eni_line_of_esi_twins_and_a_pam_with_the_real_devices_identities() {
+    let spec = crate::twins::soem_expectations();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/testdata");
+    let eni = root.join("machine.xml");
+    let esi = root.join("esi");
+    soem_phase(
+        "t",
+        "twins",
+        "",
+        &[
+            "--eni",
+            eni.to_str().expect("utf-8 path"),
+            "--esi-dir",
+            esi.to_str().expect("utf-8 path"),
+            "--inputs",
+            "counter",
+        ],
+        &["twins", &spec],
+    );
 }

@@ -99,6 +99,41 @@ fn visible(i: &Inspection) -> String {
     )
 }
 
+/// What SOEM must see on the ENI line (`name|vendor|product|rev|out|in`
+/// per slave): the EK1100, EL2004 and EL2828 from their real SII dumps
+/// (SOEM names a slave by the SII General order string), the EL1008 from
+/// its ESI, the PAM from its description.
+pub(crate) fn soem_expectations() -> String {
+    let mut out = Vec::new();
+    for n in [
+        "ek1100-eeprom-dump.bin",
+        "el2004-eeprom-dump.bin",
+        "el2828.bin",
+    ] {
+        let i = inspect(&dump(n)).expect("dump");
+        let (o, inp) = image_bytes(&i);
+        let order = i
+            .general
+            .as_ref()
+            .map(|(_, s)| s[2].clone())
+            .unwrap_or_default();
+        out.push(format!(
+            "{order}|{:#x}|{:#x}|{:#x}|{o}|{inp}",
+            i.identity.vendor_id, i.identity.product_code, i.identity.revision
+        ));
+    }
+    out.push("EL1008|0x2|0x3f03052|0x100000|0|1".into());
+    let pam = &pam_199_p_etc::DEVICE;
+    out.push(format!(
+        "{}|{:#x}|{:#x}|{:#x}|5|14",
+        pam.names.type_name,
+        pam.identity.vendor_id,
+        pam.identity.product_code,
+        pam.identity.revision
+    ));
+    out.join(";")
+}
+
 #[test]
 fn twins_from_the_synthetic_esi_files_show_what_the_real_devices_sii_dumps_show() {
     let dir = testdata("esi");
