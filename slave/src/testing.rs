@@ -178,7 +178,9 @@ pub struct TestApp {
 }
 
 impl Application for TestApp {
-    const DESCRIPTION: &'static DeviceDescription = &DEVICE;
+    fn description(&self) -> &'static DeviceDescription {
+        &DEVICE
+    }
     type Values = [i64; ENTRIES];
 
     fn power_on(&mut self, od: &mut Od) {

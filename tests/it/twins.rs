@@ -162,8 +162,6 @@ fn twins_from_the_synthetic_esi_files_show_what_the_real_devices_sii_dumps_show(
     }
 }
 
-use ecat_slave::host::chain::LineSlave as _;
-
 #[test]
 fn an_esi_carrying_the_eeprom_data_is_served_byte_for_byte() {
     // The real EL2889's EEPROM as `<Eeprom><Data>` of an ESI made here:
@@ -192,7 +190,7 @@ fn an_esi_carrying_the_eeprom_data_is_served_byte_for_byte() {
 
 #[test]
 fn ethercrab_brings_the_eni_line_to_op_with_the_real_devices_identities_and_images() {
-    let (slaves, placed) = twins::from_eni(
+    let ecat_twin::line::BuiltLine { slaves, placed } = twins::from_eni(
         &testdata("machine.xml"),
         Some(&testdata("esi")),
         InputRule::Hold,
@@ -304,12 +302,8 @@ fn a_counter_twin_changes_its_inputs_every_cycle() {
     let dev = esi.device(None, None).expect("one device");
     let twin = ecat_twin::twin(dev, None, InputRule::Counter).expect("twin");
     smol::block_on(async {
-        let bus = VirtualBus::with_chain(
-            Chain::with_slaves(vec![Box::new(twin)]),
-            Clock::simulated(),
-            None,
-        )
-        .expect("bus");
+        let bus = VirtualBus::with_chain(Chain::with_slaves(vec![twin]), Clock::simulated(), None)
+            .expect("bus");
         let md = &*bus.maindevice;
         let group = bus
             .init()
@@ -447,4 +441,91 @@ fn pam_slave_refuses_a_broken_esi_before_serving_with_exit_2() {
     );
     assert!(err.contains("product 0x00000063"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Everything SDO Information reports of the first slave of `slaves`: the
+/// object list, every object's description and every entry's with its
+/// unit, default, minimum and maximum.
+fn sdo_information(
+    slaves: Vec<Box<dyn ecat_slave::host::chain::LineSlave>>,
+    layout: ecat_slave::device::MemoryLayout,
+) -> Vec<String> {
+    use master_test::mailbox::{MailboxClient, MailboxGeometry};
+    use master_test::sdo_info::{entry_description, object_description, od_list};
+    smol::block_on(async {
+        let bus = VirtualBus::with_chain(Chain::with_slaves(slaves), Clock::simulated(), None)
+            .expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let sd = group.subdevice(md, 0).expect("slave");
+        let mut out = vec![format!(
+            "{} {:?} alias {}",
+            sd.name(),
+            sd.identity(),
+            sd.alias_address()
+        )];
+        let mut c = MailboxClient::new(md, sd.configured_address(), MailboxGeometry::of(&layout));
+        for index in od_list(&mut c, 1).await.expect("OD list") {
+            let o = object_description(&mut c, index).await.expect("object");
+            out.push(format!("{o:?}"));
+            for sub in 0..=o.max_sub {
+                match entry_description(&mut c, index, sub, 0x78).await {
+                    Ok(e) => out.push(format!("{e:?}")),
+                    Err(e) => out.push(format!("{index:#06x}:{sub} {e}")),
+                }
+            }
+        }
+        out
+    })
+}
+
+#[test]
+fn our_devices_generated_esi_loaded_as_twins_give_the_same_sii_and_sdo_information() {
+    for key in ["pam", "io8"] {
+        let entry = device_catalog::find(key).expect("catalog device");
+        let dev = entry.description;
+        let xml = ecat_esi::generate(dev).expect("ESI");
+        let file =
+            EsiFile::parse(std::str::from_utf8(&xml).expect("utf-8")).expect("our ESI loads");
+        let esi_dev = file.device(None, None).expect("one device");
+        let (desc, layout) = ecat_twin::coe_twin::describe(esi_dev).expect("description");
+        assert_eq!(layout, dev.layout(), "{key}: memory layout");
+        let twin = ecat_twin::twin(esi_dev, None, InputRule::Hold).expect("twin");
+        let ours = inspect(twin.esc().sii()).expect("twin SII");
+        let real = inspect(&dev.sii_image()).expect("device SII");
+        assert_eq!(visible(&ours), visible(&real), "{key}: SII");
+        assert_eq!(
+            desc.dictionary.entry_count(),
+            dev.dictionary.entry_count(),
+            "{key}: dictionary size"
+        );
+        let want = sdo_information(
+            vec![(entry.make)(device_catalog::Pdi::Direct)],
+            dev.layout(),
+        );
+        let got = sdo_information(vec![twin], layout);
+        assert!(want.len() > 20, "{key}: {} lines", want.len());
+        for (k, (w, g)) in want.iter().zip(&got).enumerate() {
+            assert_eq!(g, w, "{key}: SDO Information line {k}");
+        }
+        assert_eq!(got.len(), want.len(), "{key}: SDO Information length");
+    }
+}
+
+#[test]
+fn a_modular_devices_esi_is_refused_with_a_message_until_supported() {
+    let xml = ecat_esi::generate(&hcs_dma22::device::DEVICE).expect("ESI");
+    let file = EsiFile::parse(std::str::from_utf8(&xml).expect("utf-8")).expect("parses");
+    let e = ecat_twin::twin(
+        file.device(None, None).expect("device"),
+        None,
+        InputRule::Hold,
+    )
+    .err()
+    .expect("refused");
+    assert!(
+        e.to_string()
+            .contains("modular devices (<Slots>) cannot be twinned"),
+        "{e}"
+    );
 }

@@ -247,6 +247,9 @@ pub struct EsiDevice {
     pub objects: BTreeMap<(u16, u8), u16>,
     /// Where the device is.
     pub at: At,
+    /// The whole `Device` element (the dictionary and the vendor-specific
+    /// parts are read from it when a twin with a mailbox is built).
+    pub source: Element,
 }
 
 impl EsiDevice {
@@ -712,6 +715,7 @@ fn parse_device(
         dc_modes,
         objects,
         at: At::of(d),
+        source: d.clone(),
     };
     check_sms(&dev)?;
     Ok(dev)

@@ -11,17 +11,24 @@
 //!   ESI with the core's encoder).
 //! - [`esc_twin`]: the twin of a device without a firmware (couplers,
 //!   digital I/O terminals: ESC and EEPROM only).
+//! - [`coe_twin`] and [`dictionary`]: the twin of a device with a mailbox:
+//!   the core's firmware (CoE, SDO Information, PDO engine, AL state
+//!   machine) on a description built from the ESI at run time.
 //! - [`eni`]: the slaves of an ENI.
 //! - [`line`]: the line of twins an ENI describes, each device from an ESI
 //!   library or a built-in device.
 //! - [`xml`]: the small element tree (with line numbers) both readers use.
 //!
-//! **Not yet supported** (refused with an error naming the device): twins
-//! of devices with a mailbox (CoE, FoE, EoE...) from their ESI alone; those
-//! need the core's CoE server run on a description built at run time.
-//! Built-in devices (the PAM, IO8, DMA-22) take their place in a line.
-//! DC op modes are read but the SII of a twin has no DC category yet.
+//! **Not yet supported** (refused with an error naming the device and,
+//! where it is in the file, the element and line): modular devices
+//! (`<Slots>`), data types the core does not serve (`REAL`, `LREAL`,
+//! `UINT24`, `OCTET_STRING`, arrays of bytes), writable PDO mappings, EoE,
+//! SoE, AoE. DC op modes are read but the SII of a twin has no DC category
+//! yet. Built-in devices (the PAM, IO8, DMA-22) run their real behaviour
+//! in a line.
 
+pub mod coe_twin;
+pub mod dictionary;
 pub mod eni;
 pub mod esc_twin;
 pub mod esi;
@@ -33,6 +40,8 @@ pub use esc_twin::{EscTwin, InputRule};
 pub use esi::{EsiDevice, EsiError, EsiFile};
 
 use std::path::Path;
+
+use ecat_slave::host::chain::LineSlave;
 
 /// Why a twin cannot be made.
 #[derive(Debug, thiserror::Error)]
@@ -56,17 +65,9 @@ pub enum TwinError {
     /// The SII image cannot be made.
     #[error(transparent)]
     Sii(#[from] sii::SiiBuildError),
-    /// The device has a mailbox: not yet supported from an ESI.
-    #[error(
-        "{device}: devices with a mailbox (protocols {protocols:#06x}) cannot be twinned from their ESI yet; \
-         only ESC-only devices (couplers, digital I/O terminals) can, or a built-in device"
-    )]
-    MailboxUnsupported {
-        /// The device.
-        device: String,
-        /// Its mailbox protocol bits.
-        protocols: u16,
-    },
+    /// The description of a device with a mailbox cannot be made.
+    #[error(transparent)]
+    Description(#[from] coe_twin::DescriptionBuildError),
 }
 
 /// Reads and parses one ESI file.
@@ -81,14 +82,37 @@ pub fn load_esi(path: &Path) -> Result<EsiFile, TwinError> {
     })
 }
 
-/// The twin of `dev` with station alias `alias` and input rule `rule`.
-pub fn twin(dev: &EsiDevice, alias: Option<u16>, rule: InputRule) -> Result<EscTwin, TwinError> {
-    if dev.has_mailbox() {
-        return Err(TwinError::MailboxUnsupported {
-            device: dev.label(),
-            protocols: dev.mailbox_protocols,
-        });
-    }
+/// The twin of an ESC-only `dev` (no mailbox) with station alias `alias`
+/// and input rule `rule`; see [`twin`] for any device.
+pub fn esc_twin(
+    dev: &EsiDevice,
+    alias: Option<u16>,
+    rule: InputRule,
+) -> Result<EscTwin, TwinError> {
     let image = sii::image(dev, alias)?;
     Ok(EscTwin::new(dev, &image, rule))
+}
+
+/// The twin of `dev` with station alias `alias` and input rule `rule`: an
+/// [`EscTwin`] for a device without a mailbox, else the core's firmware on
+/// a description built from the ESI ([`coe_twin`]). The SII is the ESI's
+/// `<Eeprom><Data>` when it has one, else encoded from the description.
+pub fn twin(
+    dev: &EsiDevice,
+    alias: Option<u16>,
+    rule: InputRule,
+) -> Result<Box<dyn LineSlave>, TwinError> {
+    if !dev.has_mailbox() {
+        return Ok(Box::new(esc_twin(dev, alias, rule)?));
+    }
+    let (desc, layout) = coe_twin::describe(dev)?;
+    let mut slave = coe_twin::slave(desc, layout, rule);
+    let esc = LineSlave::esc_mut(&mut slave);
+    if dev.eeprom_data.is_some() {
+        esc.program_sii(&sii::image(dev, alias)?);
+    } else if let Some(a) = alias {
+        esc.program_sii_alias(a);
+    }
+    esc.power_on();
+    Ok(Box::new(slave))
 }

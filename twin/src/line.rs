@@ -91,8 +91,24 @@ pub enum LineError {
         /// ENI name.
         name: String,
         /// Why.
-        source: TwinError,
+        source: Box<TwinError>,
     },
+}
+
+/// A built line: the slaves in order and where each came from.
+pub struct BuiltLine {
+    /// The software slaves, first to last.
+    pub slaves: Vec<Box<dyn LineSlave>>,
+    /// Where each came from (for the report).
+    pub placed: Vec<Placed>,
+}
+
+impl core::fmt::Debug for BuiltLine {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("BuiltLine")
+            .field("placed", &self.placed)
+            .finish_non_exhaustive()
+    }
 }
 
 /// Where one slave of the line came from.
@@ -167,7 +183,7 @@ pub fn build(
     lib: &EsiLibrary,
     builtin: BuiltIn<'_>,
     rule: InputRule,
-) -> Result<(Vec<Box<dyn LineSlave>>, Vec<Placed>), LineError> {
+) -> Result<BuiltLine, LineError> {
     let mut slaves = Vec::new();
     let mut placed = Vec::new();
     let mut unmatched = Vec::new();
@@ -189,9 +205,9 @@ pub fn build(
                 let t = twin(dev, s.alias, rule).map_err(|source| LineError::Twin {
                     position,
                     name: s.name.clone(),
-                    source,
+                    source: Box::new(source),
                 })?;
-                slaves.push(Box::new(t));
+                slaves.push(t);
                 placed.push(Placed {
                     eni: s.clone(),
                     source: Source::Esi {
@@ -211,5 +227,5 @@ pub fn build(
     if !unmatched.is_empty() {
         return Err(LineError::Unmatched(unmatched));
     }
-    Ok((slaves, placed))
+    Ok(BuiltLine { slaves, placed })
 }

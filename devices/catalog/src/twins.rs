@@ -7,7 +7,7 @@ use std::path::Path;
 
 use ecat_slave::host::chain::LineSlave;
 use ecat_twin::eni::{self, EniSlave};
-use ecat_twin::line::{self, EsiLibrary, Placed};
+use ecat_twin::line::{self, BuiltLine, EsiLibrary};
 use ecat_twin::{InputRule, TwinError};
 
 use crate::{DEVICES, Pdi};
@@ -80,7 +80,7 @@ pub fn from_esi(
         })?;
     let mut slaves: Vec<Box<dyn LineSlave>> = Vec::with_capacity(count);
     for _ in 0..count {
-        slaves.push(Box::new(ecat_twin::twin(dev, None, rule)?));
+        slaves.push(ecat_twin::twin(dev, None, rule)?);
     }
     Ok((dev.label(), slaves))
 }
@@ -91,7 +91,7 @@ pub fn from_eni(
     eni_path: &Path,
     esi_dir: Option<&Path>,
     rule: InputRule,
-) -> Result<(Vec<Box<dyn LineSlave>>, Vec<Placed>), TwinsError> {
+) -> Result<BuiltLine, TwinsError> {
     let text = std::fs::read_to_string(eni_path).map_err(|source| TwinsError::EniIo {
         path: eni_path.display().to_string(),
         source,

@@ -204,7 +204,9 @@ impl<P: PowerStage, N: NvStorage> Pam<P, N> {
 }
 
 impl<P: PowerStage + Send + 'static, N: NvStorage + Send + 'static> Application for Pam<P, N> {
-    const DESCRIPTION: &'static DeviceDescription = &DEVICE;
+    fn description(&self) -> &'static DeviceDescription {
+        &DEVICE
+    }
     type Values = [i64; od::ENTRY_COUNT];
 
     fn power_on(&mut self, od: &mut Od) {

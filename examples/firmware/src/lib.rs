@@ -66,7 +66,7 @@ pub struct FwLayout {
 
 #[cfg(any(feature = "io8", feature = "pam"))]
 mod device {
-    use ecat_slave::device::{Application, MemoryLayout, Slave};
+    use ecat_slave::device::{MemoryLayout, Slave};
 
     use crate::FwLayout;
 
@@ -101,14 +101,18 @@ mod device {
 
     #[cfg(feature = "io8")]
     pub use crate::board::io8::App;
+    #[cfg(feature = "io8")]
+    use io8_example::DEVICE;
     #[cfg(feature = "pam")]
     pub use crate::board::pam::App;
+    #[cfg(feature = "pam")]
+    use pam_199_p_etc::DEVICE;
 
     /// The whole firmware state: ESC handle, application, dictionary,
     /// mailbox servers, process images.
     pub type Firmware = Slave<Pdi, App>;
 
-    const LAYOUT: MemoryLayout = <App as Application>::DESCRIPTION.layout();
+    const LAYOUT: MemoryLayout = DEVICE.layout();
 
     pub const FW_LAYOUT: FwLayout = FwLayout {
         mbx_out_start: LAYOUT.mbx_out.0,

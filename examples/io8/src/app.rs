@@ -138,7 +138,9 @@ impl<B: Board, N: NvStorage> Io8<B, N> {
 }
 
 impl<B: Board, N: NvStorage> Application for Io8<B, N> {
-    const DESCRIPTION: &'static DeviceDescription = &DEVICE;
+    fn description(&self) -> &'static DeviceDescription {
+        &DEVICE
+    }
     type Values = [i64; ENTRIES];
 
     fn power_on(&mut self, od: &mut Od) {

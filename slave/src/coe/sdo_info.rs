@@ -227,25 +227,40 @@ pub fn entry_data_type(e: &Entry) -> u16 {
 /// padding gap in a record (no value, bit length = the gap).
 pub const NULL_TYPE: u16 = 0x0000;
 
+/// ETG.1004 unit codes (reserved (8) | SI prefix (8) | unit (8) |
+/// denominator (8)) of the unit texts the core knows.
+pub const UNITS: &[(&str, u32)] = &[
+    ("s", 0x0003_0000),
+    ("ms", 0xFD03_0000),
+    ("us", 0xFA03_0000),
+    ("µs", 0xFA03_0000),
+    ("A", 0x0004_0000),
+    ("mA", 0xFD04_0000),
+    ("V", 0x0026_0000),
+    ("mV", 0xFD26_0000),
+    ("Hz", 0x0020_0000),
+    ("°C", 0x002D_0000),
+    ("m", 0x0001_0000),
+    ("mm", 0xFD01_0000),
+    ("W", 0x0024_0000),
+];
+
 /// The ETG.1004 unit code of a unit text (0 when there is none), the same
 /// codes the ESI writes.
 pub fn unit_code(unit: &str) -> u32 {
-    // ETG.1004: reserved (8) | SI prefix (8) | unit (8) | denominator (8).
-    match unit {
-        "s" => 0x0003_0000,
-        "ms" => 0xFD03_0000,
-        "us" | "µs" => 0xFA03_0000,
-        "A" => 0x0004_0000,
-        "mA" => 0xFD04_0000,
-        "V" => 0x0026_0000,
-        "mV" => 0xFD26_0000,
-        "Hz" => 0x0020_0000,
-        "°C" => 0x002D_0000,
-        "m" => 0x0001_0000,
-        "mm" => 0xFD01_0000,
-        "W" => 0x0024_0000,
-        _ => 0,
-    }
+    UNITS
+        .iter()
+        .find(|(t, _)| *t == unit)
+        .map_or(0, |(_, c)| *c)
+}
+
+/// The unit text of an ETG.1004 unit code ("" when the core knows none;
+/// the inverse of [`unit_code`]).
+pub fn unit_text(code: u32) -> &'static str {
+    UNITS
+        .iter()
+        .find(|(_, c)| *c == code && code != 0)
+        .map_or("", |(t, _)| t)
 }
 
 /// Size in bytes of one value of `e` (default, minimum, maximum).

@@ -134,12 +134,18 @@ impl<'a> Tick<'a> {
 
 /// A device's behaviour on the core. See the module documentation.
 pub trait Application {
-    /// The device's static description.
-    const DESCRIPTION: &'static DeviceDescription;
+    /// The device's description: a `const` for a device known when it is
+    /// built (`&DEVICE`), or one made at run time (a twin read from an ESI
+    /// file on a host). The core reads it once per use and never expects
+    /// it to change while the slave runs.
+    fn description(&self) -> &'static DeviceDescription;
 
     /// Storage for the dictionary's live values: `[i64; N]` with `N` the
     /// dictionary's entry count (the [`dictionary!`](crate::dictionary)
-    /// macro defines that constant).
+    /// macro defines that constant). A device described at run time uses
+    /// a larger `N` (a capacity); entries beyond `N` would read as 0 and
+    /// ignore writes, so whoever builds such a description checks that it
+    /// fits.
     type Values: ValueStorage;
 
     /// Power-on, after the dictionary was set to its defaults: restore

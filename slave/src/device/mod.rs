@@ -11,10 +11,12 @@
 //!    safe outputs, power-on and storage).
 //!
 //! Contradictions do not compile: a description that `validate` refuses
-//! fails the `const` assertion, and so does value storage of the wrong
-//! size:
+//! fails the `const` assertion. Value storage too small for the dictionary
+//! is a programming error that [`Slave::new`] stops in debug builds (the
+//! description may be made at run time, so this check cannot be a
+//! `const`; in release builds the missing entries read as 0):
 //!
-//! ```compile_fail
+//! ```should_panic
 //! use ecat_slave::device::*;
 //! use ecat_slave::od::build::{constant, sub0, var};
 //! use ecat_slave::od::{DataType, Object, ObjectCode, PdoMapping};
@@ -37,7 +39,9 @@
 //! };
 //! struct Bad;
 //! impl Application for Bad {
-//!     const DESCRIPTION: &'static DeviceDescription = &DEV;
+//!     fn description(&self) -> &'static DeviceDescription {
+//!         &DEV
+//!     }
 //!     type Values = [i64; 2]; // the dictionary has 3 entries
 //! }
 //! let _ = SoftSlave::new(Bad);

@@ -96,7 +96,7 @@ pub struct Slave<E: Esc, A: Application> {
 impl<E: Esc, A: Application> core::fmt::Debug for Slave<E, A> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Slave")
-            .field("device", &A::DESCRIPTION.names.type_name)
+            .field("device", &self.app.description().names.type_name)
             .field("al", &self.al)
             .finish_non_exhaustive()
     }
@@ -221,10 +221,11 @@ impl<E: Esc, A: Application> TransitionChecks for Checks<'_, E, A> {
     }
 
     fn check_process_data(&mut self) -> Result<(), AlStatusCode> {
-        if let Some(m) = A::DESCRIPTION.modules {
+        let desc = self.app.description();
+        if let Some(m) = desc.modules {
             m.check_configured(self.od)?;
             // Every assigned PDO must belong to a slot that holds a module.
-            let view = object_view::<A>(self.od);
+            let view = object_view(desc, self.od);
             for (assign, code) in [
                 (0x1C12u16, AlStatusCode::InvalidOutputConfig),
                 (0x1C13u16, AlStatusCode::InvalidInputConfig),
@@ -238,7 +239,7 @@ impl<E: Esc, A: Application> TransitionChecks for Checks<'_, E, A> {
                 }
             }
         }
-        let pd = &A::DESCRIPTION.process_data;
+        let pd = &desc.process_data;
         let outputs = ProcessImage::build(self.od, Direction::Outputs, pd)
             .map_err(|_| AlStatusCode::InvalidOutputConfig)?;
         let inputs = ProcessImage::build(self.od, Direction::Inputs, pd)
@@ -311,25 +312,26 @@ impl<E: Esc, A: Application> TransitionChecks for Checks<'_, E, A> {
 
 impl<E: Esc, A: Application> Slave<E, A> {
     /// The device's description.
-    pub const DESCRIPTION: &'static DeviceDescription = A::DESCRIPTION;
+    pub fn description(&self) -> &'static DeviceDescription {
+        self.app.description()
+    }
 
     /// The firmware in its power-on state on `esc`, running `app`.
     ///
-    /// A device whose `Values` storage does not hold exactly its
-    /// dictionary's entry count does not compile.
+    /// The application's `Values` must hold at least its dictionary's
+    /// entry count ([`Application::Values`]; checked in debug builds).
     pub fn new(esc: E, mut app: A) -> Self {
-        const {
-            assert!(
-                <A::Values as ValueStorage>::LEN == A::DESCRIPTION.dictionary.entry_count(),
-                "Application::Values must be [i64; N] with N the dictionary's entry count"
-            );
-        }
-        let mut store = ObjectStore::<A::Values>::new(A::DESCRIPTION.dictionary);
+        let desc = app.description();
+        debug_assert!(
+            <A::Values as ValueStorage>::LEN >= desc.dictionary.entry_count(),
+            "Application::Values must hold the dictionary's entry count"
+        );
+        let mut store = ObjectStore::<A::Values>::new(desc.dictionary);
         app.power_on(A::Values::view_mut(&mut store));
         Slave {
             esc,
             app,
-            layout: A::DESCRIPTION.layout(),
+            layout: desc.layout(),
             store,
             al: AlStatus::INIT,
             outputs: ProcessImage::default(),
@@ -358,7 +360,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
     /// dictionary at its defaults. The ESC is not touched.
     pub fn restart(&mut self) {
         self.app.power_cycle();
-        let mut store = ObjectStore::<A::Values>::new(A::DESCRIPTION.dictionary);
+        let mut store = ObjectStore::<A::Values>::new(self.app.description().dictionary);
         self.app.power_on(A::Values::view_mut(&mut store));
         self.store = store;
         self.al = AlStatus::INIT;
@@ -890,7 +892,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
         if self.pending.is_some() {
             return Ok(());
         }
-        let view = object_view::<A>(A::Values::view(&self.store));
+        let view = object_view(self.app.description(), A::Values::view(&self.store));
         if !self.sm_full(0)? {
             // Nothing new: continue a response that spans several mailboxes.
             let (_, inp) = self.mailbox_layout();
@@ -923,8 +925,9 @@ impl<E: Esc, A: Application> Slave<E, A> {
         let max = usize::from(inp.1).min(MAX_MAILBOX);
         let state = self.al.state;
         let version = self.firmware_version();
-        let id = &A::DESCRIPTION.identity;
-        let foe_offered = A::DESCRIPTION.mailbox.foe;
+        let desc = self.app.description();
+        let id = &desc.identity;
+        let foe_offered = desc.mailbox.foe;
         let mut ctx = images.filter(|_| foe_offered).map(|store| FoeContext {
             store,
             identity: DeviceIdentity {
@@ -1095,11 +1098,11 @@ struct OdAccess<'a, A: Application> {
     now_ns: u64,
 }
 
-/// What SDO access and SDO Information show of `A`'s dictionary (a
+/// What SDO access and SDO Information show of a device's dictionary (a
 /// modular device hides its empty slots).
-fn object_view<A: Application>(od: &Od) -> ObjectView {
-    let dict = A::DESCRIPTION.dictionary;
-    match A::DESCRIPTION.modules {
+fn object_view(desc: &'static DeviceDescription, od: &Od) -> ObjectView {
+    let dict = desc.dictionary;
+    match desc.modules {
         Some(m) => ObjectView::modular(dict, m, od),
         None => ObjectView::all(dict),
     }
@@ -1109,7 +1112,7 @@ impl<A: Application> OdAccess<'_, A> {
     /// A configured module list (0xF030) holds idents of module types the
     /// device knows (0 for an empty slot), at most one per slot.
     fn check_module_list(&self, index: u16, changes: &[(u8, i64)]) -> Result<(), SdoAbortCode> {
-        let Some(m) = A::DESCRIPTION.modules else {
+        let Some(m) = self.app.description().modules else {
             return Ok(());
         };
         if index != CONFIGURED_MODULES {
@@ -1152,13 +1155,13 @@ impl<A: Application> OdAccess<'_, A> {
         // Every written PDO must be one of the direction's mapping objects.
         for (s, v) in changes.iter().filter(|(s, _)| *s != 0) {
             let pdo = *v as u16;
-            if pdo < lo || pdo > hi || object_view::<A>(self.od).find(pdo).is_none() {
+            if pdo < lo || pdo > hi || self.view().find(pdo).is_none() {
                 let _ = s;
                 return Err(SdoAbortCode::ValueRange);
             }
         }
         // The assigned PDOs (1..=count) must share a PDO set.
-        let pd = &A::DESCRIPTION.process_data;
+        let pd = &self.app.description().process_data;
         if !pd.sets.is_empty() {
             let mut sets = u32::MAX;
             for s in 1..=count.clamp(0, 255) as u8 {
@@ -1203,11 +1206,11 @@ impl<A: Application> OdAccess<'_, A> {
 
 impl<A: Application> ObjectAccess for OdAccess<'_, A> {
     fn dictionary(&self) -> &'static Dictionary {
-        A::DESCRIPTION.dictionary
+        self.app.description().dictionary
     }
 
     fn view(&self) -> ObjectView {
-        object_view::<A>(self.od)
+        object_view(self.app.description(), self.od)
     }
 
     fn sdo_upload(

@@ -96,7 +96,7 @@ impl<A: Application> SoftSlave<A> {
     /// A slave whose standard mailboxes have another layout (the SII it
     /// serves says so, so masters configure SM0/SM1 accordingly).
     pub fn with_layout(app: A, layout: MemoryLayout) -> Self {
-        let sii = A::DESCRIPTION.sii_image_for(&layout);
+        let sii = app.description().sii_image_for(&layout);
         let mut inner = Slave::new(SoftEsc::new(&sii), app);
         inner.set_layout(layout);
         SoftSlave {
@@ -113,7 +113,7 @@ impl<A: Application, P: SoftPdi> SoftSlave<A, P> {
     /// (serving the device's SII image) through the PDI `wrap` builds
     /// around it.
     pub fn with_pdi(app: A, wrap: impl FnOnce(SoftEsc) -> P) -> Self {
-        let sii = A::DESCRIPTION.sii_image();
+        let sii = app.description().sii_image();
         SoftSlave {
             inner: Slave::new(wrap(SoftEsc::new(&sii)), app),
             port1_link: false,

@@ -250,6 +250,17 @@ impl SoftEsc {
         esc
     }
 
+    /// Programs a whole SII image into the EEPROM (truncated to
+    /// [`SII_SIZE`], the rest erased to 0xFF), as a configurator writes a
+    /// device's EEPROM; the ESC loads it at its next power-on.
+    pub fn program_sii(&mut self, image: &[u8]) {
+        self.sii = [0xFF; SII_SIZE];
+        let n = image.len().min(SII_SIZE);
+        if let (Some(dst), Some(src)) = (self.sii.get_mut(..n), image.get(..n)) {
+            dst.copy_from_slice(src);
+        }
+    }
+
     /// Programs the station alias into the SII image (word 4, checksum of
     /// words 0..6 recomputed), as a configurator writes it to a device's
     /// EEPROM. The ESC loads it into 0x0012 at its next power-on (the

@@ -110,7 +110,7 @@ pub trait LineSlave: Send {
 
 impl<A: Application + Send + 'static, P: SoftPdi + Send + 'static> LineSlave for SoftSlave<A, P> {
     fn description(&self) -> &'static DeviceDescription {
-        A::DESCRIPTION
+        self.slave().description()
     }
     fn process_frame(&mut self, frame: &mut [u8]) -> FrameOutcome {
         SoftSlave::process_frame(self, frame)

@@ -132,8 +132,8 @@ impl Od {
                                 break;
                             }
                         }
-                        // More string entries than slots is a model error the
-                        // model's tests exclude; extra strings read as "".
+                        // Strings beyond the slots read as their default
+                        // (see `encode`) and cannot be written.
                         let _ = self.strings.push((flat as u16, text));
                     }
                 }
@@ -211,7 +211,13 @@ impl Od {
         out: &mut [u8],
     ) -> Result<usize, SdoAbortCode> {
         if entry.data_type == DataType::VisibleString {
-            let s = self.string(flat).unwrap_or("");
+            // A string beyond the store's slots is served from its default
+            // (read-only strings of a large dictionary need no slot).
+            let fallback = match entry.default {
+                DefaultValue::Str(d) => d,
+                DefaultValue::Int(_) => "",
+            };
+            let s = self.string(flat).unwrap_or(fallback);
             let dst = out.get_mut(..s.len()).ok_or(SdoAbortCode::ObjectTooLong)?;
             dst.copy_from_slice(s.as_bytes());
             return Ok(s.len());

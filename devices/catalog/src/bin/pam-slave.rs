@@ -196,7 +196,7 @@ struct Line {
 fn build_line(cli: &Cli, spec: &str) -> Result<Line, String> {
     use device_catalog::twins;
     if let Some(eni) = &cli.eni {
-        let (slaves, placed) =
+        let ecat_twin::line::BuiltLine { slaves, placed } =
             twins::from_eni(eni, cli.esi_dir.as_deref(), cli.inputs).map_err(|e| e.to_string())?;
         let names: Vec<String> = slaves
             .iter()

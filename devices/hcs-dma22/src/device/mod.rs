@@ -118,7 +118,9 @@ impl<const N: usize> Dma22Node<N> {
 }
 
 impl<const N: usize> Application for Dma22Node<N> {
-    const DESCRIPTION: &'static DeviceDescription = &DEVICE;
+    fn description(&self) -> &'static DeviceDescription {
+        &DEVICE
+    }
     type Values = [i64; od::ENTRIES];
 
     fn power_on(&mut self, od: &mut Od) {
