@@ -13,6 +13,7 @@ exits 1 on the first disagreement.
     soem_interop.py chain IFACE NAME,NAME,...
     soem_interop.py dc IFACE COUNT
     soem_interop.py twins IFACE SPEC
+    soem_interop.py esi_twin IFACE ESI.xml
 
 phase1: discovery, SDO, SDO Information, complete access, SII, state
 machine, SM watchdog, 1000 cycles, an ended session followed by a second
@@ -35,6 +36,12 @@ output/input sizes SPEC lists (`name|vendor|product|revision|out|in` per
 slave, `;`-separated, taken from the real devices' SII dumps by the Rust
 test), brings the line to OP, runs 100 cycles at the expected working
 counter and sees the counter twin's inputs move.
+esi_twin: a twin of a device with CoE built from its ESI alone
+(`pam-slave --esi ESI.xml --inputs loopback`): SOEM finds the ESI's
+identity and type name, SDO Information lists exactly the ESI's objects
+with the ESI's names, SDO reads of 0x1018 give the identity, the process
+image has the ESI's PDO sizes, the twin reaches OP and its inputs loop its
+outputs back.
 """
 
 import struct
@@ -507,6 +514,48 @@ def twins(iface, spec):
     m.close()
 
 
+def esi_twin(iface, esi):
+    root = ET.parse(esi).getroot()
+    dev = root.find("Descriptions/Devices/Device")
+    typ = dev.find("Type")
+    hexv = lambda t: int(t.replace("#x", "0x"), 16)
+    vendor = hexv(root.find("Vendor/Id").text)
+    product, revision = hexv(typ.get("ProductCode")), hexv(typ.get("RevisionNo"))
+    m, n = open_master(iface)
+    check(n == 1, f"SOEM config_init found {n} slave(s) (1 expected)")
+    s = m.slaves[0]
+    log(f"      {s.name!r} man {s.man:#010x} id {s.id:#010x} rev {s.rev:#010x}")
+    check(s.name == typ.text, f"name {s.name!r} is the ESI type {typ.text!r}")
+    check((s.man, s.id, s.rev) == (vendor, product, revision), "identity as the ESI says")
+    ids = [struct.unpack("<I", s.sdo_read(0x1018, k))[0] for k in (1, 2, 3)]
+    check(ids == [vendor, product, revision], f"0x1018:01..03 over SDO {[hex(i) for i in ids]}")
+    od = s.od
+    live = [o.index for o in od]
+    want = esi_object_indices(esi)
+    check(live == want, f"SDO Information lists {len(live)} objects, the ESI {len(want)}: equal")
+    names = {hexv(o.find("Index").text): o.find("Name").text for o in root.iter("Object")}
+    text = lambda v: v.decode() if isinstance(v, bytes) else v
+    wrong = [hex(o.index) for o in od if names.get(o.index) != text(o.name)]
+    check(not wrong, f"every object's name as in the ESI (wrong: {wrong})")
+    bits = {"R": 0, "T": 0}
+    for kind, tag in (("R", "RxPdo"), ("T", "TxPdo")):
+        for p in dev.iter(tag):
+            if p.get("Sm") is not None:
+                bits[kind] += sum(int(e.find("BitLen").text) for e in p.iter("Entry"))
+    set_sm_watchdog(m, LONG_WATCHDOG_MS)
+    size = m.config_map()
+    log(f"      config_map: I/O map {size} bytes, outputs {len(s.output)}, inputs {len(s.input)}")
+    check((len(s.output), len(s.input)) == ((bits["R"] + 7) // 8, (bits["T"] + 7) // 8),
+          f"image sizes from the ESI's default PDOs ({bits['R']} / {bits['T']} bits)")
+    check(to_op(m), "OP")
+    s.output = bytes([0xA5] * len(s.output))
+    wkcs = cycles(m, 30)
+    check(all(w == m.expected_wkc for w in wkcs[5:]), f"30 cycles with WKC {m.expected_wkc}")
+    log(f"      outputs {bytes(s.output).hex()} inputs {bytes(s.input).hex()}")
+    check(bytes(s.input)[:1] == b"\xa5", "the loopback twin's inputs carry its outputs")
+    m.close()
+
+
 def main():
     if len(sys.argv) < 3:
         print(__doc__)
@@ -524,6 +573,8 @@ def main():
         dma22(*sys.argv[2:3])
     elif sys.argv[1] == "twins":
         twins(*sys.argv[2:4])
+    elif sys.argv[1] == "esi_twin":
+        esi_twin(*sys.argv[2:4])
     else:
         print(__doc__)
         return 2

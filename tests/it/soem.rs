@@ -446,3 +446,24 @@ fn soem_runs_an_eni_line_of_esi_twins_and_a_pam_with_the_real_devices_identities
         &["twins", &spec],
     );
 }
+
+/// A twin of a device with CoE built from its ESI alone (the script's
+/// `esi_twin` phase): the IO8's generated ESI served by `pam-slave --esi`
+/// with looped-back inputs; SOEM checks identity, SDO Information against
+/// the ESI, the image sizes, OP and the loopback.
+#[test]
+fn soem_drives_a_coe_twin_built_from_an_esi_file() {
+    let dir = std::env::temp_dir().join(format!("pam-soem-esi-twin-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let esi = dir.join("IO8.xml");
+    std::fs::write(&esi, ecat_esi::generate(&io8_example::DEVICE).expect("ESI")).expect("write");
+    let path = esi.to_str().expect("utf-8 path").to_string();
+    soem_phase(
+        "e",
+        "esi-twin",
+        "",
+        &["--esi", &path, "--inputs", "loopback"],
+        &["esi_twin", &path],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
