@@ -32,7 +32,7 @@ cd "$(dirname "$0")/.."
 
 mode="${1:-smoke}"
 shift || true
-all_targets=(line_frames mailbox sii esi efw hcs_telegram)
+all_targets=(line_frames mailbox sii esi efw hcs_telegram twin)
 if [ $# -gt 0 ]; then targets=("$@"); else targets=("${all_targets[@]}"); fi
 
 sanitizer="${FUZZ_SANITIZER:-none}"
@@ -49,6 +49,7 @@ max_len() {
         esi) echo 65536 ;;
         efw) echo 8192 ;;
         hcs_telegram) echo 128 ;;
+        twin) echo 65536 ;;
         *) echo 4096 ;;
     esac
 }

@@ -529,3 +529,66 @@ fn a_modular_devices_esi_is_refused_with_a_message_until_supported() {
         "{e}"
     );
 }
+
+#[test]
+fn a_coe_device_whose_esi_has_no_dictionary_gets_one_from_its_pdos_and_runs() {
+    // The IO8's ESI with its <Dictionary> removed (a <ChannelInfo>-only
+    // shape): the twin makes 0x1000, 0x1018, the PDO mapping and
+    // assignment objects and the mapped objects from the PDOs.
+    let xml =
+        String::from_utf8(ecat_esi::generate(&io8_example::DEVICE).expect("ESI")).expect("utf-8");
+    let (a, b) = (
+        xml.find("<Dictionary>").expect("dict"),
+        xml.find("</Dictionary>").expect("end"),
+    );
+    let stripped = format!(
+        "{}<ChannelInfo><ProfileNo>5001</ProfileNo></ChannelInfo>{}",
+        &xml[..a],
+        &xml[b + "</Dictionary>".len()..]
+    );
+    let file = EsiFile::parse(&stripped).expect("parses");
+    let dev = file.device(None, None).expect("device");
+    let twin = ecat_twin::twin(dev, None, InputRule::Loopback).expect("twin");
+    let od = twin.od();
+    let indices: Vec<u16> = od.dictionary().objects().iter().map(|o| o.index).collect();
+    assert_eq!(
+        indices,
+        [
+            0x1000, 0x1018, 0x1600, 0x1A00, 0x1C00, 0x1C12, 0x1C13, 0x6000, 0x7000
+        ]
+    );
+    assert_eq!(od.get(0x1000, 0), Some(5001));
+    smol::block_on(async {
+        use master_test::mailbox::{MailboxClient, MailboxGeometry};
+        let bus = VirtualBus::with_chain(Chain::with_slaves(vec![twin]), Clock::simulated(), None)
+            .expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let sd = group.subdevice(md, 0).expect("slave");
+        assert_eq!(sd.name(), "IO8");
+        let mut c = MailboxClient::new(
+            md,
+            sd.configured_address(),
+            MailboxGeometry::of(&io8_example::DEVICE.layout()),
+        );
+        let product = c.sdo_upload(0x1018, 2, false).await.expect("0x1018:02");
+        assert_eq!(
+            product,
+            io8_example::DEVICE.identity.product_code.to_le_bytes()
+        );
+        let group = group.into_op(md).await.expect("OP");
+        let sd = group.subdevice(md, 0).expect("slave");
+        assert_eq!((sd.outputs_raw().len(), sd.inputs_raw().len()), (1, 1));
+        sd.outputs_raw_mut()[0] = 0x3C;
+        for _ in 0..5 {
+            bus.clock.advance(Duration::from_millis(1));
+            group.tx_rx(md).await.expect("tx_rx");
+        }
+        let inputs = group.subdevice(md, 0).expect("slave").inputs_raw().to_vec();
+        assert_eq!(
+            inputs,
+            [0x3C],
+            "loopback of the 8 BOOL outputs into the 8 BOOL inputs"
+        );
+    });
+}

@@ -4,7 +4,9 @@
 //! from the ESI.
 //!
 //! The description takes: identity and names; the dictionary
-//! ([`crate::dictionary`]; 0x1018:01..03 always carry the ESI identity);
+//! ([`crate::dictionary`]; 0x1018:01..03 always carry the ESI identity),
+//! or, for an ESI without one, a dictionary made from the PDOs
+//! (`synthesize`);
 //! the mailbox from the `MBoxOut`/`MBoxIn` SyncManagers, the bootstrap
 //! mailbox from `Eeprom/BootStrap`, CoE services from `Mailbox/CoE`, FoE
 //! from `Mailbox/FoE`; PDO sets from
@@ -22,7 +24,8 @@ use ecat_slave::device::{
     Application, CoeServices, DeviceDescription, DeviceNames, EscConfig, Identity, MailboxConfig,
     MemoryLayout, PdoSet, ProcessData, SoftSlave, Tick,
 };
-use ecat_slave::od::{DataType, DefaultValue, Entry, Object, PdoMapping};
+use ecat_slave::od::build::{assign, assign_count, constant, input, map, output, sub0, var};
+use ecat_slave::od::{DataType, DefaultValue, Entry, Object, ObjectCode, PdoMapping};
 use ecat_slave::sii::{SmType, protocols};
 
 use crate::dictionary;
@@ -39,9 +42,21 @@ pub enum DescriptionBuildError {
     /// The ESI is wrong (element and line inside).
     #[error(transparent)]
     Esi(#[from] EsiError),
-    /// The device has no `Profile/Dictionary`.
-    #[error("{0}: the ESI has no <Profile><Dictionary>: a device with CoE needs its objects")]
-    NoDictionary(String),
+    /// A PDO entry of a device without a dictionary has a type the core
+    /// does not serve (the dictionary is made from the PDOs).
+    #[error(
+        "{at}: PDO entry {index:#06x}:{sub:02x} has data type code {code:#04x}, which twins do not serve yet"
+    )]
+    UnsupportedEntryType {
+        /// The PDO element.
+        at: At,
+        /// Object index.
+        index: u16,
+        /// Subindex.
+        sub: u8,
+        /// CoE data type code.
+        code: u8,
+    },
     /// More entries than a twin holds.
     #[error("{device}: {entries} dictionary entries, a twin holds at most {TWIN_ENTRIES}")]
     TooManyEntries {
@@ -173,6 +188,182 @@ fn sm(dev: &EsiDevice, kind: SmType) -> Option<(u16, u16)> {
         .map(|s| (s.start, s.default_size))
 }
 
+/// The CoE data type of a PDO entry's type code.
+fn entry_type(code: u8) -> Option<DataType> {
+    Some(match code {
+        0x01 => DataType::Bool,
+        0x02 => DataType::Int8,
+        0x03 => DataType::Int16,
+        0x04 => DataType::Int32,
+        0x05 => DataType::UInt8,
+        0x06 => DataType::UInt16,
+        0x07 => DataType::UInt32,
+        0x15 => DataType::Int64,
+        0x1B => DataType::UInt64,
+        c @ 0x30..=0x37 => DataType::Bits(c - 0x2F),
+        _ => return None,
+    })
+}
+
+fn record(index: u16, name: &str, entries: Vec<Entry>) -> Object {
+    Object {
+        index,
+        name: leak(name),
+        code: ObjectCode::Record,
+        entries: Box::leak(entries.into_boxed_slice()),
+    }
+}
+
+fn array(index: u16, name: &str, entries: Vec<Entry>) -> Object {
+    Object {
+        code: ObjectCode::Array,
+        ..record(index, name, entries)
+    }
+}
+
+/// The dictionary of a device with CoE whose ESI has none (only
+/// `<ChannelInfo>` or no profile): 0x1000 (the profile number), 0x1018,
+/// the PDO mapping objects of its PDOs, 0x1C00, 0x1C12/0x1C13 assigning
+/// the PDOs with a default SyncManager, and the objects the PDOs map (a
+/// VAR for subindex 0 alone, else a record), read-only inputs and
+/// writable outputs.
+fn synthesize(dev: &EsiDevice) -> Result<Vec<Object>, DescriptionBuildError> {
+    let profile = dev
+        .source
+        .path("Profile/ChannelInfo/ProfileNo")
+        .or_else(|| dev.source.path("Profile/ProfileNo"))
+        .and_then(|p| crate::eni::number(&p.text))
+        .unwrap_or(0);
+    let mut objects = vec![
+        Object {
+            index: 0x1000,
+            name: "Device type",
+            code: ObjectCode::Var,
+            entries: Box::leak(Box::new([var(
+                "Device type",
+                DataType::UInt32,
+                PdoMapping::None,
+                profile,
+            )])),
+        },
+        record(
+            0x1018,
+            "Identity",
+            vec![
+                sub0(4),
+                constant(1, "Vendor ID", DataType::UInt32, i64::from(dev.vendor_id)),
+                constant(
+                    2,
+                    "Product code",
+                    DataType::UInt32,
+                    i64::from(dev.product_code),
+                ),
+                constant(3, "Revision", DataType::UInt32, i64::from(dev.revision)),
+                constant(4, "Serial number", DataType::UInt32, 0),
+            ],
+        ),
+    ];
+    // Mapped objects: (index) -> [(sub, name, type, output)].
+    let mut mapped: std::collections::BTreeMap<u16, (String, Vec<(u8, String, DataType, bool)>)> =
+        std::collections::BTreeMap::new();
+    for (pdos, out) in [(&dev.rx_pdos, true), (&dev.tx_pdos, false)] {
+        for p in pdos.iter() {
+            let mut entries = vec![sub0(u8::try_from(p.entries.len()).unwrap_or(u8::MAX))];
+            for (k, e) in p.entries.iter().enumerate() {
+                let sub = u8::try_from(k + 1).unwrap_or(u8::MAX);
+                let value = u32::from(e.index) << 16 | u32::from(e.sub) << 8 | u32::from(e.bit_len);
+                entries.push(map(sub, ecat_slave::od::build::sub_name(sub), value));
+                if e.index == 0 {
+                    continue;
+                }
+                let ty = entry_type(e.data_type).ok_or_else(|| {
+                    DescriptionBuildError::UnsupportedEntryType {
+                        at: p.at.clone(),
+                        index: e.index,
+                        sub: e.sub,
+                        code: e.data_type,
+                    }
+                })?;
+                let slot = mapped
+                    .entry(e.index)
+                    .or_insert_with(|| (p.name.clone(), Vec::new()));
+                if !slot.1.iter().any(|(s, ..)| *s == e.sub) {
+                    slot.1.push((e.sub, e.name.clone(), ty, out));
+                }
+            }
+            objects.push(record(p.index, &p.name, entries));
+        }
+    }
+    let sm_types: Vec<Entry> =
+        std::iter::once(sub0(u8::try_from(dev.sms.len()).unwrap_or(u8::MAX)))
+            .chain(dev.sms.iter().enumerate().map(|(i, s)| {
+                let sub = u8::try_from(i + 1).unwrap_or(u8::MAX);
+                let t = match s.kind {
+                    SmType::MailboxOut => 1,
+                    SmType::MailboxIn => 2,
+                    SmType::ProcessOut => 3,
+                    SmType::ProcessIn => 4,
+                    _ => 0,
+                };
+                constant(
+                    sub,
+                    ecat_slave::od::build::sub_name(sub),
+                    DataType::UInt8,
+                    t,
+                )
+            }))
+            .collect();
+    objects.push(array(0x1C00, "Sync manager type", sm_types));
+    for (index, name, pdos) in [
+        (0x1C12u16, "RxPDO assign", &dev.rx_pdos),
+        (0x1C13u16, "TxPDO assign", &dev.tx_pdos),
+    ] {
+        let def: Vec<u16> = pdos
+            .iter()
+            .filter(|p| p.sm.is_some())
+            .map(|p| p.index)
+            .collect();
+        let cap = u8::try_from(pdos.len().max(1)).unwrap_or(u8::MAX);
+        let mut entries = vec![assign_count(
+            u8::try_from(def.len()).unwrap_or(u8::MAX),
+            cap,
+        )];
+        for k in 1..=cap {
+            let pdo = def.get(usize::from(k) - 1).copied().unwrap_or(0);
+            entries.push(assign(k, pdo));
+        }
+        objects.push(array(index, name, entries));
+    }
+    for (index, (pdo_name, mut subs)) in mapped {
+        subs.sort_by_key(|s| s.0);
+        let make = |(sub, name, ty, out): &(u8, String, DataType, bool)| {
+            let n = leak(name);
+            if *out {
+                output(*sub, n, *ty)
+            } else {
+                input(*sub, n, *ty)
+            }
+        };
+        match subs.as_slice() {
+            [only] if only.0 == 0 => objects.push(Object {
+                index,
+                name: leak(&only.1),
+                code: ObjectCode::Var,
+                entries: Box::leak(Box::new([make(only)])),
+            }),
+            _ => {
+                let highest = subs.iter().map(|s| s.0).max().unwrap_or(0);
+                let entries: Vec<Entry> = std::iter::once(sub0(highest))
+                    .chain(subs.iter().filter(|s| s.0 != 0).map(make))
+                    .collect();
+                objects.push(record(index, &pdo_name, entries));
+            }
+        }
+    }
+    objects.sort_by_key(|o| o.index);
+    Ok(objects)
+}
+
 /// The twin's description and memory layout for `dev`.
 pub fn describe(
     dev: &EsiDevice,
@@ -181,14 +372,15 @@ pub fn describe(
     if dev.source.child("Slots").is_some() {
         return Err(DescriptionBuildError::Modular(label));
     }
-    let dict_el = dev
-        .source
-        .path("Profile/Dictionary")
-        .ok_or_else(|| DescriptionBuildError::NoDictionary(label.clone()))?;
-    let (parsed, enums) = dictionary::parse(dict_el)?;
+    let (parsed, enums) = match dev.source.path("Profile/Dictionary") {
+        Some(dict_el) => {
+            let (parsed, enums) = dictionary::parse(dict_el)?;
+            (parsed.into_iter().map(|p| p.object).collect(), enums)
+        }
+        None => (synthesize(dev)?, Vec::new()),
+    };
     let mut objects: Vec<Object> = Vec::with_capacity(parsed.len());
-    for p in parsed {
-        let o = p.object;
+    for o in parsed {
         if o.index == 0x1018 {
             // The identity the device answers with is the ESI's.
             let id = [dev.vendor_id, dev.product_code, dev.revision];

@@ -395,6 +395,7 @@ fn sub_infos<'a>(obj_info: Option<&'a Element>, names: &[String]) -> Vec<Option<
 }
 
 /// One parsed object: its index, name, code and entries.
+#[derive(Debug)]
 pub struct ParsedObject {
     /// The object.
     pub object: Object,
@@ -589,4 +590,156 @@ pub fn build(objects: Vec<Object>, enums: Vec<&'static EnumDesc>) -> &'static Di
     let enums: &'static [&'static EnumDesc] = Box::leak(enums.into_boxed_slice());
     let bases: &'static [u16] = Box::leak(bases.into_boxed_slice());
     Box::leak(Box::new(Dictionary::new(objects, enums, bases)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::xml;
+
+    const DICT: &str = r##"<Dictionary>
+  <DataTypes>
+    <DataType><Name>USINT</Name><BitSize>8</BitSize></DataType>
+    <DataType><Index>#x0800</Index><Name>DT0800EN02</Name><BitSize>2</BitSize>
+      <EnumInfo><Text>off</Text><Enum>0</Enum></EnumInfo>
+      <EnumInfo><Text>on</Text><Enum>1</Enum></EnumInfo></DataType>
+    <DataType><Name>DT1018</Name><BitSize>80</BitSize>
+      <SubItem><SubIdx>0</SubIdx><Name>SubIndex 000</Name><Type>USINT</Type><BitSize>8</BitSize><BitOffs>0</BitOffs><Flags><Access>ro</Access></Flags></SubItem>
+      <SubItem><SubIdx>1</SubIdx><Name>Vendor ID</Name><Type>UDINT</Type><BitSize>32</BitSize><BitOffs>16</BitOffs><Flags><Access>ro</Access></Flags></SubItem>
+      <SubItem><SubIdx>2</SubIdx><Name>Gap</Name><Type>BIT7</Type><BitSize>7</BitSize><BitOffs>48</BitOffs></SubItem>
+      <SubItem><SubIdx>3</SubIdx><Name>Mode</Name><Type>DT0800EN02</Type><BitSize>2</BitSize><BitOffs>55</BitOffs><Flags><Access WriteRestrictions="PreOP">rw</Access><PdoMapping>R</PdoMapping></Flags></SubItem>
+    </DataType>
+    <DataType><Name>DT1C12ARR</Name><BaseType>UINT</BaseType><BitSize>32</BitSize><ArrayInfo><LBound>1</LBound><Elements>2</Elements></ArrayInfo></DataType>
+    <DataType><Name>DT1C12</Name><BitSize>48</BitSize>
+      <SubItem><SubIdx>0</SubIdx><Name>SubIndex 000</Name><Type>USINT</Type><BitSize>8</BitSize><BitOffs>0</BitOffs><Flags><Access>rw</Access></Flags></SubItem>
+      <SubItem><Name>Elements</Name><Type>DT1C12ARR</Type><BitSize>32</BitSize><BitOffs>16</BitOffs><Flags><Access>rw</Access></Flags></SubItem>
+    </DataType>
+  </DataTypes>
+  <Objects>
+    <Object><Index>#x1C12</Index><Name>RxPDO assign</Name><Type>DT1C12</Type><BitSize>48</BitSize>
+      <Info><SubItem><Name>SubIndex 000</Name><Info><DefaultData>01</DefaultData></Info></SubItem>
+        <SubItem><Name>SubIndex 001</Name><Info><DefaultData>0016</DefaultData></Info></SubItem></Info></Object>
+    <Object><Index>#x1000</Index><Name>Device type</Name><Type>UDINT</Type><BitSize>32</BitSize>
+      <Info><DefaultData>89130000</DefaultData></Info><Flags><Access>ro</Access></Flags></Object>
+    <Object><Index>#x2000</Index><Name>Offset</Name><Type>INT</Type><BitSize>16</BitSize>
+      <Info><MinData>18FC</MinData><MaxData>E803</MaxData><DefaultData>F6FF</DefaultData><Unit>#xFD030000</Unit></Info>
+      <Flags><Access>rw</Access><PdoMapping>T</PdoMapping><Backup>1</Backup></Flags></Object>
+    <Object><Index>#x1018</Index><Name>Identity</Name><Type>DT1018</Type><BitSize>80</BitSize>
+      <Info><SubItem><Name>SubIndex 000</Name><Info><DefaultValue>3</DefaultValue></Info></SubItem>
+        <SubItem><Name>Vendor ID</Name><Info><DefaultValue>#x00000ABC</DefaultValue></Info></SubItem>
+        <SubItem><Name>Mode</Name><Info><DefaultValue>1</DefaultValue></Info></SubItem></Info></Object>
+    <Object><Index>#x1008</Index><Name>Device name</Name><Type>STRING(6)</Type><BitSize>48</BitSize>
+      <Info><DefaultString>Twin 1</DefaultString></Info><Flags><Access>ro</Access></Flags></Object>
+  </Objects>
+</Dictionary>"##;
+
+    fn parsed(text: &str) -> Result<(Vec<ParsedObject>, Vec<&'static EnumDesc>), EsiError> {
+        parse(&xml::parse(text).unwrap())
+    }
+
+    #[test]
+    fn objects_of_every_shape_get_types_defaults_ranges_units_and_access() {
+        let (objs, enums) = parsed(DICT).unwrap();
+        let idx: Vec<u16> = objs.iter().map(|o| o.object.index).collect();
+        assert_eq!(idx, [0x1000, 0x1008, 0x1018, 0x1C12, 0x2000], "sorted");
+        assert_eq!(enums.len(), 1);
+        let o = |i: u16| &objs.iter().find(|o| o.object.index == i).unwrap().object;
+        let dt = o(0x1000);
+        assert_eq!(
+            (dt.code, dt.entries[0].default),
+            (ObjectCode::Var, DefaultValue::Int(0x1389))
+        );
+        let off = &o(0x2000).entries[0];
+        assert_eq!(off.data_type, DataType::Int16);
+        assert_eq!(
+            (off.default, off.min, off.max),
+            (DefaultValue::Int(-10), Some(-1000), Some(1000))
+        );
+        assert_eq!(
+            (off.unit, off.access, off.pdo, off.backup),
+            ("ms", Access::Rw, PdoMapping::Tx, true)
+        );
+        let id = o(0x1018);
+        assert_eq!(id.code, ObjectCode::Record);
+        assert_eq!(id.entries.len(), 4);
+        assert_eq!(id.entries[1].default, DefaultValue::Int(0xABC));
+        assert!(id.entries[2].gap, "BIT7 without flags is a gap");
+        let mode = &id.entries[3];
+        assert_eq!(
+            (mode.access, mode.pdo, mode.default),
+            (Access::RwPreOp, PdoMapping::Rx, DefaultValue::Int(1))
+        );
+        assert!(matches!(mode.data_type, DataType::Enum(e) if e.text(1) == Some("on")));
+        let a = o(0x1C12);
+        assert_eq!(a.code, ObjectCode::Array);
+        assert_eq!(a.entries.len(), 3, "sub 0 and two elements");
+        assert_eq!(a.entries[1].default, DefaultValue::Int(0x1600));
+        assert_eq!(a.entries[2].name, "SubIndex 002");
+        assert_eq!(o(0x1008).entries[0].default, DefaultValue::Str("Twin 1"));
+        let dict = build(objs.into_iter().map(|p| p.object).collect(), enums);
+        assert_eq!(dict.entry_count(), 1 + 1 + 4 + 3 + 1);
+        assert_eq!(dict.find_entry(0x2000, 0).map(|(f, _)| f), Some(9));
+    }
+
+    #[test]
+    fn dictionary_errors_name_the_element_and_line() {
+        let line =
+            |needle: &str, text: &str| text.lines().position(|l| l.contains(needle)).unwrap() + 1;
+        let t = DICT.replace("<Type>INT</Type>", "<Type>REAL</Type>");
+        let e = parsed(&t).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            format!(
+                "<Type> at line {}: unknown data type 'REAL'",
+                line("REAL", &t)
+            )
+        );
+        let t = DICT.replace(
+            "<Access>rw</Access><PdoMapping>T",
+            "<Access>rx</Access><PdoMapping>T",
+        );
+        let e = parsed(&t).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            format!("<Access> at line {}: bad Access 'rx'", line(">rx<", &t))
+        );
+        let t = DICT.replace(
+            "<DefaultData>F6FF</DefaultData>",
+            "<DefaultData>F6F</DefaultData>",
+        );
+        assert!(
+            parsed(&t)
+                .unwrap_err()
+                .to_string()
+                .contains("bad hexBinary 'F6F'")
+        );
+        let t = DICT.replace(
+            "<SubIdx>1</SubIdx><Name>Vendor ID</Name><Type>UDINT</Type><BitSize>32",
+            "<SubIdx>1</SubIdx><Name>Vendor ID</Name><Type>UDINT</Type><BitSize>16",
+        );
+        assert!(
+            parsed(&t)
+                .unwrap_err()
+                .to_string()
+                .contains("bad BitSize (not the type's size) '16'")
+        );
+        let t = DICT.replace(
+            "<Name>DT0800EN02</Name><BitSize>2</BitSize>",
+            "<Name>DT0800EN02</Name><BitSize>999</BitSize>",
+        );
+        assert!(
+            parsed(&t)
+                .unwrap_err()
+                .to_string()
+                .contains("bad BitSize '999'")
+        );
+    }
+
+    #[test]
+    fn little_endian_data_is_sign_extended_by_type() {
+        assert_eq!(from_le(&[0xF6, 0xFF], &DataType::Int16, 16), -10);
+        assert_eq!(from_le(&[0xF6, 0xFF], &DataType::UInt16, 16), 0xFFF6);
+        assert_eq!(from_le(&[0xFF; 9], &DataType::Int64, 64), -1);
+        assert_eq!(from_le(&[], &DataType::UInt8, 8), 0);
+    }
 }

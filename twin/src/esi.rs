@@ -258,11 +258,14 @@ impl EsiDevice {
         format!("{} rev {:#010x}", self.type_name, self.revision)
     }
 
-    /// Whether the device has a mailbox (and so a firmware behind its ESC).
+    /// Whether the device has a mailbox (and so a firmware behind its
+    /// ESC): a mailbox SyncManager or a mailbox protocol.
     pub fn has_mailbox(&self) -> bool {
-        self.sms
-            .iter()
-            .any(|s| matches!(s.kind, SmType::MailboxOut | SmType::MailboxIn))
+        self.mailbox_protocols != 0
+            || self
+                .sms
+                .iter()
+                .any(|s| matches!(s.kind, SmType::MailboxOut | SmType::MailboxIn))
     }
 
     /// Bytes of process data the default PDO assignment puts on `sm`.
@@ -880,5 +883,157 @@ impl EsiFile {
             .filter(|d| d.vendor_id == vendor_id && d.product_code == product_code)
             .filter(|d| revision.is_none_or(|r| d.revision == r))
             .max_by_key(|d| d.revision)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ONE: &str = r##"<?xml version="1.0"?>
+<EtherCATInfo>
+  <Vendor><Id>#x00000002</Id><Name>V</Name></Vendor>
+  <Descriptions>
+    <Groups><Group><Type>DigOut</Type><Name>Outputs</Name></Group></Groups>
+    <Devices>
+      <Device Physics="KK">
+        <Type ProductCode="#x07d43052" RevisionNo="#x00100000">EL2004</Type>
+        <Name LcId="1031">Deutsch</Name>
+        <Name LcId="1033">English</Name>
+        <GroupType>DigOut</GroupType>
+        <Fmmu>Outputs</Fmmu>
+        <Sm StartAddress="#x0f00" ControlByte="#x44" Enable="1" OpOnly="1">Outputs</Sm>
+        <RxPdo Fixed="1" Mandatory="1" Sm="0">
+          <Index>#x1600</Index><Name>Channel 1</Name>
+          <Exclude>#x1601</Exclude>
+          <Entry><Index>#x7000</Index><SubIndex>1</SubIndex><BitLen>1</BitLen><Name>Output</Name><DataType>BOOL</DataType></Entry>
+          <Entry><Index>#x0</Index><BitLen>3</BitLen></Entry>
+        </RxPdo>
+        <Eeprom><ByteSize>2048</ByteSize><ConfigData>0401000000000F00</ConfigData></Eeprom>
+      </Device>
+    </Devices>
+  </Descriptions>
+</EtherCATInfo>"##;
+
+    #[test]
+    fn a_device_is_read_with_identity_names_sms_pdos_and_eeprom() {
+        let f = EsiFile::parse(ONE).unwrap();
+        let d = f.device(None, None).unwrap();
+        assert_eq!(
+            (d.vendor_id, d.product_code, d.revision),
+            (2, 0x07d4_3052, 0x0010_0000)
+        );
+        assert_eq!(d.name, "English", "LcId 1033 preferred");
+        assert_eq!(d.group_name, "Outputs");
+        assert_eq!(d.sms[0].enable, 0x09, "enable + OpOnly");
+        assert_eq!(d.sms[0].kind, SmType::ProcessOut);
+        let p = &d.rx_pdos[0];
+        assert_eq!(p.flags, pdo_flags::MANDATORY | pdo_flags::FIXED_CONTENT);
+        assert_eq!(p.excludes, [0x1601]);
+        assert_eq!(p.entries[1].data_type, 0, "padding");
+        assert_eq!(p.bits(), 4);
+        assert_eq!(d.output_bytes(), 1);
+        assert_eq!(d.config_data, [4, 1, 0, 0, 0, 0, 0x0F, 0]);
+        assert!(!d.has_mailbox());
+    }
+
+    #[test]
+    fn device_choice_by_type_and_revision_and_its_errors() {
+        let two = ONE.replace(
+            "</Device>\n    </Devices>",
+            "</Device>\n<Device><Type ProductCode=\"#x1\" RevisionNo=\"#x2\">EL9999</Type><Name>x</Name></Device>\n    </Devices>",
+        );
+        let f = EsiFile::parse(&two).unwrap();
+        assert!(matches!(
+            f.device(None, None),
+            Err(EsiError::Ambiguous { count: 2, .. })
+        ));
+        assert_eq!(f.device(Some("el9999"), None).unwrap().revision, 2);
+        let e = f.device(Some("EL2004"), Some(5)).unwrap_err();
+        assert!(
+            e.to_string().contains("no device EL2004 rev 0x00000005"),
+            "{e}"
+        );
+        assert!(f.find_identity(2, 0x07d4_3052, None).is_some());
+        assert!(f.find_identity(2, 0x07d4_3052, Some(1)).is_none());
+    }
+
+    #[test]
+    fn malformed_files_give_the_element_and_line() {
+        let cases: [(&str, &str, &str); 6] = [
+            (
+                "ProductCode=\"#x07d43052\"",
+                "ProductCode=\"#xZZ\"",
+                "<Type> at line 8: bad ProductCode '#xZZ'",
+            ),
+            (
+                "<BitLen>1</BitLen>",
+                "<BitLen>300</BitLen>",
+                "<BitLen> at line 17: bad BitLen '300'",
+            ),
+            (
+                "Enable=\"1\" OpOnly=\"1\">Outputs",
+                "Enable=\"1\">Sideways",
+                "<Sm> at line 13: bad SyncManager type 'Sideways'",
+            ),
+            (
+                "<Fmmu>Outputs</Fmmu>",
+                "<Fmmu>Both</Fmmu>",
+                "<Fmmu> at line 12: bad FMMU usage 'Both'",
+            ),
+            (
+                "Sm=\"0\"",
+                "Sm=\"3\"",
+                "<RxPdo> at line 14: PDO 0x1600 is assigned to SM3, which is not described by an <Sm>",
+            ),
+            (
+                "<ConfigData>0401000000000F00</ConfigData>",
+                "<ConfigData>0401X</ConfigData>",
+                "<ConfigData> at line 20: bad hexBinary '0401X'",
+            ),
+        ];
+        for (from, to, want) in cases {
+            let text = ONE.replace(from, to);
+            assert_ne!(text, ONE, "{from}");
+            assert_eq!(EsiFile::parse(&text).unwrap_err().to_string(), want);
+        }
+        let tx = ONE.replace("<Sm StartAddress=\"#x0f00\"", "<Sm StartAddress=\"#x1000\" ControlByte=\"#x00\" Enable=\"1\">Inputs</Sm>\n<Sm StartAddress=\"#x0f00\"").replace("Sm=\"0\"", "Sm=\"0\"");
+        // SM0 is now an input SM: an RxPDO on it is refused.
+        let e = EsiFile::parse(&tx).unwrap_err();
+        assert!(e.to_string().contains("not an output SyncManager"), "{e}");
+        assert!(matches!(
+            EsiFile::parse("<Other/>"),
+            Err(EsiError::NotEsi(_))
+        ));
+        assert!(matches!(
+            EsiFile::parse("<EtherCATInfo>"),
+            Err(EsiError::Xml(_))
+        ));
+        let e = EsiFile::parse("<EtherCATInfo><Vendor><Id>2</Id></Vendor><Descriptions><Devices/></Descriptions></EtherCATInfo>").unwrap_err();
+        assert!(e.to_string().contains("missing <Device>"), "{e}");
+    }
+
+    #[test]
+    fn mailbox_sms_smaller_than_one_sdo_are_refused() {
+        let text = ONE.replace(
+            "<Fmmu>Outputs</Fmmu>",
+            "<Sm StartAddress=\"#x1000\" DefaultSize=\"8\" ControlByte=\"#x26\" Enable=\"1\">MBoxOut</Sm>",
+        );
+        let e = EsiFile::parse(&text).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("SM0 DefaultSize 8 bytes is too small for 16 bytes"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn base_type_names_map_to_coe_codes() {
+        assert_eq!(base_type_code("BOOL"), Some(1));
+        assert_eq!(base_type_code("BIT3"), Some(0x32));
+        assert_eq!(base_type_code("BIT9"), None);
+        assert_eq!(base_type_code("STRING(12)"), Some(9));
+        assert_eq!(base_type_code("ULINT"), Some(0x1B));
+        assert_eq!(base_type_code("FLOAT7"), None);
     }
 }

@@ -208,3 +208,66 @@ fn encode(dev: &EsiDevice) -> Result<Vec<u8>, SiiBuildError> {
     out.resize(EEPROM_BYTES.max(out.len()), 0xFF);
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::esi::EsiFile;
+    use ecat_slave::sii::SiiReader;
+
+    const DEV: &str = r##"<EtherCATInfo><Vendor><Id>#x2</Id><Name>V</Name></Vendor><Descriptions><Devices>
+<Device Physics="YKY"><Type ProductCode="#x044c2c52" RevisionNo="#x00120000">EK1100</Type><Name>Coupler</Name>
+<GroupType>SystemBk</GroupType><Electrical><EBusCurrent>-2000</EBusCurrent></Electrical>
+<Eeprom><ByteSize>2048</ByteSize><ConfigData>000D0000000000000000</ConfigData></Eeprom></Device>
+</Devices></Descriptions></EtherCATInfo>"##;
+
+    #[test]
+    fn physics_letters_become_port_nibbles() {
+        assert_eq!(physical_port("YKY"), 0x0131);
+        assert_eq!(physical_port("KK"), 0x0033);
+        assert_eq!(physical_port("YY"), 0x0011);
+        assert_eq!(physical_port(""), 0);
+        assert_eq!(physical_port("YYYYY"), 0x1111, "4 ports at most");
+    }
+
+    #[test]
+    fn an_encoded_image_carries_header_identity_and_general_from_the_esi() {
+        let f = EsiFile::parse(DEV).unwrap();
+        let img = image(&f.devices[0], Some(0x0102)).unwrap();
+        assert_eq!(img.len(), EEPROM_BYTES);
+        assert_eq!(
+            &img[0..2],
+            &[0x00, 0x0D],
+            "PDI control word from ConfigData"
+        );
+        assert_eq!(&img[8..10], &[0x02, 0x01], "alias");
+        assert_eq!(img[14], sii::crc8(&img[..14]));
+        let r = SiiReader::new(&img).unwrap();
+        assert_eq!(r.identity().product_code, 0x044c_2c52);
+        let g = r.general().unwrap().unwrap();
+        assert_eq!(g.current_on_ebus, -2000);
+        assert_eq!(g.physical_port, 0x0131);
+    }
+
+    #[test]
+    fn eeprom_data_is_served_verbatim_and_a_short_one_is_refused() {
+        let data: String = (0..256).map(|i| format!("{:02X}", i % 251)).collect();
+        let text = DEV.replace("<ByteSize>2048</ByteSize>", &format!("<Data>{data}</Data>"));
+        let f = EsiFile::parse(&text).unwrap();
+        let img = image(&f.devices[0], None).unwrap();
+        assert_eq!(
+            img[..256]
+                .iter()
+                .map(|b| usize::from(*b))
+                .collect::<Vec<_>>(),
+            (0..256).map(|i| i % 251).collect::<Vec<_>>()
+        );
+        assert!(img[256..].iter().all(|b| *b == 0xFF));
+        let short = DEV.replace("<ByteSize>2048</ByteSize>", "<Data>0102</Data>");
+        let f = EsiFile::parse(&short).unwrap();
+        assert!(matches!(
+            image(&f.devices[0], None),
+            Err(SiiBuildError::DataTooShort { len: 2, .. })
+        ));
+    }
+}
