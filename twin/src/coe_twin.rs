@@ -205,6 +205,9 @@ fn entry_type(code: u8) -> Option<DataType> {
     })
 }
 
+/// An entry a PDO maps: subindex, name, type, output (else input).
+type MappedEntry = (u8, String, DataType, bool);
+
 fn record(index: u16, name: &str, entries: Vec<Entry>) -> Object {
     Object {
         index,
@@ -264,7 +267,7 @@ fn synthesize(dev: &EsiDevice) -> Result<Vec<Object>, DescriptionBuildError> {
         ),
     ];
     // Mapped objects: (index) -> [(sub, name, type, output)].
-    let mut mapped: std::collections::BTreeMap<u16, (String, Vec<(u8, String, DataType, bool)>)> =
+    let mut mapped: std::collections::BTreeMap<u16, (String, Vec<MappedEntry>)> =
         std::collections::BTreeMap::new();
     for (pdos, out) in [(&dev.rx_pdos, true), (&dev.tx_pdos, false)] {
         for p in pdos.iter() {
@@ -336,7 +339,7 @@ fn synthesize(dev: &EsiDevice) -> Result<Vec<Object>, DescriptionBuildError> {
     }
     for (index, (pdo_name, mut subs)) in mapped {
         subs.sort_by_key(|s| s.0);
-        let make = |(sub, name, ty, out): &(u8, String, DataType, bool)| {
+        let make = |(sub, name, ty, out): &MappedEntry| {
             let n = leak(name);
             if *out {
                 output(*sub, n, *ty)

@@ -997,7 +997,7 @@ mod tests {
             assert_ne!(text, ONE, "{from}");
             assert_eq!(EsiFile::parse(&text).unwrap_err().to_string(), want);
         }
-        let tx = ONE.replace("<Sm StartAddress=\"#x0f00\"", "<Sm StartAddress=\"#x1000\" ControlByte=\"#x00\" Enable=\"1\">Inputs</Sm>\n<Sm StartAddress=\"#x0f00\"").replace("Sm=\"0\"", "Sm=\"0\"");
+        let tx = ONE.replace("<Sm StartAddress=\"#x0f00\"", "<Sm StartAddress=\"#x1000\" ControlByte=\"#x00\" Enable=\"1\">Inputs</Sm>\n<Sm StartAddress=\"#x0f00\"");
         // SM0 is now an input SM: an RxPDO on it is refused.
         let e = EsiFile::parse(&tx).unwrap_err();
         assert!(e.to_string().contains("not an output SyncManager"), "{e}");
