@@ -9,13 +9,13 @@
 //!   line.
 //! - [`sii`]: its SII image (`<Eeprom><Data>` verbatim, or encoded from the
 //!   ESI with the core's encoder).
-//! - [`esc_twin`]: the twin of a device without a firmware (couplers,
+//! - [`mod@esc_twin`]: the twin of a device without a firmware (couplers,
 //!   digital I/O terminals: ESC and EEPROM only).
 //! - [`coe_twin`] and [`dictionary`]: the twin of a device with a mailbox:
 //!   the core's firmware (CoE, SDO Information, PDO engine, AL state
 //!   machine) on a description built from the ESI at run time.
 //! - [`eni`]: the slaves of an ENI.
-//! - [`line`]: the line of twins an ENI describes, each device from an ESI
+//! - [`mod@line`]: the line of twins an ENI describes, each device from an ESI
 //!   library or a built-in device.
 //! - [`xml`]: the small element tree (with line numbers) both readers use.
 //!
