@@ -12,7 +12,7 @@ exits 1 on the first disagreement.
     soem_interop.py phase2 IFACE VERSION
     soem_interop.py chain IFACE NAME,NAME,...
     soem_interop.py dc IFACE COUNT
-    soem_interop.py twins IFACE SPEC
+    soem_interop.py twins IFACE SPEC ENI.xml
     soem_interop.py esi_twin IFACE ESI.xml
 
 phase1: discovery, SDO, SDO Information, complete access, SII, state
@@ -35,7 +35,11 @@ slave with the identity (vendor, product, revision), the name and the
 output/input sizes SPEC lists (`name|vendor|product|revision|out|in` per
 slave, `;`-separated, taken from the real devices' SII dumps by the Rust
 test), brings the line to OP, runs 100 cycles at the expected working
-counter and sees the counter twin's inputs move.
+counter and sees the counter twin's inputs move. Before SAFE-OP it
+executes the ENI's CoE init commands of the PS transition through SOEM's
+SDO download, as a master working from the ENI does; afterwards their
+values read back (a PAM parameter, a CoE twin's setting) and the image
+sizes SOEM derives from the written assignments are the ENI's.
 esi_twin: a twin of a device with CoE built from its ESI alone
 (`pam-slave --esi ESI.xml --inputs loopback`): SOEM finds the ESI's
 identity and type name, SDO Information lists exactly the ESI's objects
@@ -467,10 +471,34 @@ def dma22(iface):
     m.close()
 
 
-def twins(iface, spec):
+def eni_coe_init_cmds(eni, transition):
+    """Per ENI slave (in order): the CoE init commands of `transition`
+    as (index, subindex, data, complete access, comment)."""
+    out = []
+    for sl in ET.parse(eni).getroot().iter("Slave"):
+        cmds = []
+        for c in sl.findall("Mailbox/CoE/InitCmds/InitCmd"):
+            if transition not in [t.text for t in c.findall("Transition")]:
+                continue
+            num = lambda t: int(t.replace("#x", "0x"), 0)
+            cmds.append((num(c.find("Index").text), num(c.find("SubIndex").text),
+                         bytes.fromhex(c.find("Data").text), c.get("CompleteAccess") == "1",
+                         c.findtext("Comment", "")))
+        out.append(cmds)
+    return out
+
+
+def twins(iface, spec, eni):
     want = [w.split("|") for w in spec.split(";")]
     m, n = open_master(iface)
     check(n == len(want), f"SOEM config_init found {n} slave(s) ({len(want)} expected)")
+    init = eni_coe_init_cmds(eni, "PS")
+    done = 0
+    for s, cmds in zip(m.slaves, init):
+        for index, sub, data, ca, comment in cmds:
+            s.sdo_write(index, sub, data, ca)
+            done += 1
+    check(done > 0, f"the ENI's {done} CoE init commands (PS) downloaded by SOEM without an abort")
     for i, (s, w) in enumerate(zip(m.slaves, want)):
         name, vendor, product, rev = w[0], int(w[1], 0), int(w[2], 0), int(w[3], 0)
         log(f"      slave {i + 1}: {s.name!r} man {s.man:#010x} id {s.id:#010x} rev {s.rev:#010x}")
@@ -511,6 +539,12 @@ def twins(iface, spec):
     check(len(seen) > 10, f"the counter twin's inputs move ({len(seen)} distinct values)")
     states = [al_status(s) for s in m.slaves]
     check(all(st == 0x08 for st in states), f"AL status of every slave {[hex(x) for x in states]}")
+    for s, cmds in zip(m.slaves, init):
+        for index, sub, data, ca, comment in cmds:
+            if index in (0x1C12, 0x1C13) or ca:
+                continue
+            got = s.sdo_read(index, sub)
+            check(got == data, f"{s.name} {index:#06x}:{sub} ({comment}) reads back {got.hex()} ({data.hex()})")
     m.close()
 
 
@@ -572,7 +606,7 @@ def main():
     elif sys.argv[1] == "dma22":
         dma22(*sys.argv[2:3])
     elif sys.argv[1] == "twins":
-        twins(*sys.argv[2:4])
+        twins(*sys.argv[2:5])
     elif sys.argv[1] == "esi_twin":
         esi_twin(*sys.argv[2:4])
     else:

@@ -423,28 +423,43 @@ fn soem_brings_a_dma22_node_with_three_modules_to_op_after_writing_0xf030() {
 
 /// A line built from an ENI (`pam-slave --eni`, the script's `twins`
 /// phase): EK1100, EL2004, EL2828 twins from their ESI files, an EL1008
-/// twin counting, the PAM built in; SOEM sees the identities, names and
+/// twin counting, the PAM built in, and a CoE twin from an ESI (the IO8's,
+/// under another product code so the catalog does not claim it); SOEM
+/// downloads the ENI's CoE init commands, sees the identities, names and
 /// image sizes of the real devices' SII dumps and runs the line in OP.
 #[test]
 fn soem_runs_an_eni_line_of_esi_twins_and_a_pam_with_the_real_devices_identities() {
-    let spec = crate::twins::soem_expectations();
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/testdata");
-    let eni = root.join("machine.xml");
-    let esi = root.join("esi");
+    let dir = std::env::temp_dir().join(format!("pam-soem-eni-{}", std::process::id()));
+    let esi_dir = dir.join("esi");
+    std::fs::create_dir_all(&esi_dir).expect("dir");
+    for f in std::fs::read_dir(root.join("esi")).expect("testdata") {
+        let f = f.expect("entry").path();
+        std::fs::copy(&f, esi_dir.join(f.file_name().expect("name"))).expect("copy");
+    }
+    let (esi, eni) = crate::twins::coe_twin_line(
+        &std::fs::read_to_string(root.join("machine.xml")).expect("ENI"),
+    );
+    std::fs::write(esi_dir.join("IO8-twin.xml"), esi).expect("write");
+    let eni_path = dir.join("machine.xml");
+    std::fs::write(&eni_path, eni).expect("write");
+    let spec = crate::twins::soem_expectations();
+    let eni_arg = eni_path.to_str().expect("utf-8 path").to_string();
     soem_phase(
         "t",
         "twins",
         "",
         &[
             "--eni",
-            eni.to_str().expect("utf-8 path"),
+            &eni_arg,
             "--esi-dir",
-            esi.to_str().expect("utf-8 path"),
+            esi_dir.to_str().expect("utf-8 path"),
             "--inputs",
             "counter",
         ],
-        &["twins", &spec],
+        &["twins", &spec, &eni_arg],
     );
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A twin of a device with CoE built from its ESI alone (the script's

@@ -131,7 +131,49 @@ pub(crate) fn soem_expectations() -> String {
         pam.identity.product_code,
         pam.identity.revision
     ));
+    let io8 = &io8_example::DEVICE;
+    out.push(format!(
+        "{}|{:#x}|{:#x}|{:#x}|1|1",
+        io8.names.type_name, io8.identity.vendor_id, IO8_TWIN_PRODUCT, io8.identity.revision
+    ));
     out.join(";")
+}
+
+/// Product code of the IO8 twin in the SOEM ENI line (not the catalog's,
+/// so the twin is built from its ESI).
+const IO8_TWIN_PRODUCT: u32 = 0x108;
+
+/// The IO8's ESI under product code [`IO8_TWIN_PRODUCT`], and `eni` with
+/// a sixth slave of it whose CoE init commands set its PDO assignment and
+/// its input filter (0x8000:01 = 250 ms).
+pub(crate) fn coe_twin_line(eni: &str) -> (String, String) {
+    let io8 = &io8_example::DEVICE;
+    let esi = String::from_utf8(ecat_esi::generate(io8).expect("ESI"))
+        .expect("utf-8")
+        .replace(
+            &format!("ProductCode=\"#x{:08X}\"", io8.identity.product_code),
+            &format!("ProductCode=\"#x{IO8_TWIN_PRODUCT:08X}\""),
+        );
+    assert!(
+        esi.contains(&format!("#x{IO8_TWIN_PRODUCT:08X}")),
+        "product code replaced"
+    );
+    let slave = format!(
+        r##"<Slave>
+      <Info><Name>Term 6 (IO8 twin)</Name><PhysAddr>1006</PhysAddr><AutoIncAddr>65531</AutoIncAddr>
+        <VendorId>{}</VendorId><ProductCode>{IO8_TWIN_PRODUCT}</ProductCode><RevisionNo>{}</RevisionNo></Info>
+      <ProcessData><Send><BitStart>56</BitStart><BitLength>8</BitLength></Send><Recv><BitStart>120</BitStart><BitLength>8</BitLength></Recv></ProcessData>
+      <Mailbox><Protocol>CoE</Protocol><CoE><InitCmds>
+        <InitCmd><Transition>PS</Transition><Comment>clear RxPDO assignment</Comment><Ccs>1</Ccs><Index>#x1c12</Index><SubIndex>0</SubIndex><Data>00</Data></InitCmd>
+        <InitCmd><Transition>PS</Transition><Comment>RxPDO 0x1600</Comment><Ccs>1</Ccs><Index>#x1c12</Index><SubIndex>1</SubIndex><Data>0016</Data></InitCmd>
+        <InitCmd><Transition>PS</Transition><Comment>1 RxPDO</Comment><Ccs>1</Ccs><Index>#x1c12</Index><SubIndex>0</SubIndex><Data>01</Data></InitCmd>
+        <InitCmd><Transition>PS</Transition><Comment>input filter 250 ms</Comment><Ccs>1</Ccs><Index>#x8000</Index><SubIndex>1</SubIndex><Data>fa00</Data></InitCmd>
+      </InitCmds></CoE></Mailbox>
+    </Slave>
+  </Config>"##,
+        io8.identity.vendor_id, io8.identity.revision
+    );
+    (esi, eni.replacen("</Config>", &slave, 1))
 }
 
 #[test]
