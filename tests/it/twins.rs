@@ -235,7 +235,7 @@ fn ethercrab_brings_the_eni_line_to_op_with_the_real_devices_identities_and_imag
     let ecat_twin::line::BuiltLine { slaves, placed } = twins::from_eni(
         &testdata("machine.xml"),
         Some(&testdata("esi")),
-        InputRule::Hold,
+        &ecat_twin::InputRules::all(InputRule::Hold),
     )
     .expect("line from the ENI");
     assert_eq!(placed.len(), 5);

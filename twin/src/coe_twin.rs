@@ -11,8 +11,8 @@
 //! mailbox from `Eeprom/BootStrap`, CoE services from `Mailbox/CoE`, FoE
 //! from `Mailbox/FoE`; PDO sets from
 //! `VendorSpecific/TwinCAT/AlternativeSmMapping`, else the default
-//! assignment (0x1C12/0x1C13) plus, when more PDOs exist, one set of all
-//! of them; ESC settings from `Eeprom` and `Electrical`. The memory layout
+//! assignment (0x1C12/0x1C13) plus sets that honour `Exclude`
+//! ([`alternative_sets`]); ESC settings from `Eeprom` and `Electrical`. The memory layout
 //! follows the ESI's SyncManager addresses.
 //!
 //! Behaviour is generic ([`EsiApp`]): outputs are stored, inputs follow
@@ -31,6 +31,7 @@ use ecat_slave::sii::{SmType, protocols};
 use crate::dictionary;
 use crate::esc_twin::InputRule;
 use crate::esi::{At, EsiDevice, EsiError};
+use crate::sii::fit_name;
 use crate::xml::hex_binary;
 
 /// Most dictionary entries a twin can hold (its value storage).
@@ -160,25 +161,69 @@ fn pdo_sets(dev: &EsiDevice, objects: &[Object]) -> Result<&'static [PdoSet], Es
     } else {
         let rx = assigned(objects, 0x1C12);
         let tx = assigned(objects, 0x1C13);
-        let all_rx: Vec<u16> = dev.rx_pdos.iter().map(|p| p.index).collect();
-        let all_tx: Vec<u16> = dev.tx_pdos.iter().map(|p| p.index).collect();
-        let more = all_rx.iter().any(|p| !rx.contains(p)) || all_tx.iter().any(|p| !tx.contains(p));
         if !rx.is_empty() || !tx.is_empty() {
             sets.push(PdoSet {
                 name: "Default",
-                rx: leak_list(rx),
-                tx: leak_list(tx),
+                rx: leak_list(rx.clone()),
+                tx: leak_list(tx.clone()),
             });
         }
-        if more {
+        for (n, (srx, stx)) in alternative_sets(dev, &rx, &tx).into_iter().enumerate() {
             sets.push(PdoSet {
-                name: "All PDOs",
-                rx: leak_list(all_rx),
-                tx: leak_list(all_tx),
+                name: leak(&format!("Alternative {}", n + 1)),
+                rx: leak_list(srx),
+                tx: leak_list(stx),
             });
         }
     }
     Ok(Box::leak(sets.into_boxed_slice()))
+}
+
+/// PDO sets beyond the default assignment for a device without
+/// `AlternativeSmMapping`: every PDO of the device lands in a set, and no
+/// set holds two PDOs that exclude each other (`Exclude`, either way) or
+/// more than the core's process image per direction. Built greedily: a set
+/// starts with the first PDO no set holds yet and takes, in ESI order,
+/// every PDO that fits.
+pub fn alternative_sets(dev: &EsiDevice, rx: &[u16], tx: &[u16]) -> Vec<(Vec<u16>, Vec<u16>)> {
+    let pdos: Vec<&crate::esi::EsiPdo> = dev.rx_pdos.iter().chain(&dev.tx_pdos).collect();
+    let is_rx = |i: u16| dev.rx_pdos.iter().any(|p| p.index == i);
+    let excludes = |a: &crate::esi::EsiPdo, b: &crate::esi::EsiPdo| {
+        a.excludes.contains(&b.index) || b.excludes.contains(&a.index)
+    };
+    let limit = u32::try_from(ecat_slave::pdo::MAX_IMAGE * 8).unwrap_or(u32::MAX);
+    let mut covered: Vec<u16> = rx.iter().chain(tx).copied().collect();
+    let mut out = Vec::new();
+    while let Some(seed) = pdos.iter().find(|p| !covered.contains(&p.index)) {
+        let mut set: Vec<&crate::esi::EsiPdo> = vec![*seed];
+        for p in &pdos {
+            if set.iter().any(|q| q.index == p.index || excludes(q, p)) {
+                continue;
+            }
+            let bits: u32 = set
+                .iter()
+                .filter(|q| is_rx(q.index) == is_rx(p.index))
+                .map(|q| q.bits())
+                .sum();
+            if bits + p.bits() <= limit {
+                set.push(p);
+            }
+        }
+        covered.extend(set.iter().map(|p| p.index));
+        let (mut srx, mut stx) = (Vec::new(), Vec::new());
+        for p in pdos
+            .iter()
+            .filter(|p| set.iter().any(|q| q.index == p.index))
+        {
+            if is_rx(p.index) {
+                srx.push(p.index);
+            } else {
+                stx.push(p.index);
+            }
+        }
+        out.push((srx, stx));
+    }
+    out
 }
 
 fn sm(dev: &EsiDevice, kind: SmType) -> Option<(u16, u16)> {
@@ -375,6 +420,15 @@ pub fn describe(
     if dev.source.child("Slots").is_some() {
         return Err(DescriptionBuildError::Modular(label));
     }
+    // ETG.2000 requires it; the SII General category of a CoE device
+    // carries it.
+    if dev.group_type.is_empty() {
+        return Err(EsiError::Missing {
+            at: dev.at.clone(),
+            what: "<GroupType>",
+        }
+        .into());
+    }
     let (parsed, enums) = match dev.source.path("Profile/Dictionary") {
         Some(dict_el) => {
             let (parsed, enums) = dictionary::parse(dict_el)?;
@@ -462,9 +516,9 @@ pub fn describe(
         },
         names: DeviceNames {
             vendor: leak(&dev.vendor_name),
-            type_name: leak(&dev.type_name),
-            name: leak(&dev.name),
-            group_type: leak(&dev.group_type),
+            type_name: leak(fit_name(&dev.type_name)),
+            name: leak(fit_name(&dev.name)),
+            group_type: leak(fit_name(&dev.group_type)),
             group_name: leak(&dev.group_name),
         },
         dictionary: dictionary::build(objects, enums),
@@ -598,4 +652,160 @@ pub fn slave(
     rule: InputRule,
 ) -> SoftSlave<EsiApp> {
     SoftSlave::with_layout(EsiApp::new(desc, rule), layout)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::esi::EsiFile;
+
+    fn dev_with(pdos: &str) -> EsiDevice {
+        let text = format!(
+            r##"<EtherCATInfo><Vendor><Id>1</Id></Vendor><Descriptions><Devices><Device>
+<Type ProductCode="#x1" RevisionNo="#x1">D</Type><Name>D</Name><GroupType>G</GroupType>
+<Sm StartAddress="#x1000" DefaultSize="128" ControlByte="#x26" Enable="1">MBoxOut</Sm>
+<Sm StartAddress="#x1080" DefaultSize="128" ControlByte="#x22" Enable="1">MBoxIn</Sm>
+<Sm StartAddress="#x1100" ControlByte="#x64" Enable="1">Outputs</Sm>
+<Sm StartAddress="#x1180" ControlByte="#x20" Enable="1">Inputs</Sm>
+{pdos}
+<Mailbox><CoE SdoInfo="1" PdoAssign="1"/></Mailbox>
+</Device></Devices></Descriptions></EtherCATInfo>"##
+        );
+        EsiFile::parse(&text).unwrap().devices.remove(0)
+    }
+
+    fn pdo(tag: &str, index: u16, sm: Option<u8>, excludes: &[u16], entry: u16) -> String {
+        let sm = sm.map_or(String::new(), |s| format!(" Sm=\"{s}\""));
+        let ex: String = excludes
+            .iter()
+            .map(|e| format!("<Exclude>#x{e:04x}</Exclude>"))
+            .collect();
+        format!(
+            "<{tag}{sm}><Index>#x{index:04x}</Index><Name>P</Name>{ex}<Entry><Index>#x{entry:04x}</Index><SubIndex>1</SubIndex><BitLen>16</BitLen><Name>v</Name><DataType>UINT</DataType></Entry></{tag}>"
+        )
+    }
+
+    #[test]
+    fn alternative_sets_honour_excludes_and_cover_every_pdo() {
+        let d = dev_with(
+            &[
+                pdo("RxPdo", 0x1600, Some(2), &[0x1601], 0x7000),
+                pdo("RxPdo", 0x1601, None, &[0x1600], 0x7010),
+                pdo("RxPdo", 0x1602, None, &[], 0x7020),
+                pdo("TxPdo", 0x1A00, Some(3), &[], 0x6000),
+            ]
+            .concat(),
+        );
+        let sets = alternative_sets(&d, &[0x1600], &[0x1A00]);
+        // 0x1601 excludes 0x1600: its set holds 0x1601, 0x1602, 0x1A00.
+        assert_eq!(sets, [(vec![0x1601, 0x1602], vec![0x1A00])]);
+        let d = dev_with(
+            &[
+                pdo("RxPdo", 0x1600, Some(2), &[], 0x7000),
+                pdo("RxPdo", 0x1601, None, &[], 0x7010),
+                pdo("TxPdo", 0x1A00, Some(3), &[], 0x6000),
+            ]
+            .concat(),
+        );
+        let sets = alternative_sets(&d, &[0x1600], &[0x1A00]);
+        assert_eq!(
+            sets,
+            [(vec![0x1600, 0x1601], vec![0x1A00])],
+            "optional PDO with the default ones"
+        );
+        assert!(alternative_sets(&d, &[0x1600, 0x1601], &[0x1A00]).is_empty());
+    }
+
+    #[test]
+    fn a_device_with_coe_is_described_and_its_errors_are_named() {
+        // No dictionary: made from the PDOs; both PDO sets valid.
+        let d = dev_with(
+            &[
+                pdo("RxPdo", 0x1600, Some(2), &[], 0x7000),
+                pdo("TxPdo", 0x1A00, Some(3), &[], 0x6000),
+            ]
+            .concat(),
+        );
+        let (desc, layout) = describe(&d).unwrap();
+        assert_eq!(layout.mbx_out, (0x1000, 128));
+        assert_eq!((layout.pd_out, layout.pd_in), (0x1100, 0x1180));
+        assert!(desc.dictionary.find(0x7000).is_some());
+        assert!(desc.mailbox.coe.sdo_info && desc.mailbox.coe.pdo_assign);
+        // A PDO entry of a type twins do not serve.
+        let bad = dev_with(
+            &pdo("RxPdo", 0x1600, Some(2), &[], 0x7000)
+                .replace("UINT", "REAL")
+                .replace("<BitLen>16", "<BitLen>32"),
+        );
+        let e = describe(&bad).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("PDO entry 0x7000:01 has data type code 0x08"),
+            "{e}"
+        );
+        // No GroupType (ETG.2000 requires one).
+        let mut g = d.clone();
+        g.group_type.clear();
+        assert!(
+            describe(&g)
+                .unwrap_err()
+                .to_string()
+                .contains("<Device> at line 1: missing <GroupType>")
+        );
+        // A modular ESI is refused.
+        let mut m = d.clone();
+        m.source.children.push(crate::xml::Element {
+            name: "Slots".into(),
+            ..Default::default()
+        });
+        assert!(matches!(
+            describe(&m),
+            Err(DescriptionBuildError::Modular(_))
+        ));
+        // CoE without mailbox SyncManagers.
+        let mut n = d.clone();
+        n.sms
+            .retain(|s| !matches!(s.kind, SmType::MailboxOut | SmType::MailboxIn));
+        assert!(matches!(
+            describe(&n),
+            Err(DescriptionBuildError::NoMailboxSm(_))
+        ));
+    }
+
+    #[test]
+    fn the_counter_and_loopback_rules_drive_the_inputs() {
+        let d = dev_with(
+            &[
+                pdo("RxPdo", 0x1600, Some(2), &[], 0x7000),
+                pdo("TxPdo", 0x1A00, Some(3), &[], 0x6000),
+            ]
+            .concat(),
+        );
+        let (desc, _) = describe(&d).unwrap();
+        let mut store =
+            ecat_slave::od::store::ObjectStore::<[i64; TWIN_ENTRIES]>::new(desc.dictionary);
+        let od = <[i64; TWIN_ENTRIES] as ecat_slave::od::ValueStorage>::view_mut(&mut store);
+        od.set(0x7000, 1, 1234);
+        let mut em = ecat_slave::coe::emergency::Emergencies::default();
+        let mut app = EsiApp::new(desc, InputRule::Loopback);
+        app.tick(&mut Tick::new(
+            od,
+            0,
+            true,
+            ecat_slave::al::AlState::Op,
+            &mut em,
+        ));
+        assert_eq!(od.get(0x6000, 1), Some(1234));
+        let mut app = EsiApp::new(desc, InputRule::Counter);
+        for _ in 0..3 {
+            app.tick(&mut Tick::new(
+                od,
+                0,
+                true,
+                ecat_slave::al::AlState::Op,
+                &mut em,
+            ));
+        }
+        assert_eq!(od.get(0x6000, 1), Some(3));
+    }
 }

@@ -58,6 +58,63 @@ impl InputRule {
     }
 }
 
+/// The input rule of every twin of a line: a default and, per device type
+/// (order code, any case), another one. Written `RULE[,TYPE=RULE...]`,
+/// e.g. `hold,EL1008=counter,IO8=loopback`.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct InputRules {
+    /// The rule of devices not named.
+    pub default: InputRule,
+    /// `(type, rule)` pairs.
+    pub per_type: Vec<(String, InputRule)>,
+}
+
+impl InputRules {
+    /// Every twin follows `rule`.
+    pub fn all(rule: InputRule) -> Self {
+        InputRules {
+            default: rule,
+            per_type: Vec::new(),
+        }
+    }
+
+    /// The rule of a device of type `type_name`.
+    pub fn for_type(&self, type_name: &str) -> InputRule {
+        self.per_type
+            .iter()
+            .find(|(t, _)| t.eq_ignore_ascii_case(type_name))
+            .map_or(self.default, |(_, r)| *r)
+    }
+}
+
+impl core::str::FromStr for InputRules {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let unknown =
+            |r: &str| format!("unknown input rule '{r}' (known: hold, loopback, counter)");
+        let mut out = InputRules::default();
+        for (k, part) in s.split(',').map(str::trim).enumerate() {
+            match part.split_once('=') {
+                Some((ty, r)) if !ty.trim().is_empty() => {
+                    let rule = InputRule::parse(r).ok_or_else(|| unknown(r))?;
+                    out.per_type.push((ty.trim().to_string(), rule));
+                }
+                Some(_) => return Err(format!("'{part}': write TYPE=RULE")),
+                None if k == 0 => {
+                    out.default = InputRule::parse(part).ok_or_else(|| unknown(part))?
+                }
+                None => {
+                    return Err(format!(
+                        "'{part}': only the first rule may stand without TYPE="
+                    ));
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
 /// One process-data SyncManager of the device.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct PdSm {
@@ -327,5 +384,23 @@ impl LineSlave for EscTwin {
     }
     fn as_any_mut(&mut self) -> &mut dyn Any {
         self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn input_rules_parse_a_default_and_per_type_rules() {
+        let r: InputRules = "hold, EL1008=counter,io8=loopback".parse().unwrap();
+        assert_eq!(r.for_type("el1008"), InputRule::Counter);
+        assert_eq!(r.for_type("IO8"), InputRule::Loopback);
+        assert_eq!(r.for_type("EK1100"), InputRule::Hold);
+        let r: InputRules = "counter".parse().unwrap();
+        assert_eq!(r, InputRules::all(InputRule::Counter));
+        for bad in ["jump", "hold,EL1008=jump", "hold,=counter", "hold,counter"] {
+            assert!(bad.parse::<InputRules>().is_err(), "{bad}");
+        }
     }
 }

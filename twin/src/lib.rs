@@ -36,7 +36,7 @@ pub mod line;
 pub mod sii;
 pub mod xml;
 
-pub use esc_twin::{EscTwin, InputRule};
+pub use esc_twin::{EscTwin, InputRule, InputRules};
 pub use esi::{EsiDevice, EsiError, EsiFile};
 
 use std::path::Path;

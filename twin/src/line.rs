@@ -13,7 +13,7 @@ use ecat_slave::host::chain::LineSlave;
 
 use crate::eni::EniSlave;
 use crate::esi::{EsiDevice, EsiFile};
-use crate::{InputRule, TwinError, load_esi, twin};
+use crate::{InputRules, TwinError, load_esi, twin};
 
 /// The ESI files a line takes its devices from.
 #[derive(Debug, Default)]
@@ -177,12 +177,12 @@ impl Placed {
 pub type BuiltIn<'a> = &'a dyn Fn(&EniSlave) -> Option<(String, Box<dyn LineSlave>)>;
 
 /// The slaves of `eni` in line order, from `builtin` or `lib`; their input
-/// rule is `rule`.
+/// rules are `rules`.
 pub fn build(
     eni: &[EniSlave],
     lib: &EsiLibrary,
     builtin: BuiltIn<'_>,
-    rule: InputRule,
+    rules: &InputRules,
 ) -> Result<BuiltLine, LineError> {
     let mut slaves = Vec::new();
     let mut placed = Vec::new();
@@ -202,10 +202,12 @@ pub fn build(
         }
         match lib.find(s.vendor_id, s.product_code, s.revision) {
             Some((path, dev, exact)) => {
-                let t = twin(dev, s.alias, rule).map_err(|source| LineError::Twin {
-                    position,
-                    name: s.name.clone(),
-                    source: Box::new(source),
+                let t = twin(dev, s.alias, rules.for_type(&dev.type_name)).map_err(|source| {
+                    LineError::Twin {
+                        position,
+                        name: s.name.clone(),
+                        source: Box::new(source),
+                    }
                 })?;
                 slaves.push(t);
                 placed.push(Placed {

@@ -61,6 +61,17 @@ pub fn physical_port(physics: &str) -> u16 {
         .sum()
 }
 
+/// `s` cut to the core's longest device name ([`sii::MAX_NAME_LEN`]
+/// bytes, at a character boundary): ethercrab refuses longer SII names, so
+/// a twin shows a vendor's longer name cut.
+pub fn fit_name(s: &str) -> &str {
+    let mut end = s.len().min(sii::MAX_NAME_LEN);
+    while !s.is_char_boundary(end) {
+        end -= 1;
+    }
+    s.get(..end).unwrap_or("")
+}
+
 fn word(data: &[u8], w: usize) -> u16 {
     let lo = data.get(2 * w).copied().unwrap_or(0);
     let hi = data.get(2 * w + 1).copied().unwrap_or(0);
@@ -184,10 +195,10 @@ fn encode(dev: &EsiDevice) -> Result<Vec<u8>, SiiBuildError> {
         mailbox_protocols: dev.mailbox_protocols,
         eeprom_kbit: kbit,
         general: SiiGeneral {
-            group: &dev.group_type,
+            group: fit_name(&dev.group_type),
             image: "",
-            order: &dev.type_name,
-            name: &dev.name,
+            order: fit_name(&dev.type_name),
+            name: fit_name(&dev.name),
             coe_details: dev.coe_details,
             foe_details: u8::from(dev.mailbox_protocols & sii::protocols::FOE != 0),
             eoe_details: u8::from(dev.mailbox_protocols & sii::protocols::EOE != 0),
@@ -220,6 +231,16 @@ mod tests {
 <GroupType>SystemBk</GroupType><Electrical><EBusCurrent>-2000</EBusCurrent></Electrical>
 <Eeprom><ByteSize>2048</ByteSize><ConfigData>000D0000000000000000</ConfigData></Eeprom></Device>
 </Devices></Descriptions></EtherCATInfo>"##;
+
+    #[test]
+    fn long_names_are_cut_at_a_character_boundary() {
+        let long = "µ".repeat(40);
+        let cut = fit_name(&long);
+        assert_eq!(cut.len(), 64);
+        assert_eq!(fit_name("EL2004"), "EL2004");
+        let odd = format!("a{}", "µ".repeat(40));
+        assert_eq!(fit_name(&odd).len(), 63, "no half character");
+    }
 
     #[test]
     fn physics_letters_become_port_nibbles() {

@@ -8,7 +8,7 @@ use std::path::Path;
 use ecat_slave::host::chain::LineSlave;
 use ecat_twin::eni::{self, EniSlave};
 use ecat_twin::line::{self, BuiltLine, EsiLibrary};
-use ecat_twin::{InputRule, TwinError};
+use ecat_twin::{InputRules, TwinError};
 
 use crate::{DEVICES, Pdi};
 
@@ -68,7 +68,7 @@ pub fn from_esi(
     path: &Path,
     type_name: Option<&str>,
     revision: Option<u32>,
-    rule: InputRule,
+    rules: &InputRules,
     count: usize,
 ) -> Result<(String, Vec<Box<dyn LineSlave>>), TwinsError> {
     let file = ecat_twin::load_esi(path)?;
@@ -80,7 +80,7 @@ pub fn from_esi(
         })?;
     let mut slaves: Vec<Box<dyn LineSlave>> = Vec::with_capacity(count);
     for _ in 0..count {
-        slaves.push(ecat_twin::twin(dev, None, rule)?);
+        slaves.push(ecat_twin::twin(dev, None, rules.for_type(&dev.type_name))?);
     }
     Ok((dev.label(), slaves))
 }
@@ -90,7 +90,7 @@ pub fn from_esi(
 pub fn from_eni(
     eni_path: &Path,
     esi_dir: Option<&Path>,
-    rule: InputRule,
+    rules: &InputRules,
 ) -> Result<BuiltLine, TwinsError> {
     let text = std::fs::read_to_string(eni_path).map_err(|source| TwinsError::EniIo {
         path: eni_path.display().to_string(),
@@ -104,5 +104,5 @@ pub fn from_eni(
         Some(d) => EsiLibrary::load_dir(d)?,
         None => EsiLibrary::default(),
     };
-    Ok(line::build(&slaves, &lib, &builtin, rule)?)
+    Ok(line::build(&slaves, &lib, &builtin, rules)?)
 }

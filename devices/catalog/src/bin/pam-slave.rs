@@ -63,9 +63,10 @@ struct Cli {
     #[arg(long, value_name = "DIR", requires = "eni")]
     esi_dir: Option<PathBuf>,
     /// What the inputs of ESI twins do: hold (zeros), loopback (their own
-    /// outputs), counter.
-    #[arg(long, value_name = "RULE", default_value = "hold", value_parser = parse_rule)]
-    inputs: ecat_twin::InputRule,
+    /// outputs), counter; per device type after the default, e.g.
+    /// hold,EL1008=counter.
+    #[arg(long, value_name = "RULES", default_value = "hold")]
+    inputs: ecat_twin::InputRules,
     /// Load and check everything, print the line, serve nothing.
     #[arg(long)]
     dry_run: bool,
@@ -197,7 +198,7 @@ fn build_line(cli: &Cli, spec: &str) -> Result<Line, String> {
     use device_catalog::twins;
     if let Some(eni) = &cli.eni {
         let ecat_twin::line::BuiltLine { slaves, placed } =
-            twins::from_eni(eni, cli.esi_dir.as_deref(), cli.inputs).map_err(|e| e.to_string())?;
+            twins::from_eni(eni, cli.esi_dir.as_deref(), &cli.inputs).map_err(|e| e.to_string())?;
         let names: Vec<String> = slaves
             .iter()
             .map(|s| s.description().names.type_name.to_string())
@@ -219,7 +220,7 @@ fn build_line(cli: &Cli, spec: &str) -> Result<Line, String> {
             esi,
             cli.type_name.as_deref(),
             revision,
-            cli.inputs,
+            &cli.inputs,
             usize::from(cli.count),
         )
         .map_err(|e| e.to_string())?;
@@ -243,11 +244,6 @@ fn build_line(cli: &Cli, spec: &str) -> Result<Line, String> {
         summary: summarize(&names),
         report: names,
     })
-}
-
-fn parse_rule(s: &str) -> Result<ecat_twin::InputRule, String> {
-    ecat_twin::InputRule::parse(s)
-        .ok_or_else(|| format!("unknown input rule '{s}' (known: hold, loopback, counter)"))
 }
 
 fn parse_faults(s: &str) -> Result<ecat_slave::host::faults::FaultConfig, String> {
