@@ -146,15 +146,27 @@ pub fn default_data(value: i64, bit_len: u16) -> String {
     hex_binary(&value_bytes(value, bit_len))
 }
 
-/// ETG.1004 unit codes (prefix exponent << 24 | SI unit index << 16) for
-/// the model's unit texts that have one.
+/// The ETG.1004 unit code of an entry's unit text, with the unit's name
+/// and symbol for the ESI's `UnitTypes`: the same codes SDO Information
+/// reports (`ecat_slave::coe::sdo_info::unit_code`), so both agree.
 fn unit_code(unit: &str) -> Option<(u32, &'static str, &'static str)> {
-    match unit {
-        "ms" => Some((0xFD03_0000, "millisecond", "ms")),
-        "mA" => Some((0xFD04_0000, "milliampere", "mA")),
-        "Hz" => Some((0x0020_0000, "hertz", "Hz")),
-        _ => None,
-    }
+    let code = ecat_slave::coe::sdo_info::unit_code(unit);
+    let (name, symbol) = match code {
+        0x0003_0000 => ("second", "s"),
+        0xFD03_0000 => ("millisecond", "ms"),
+        0xFA03_0000 => ("microsecond", "µs"),
+        0x0004_0000 => ("ampere", "A"),
+        0xFD04_0000 => ("milliampere", "mA"),
+        0x0026_0000 => ("volt", "V"),
+        0xFD26_0000 => ("millivolt", "mV"),
+        0x0020_0000 => ("hertz", "Hz"),
+        0x002D_0000 => ("degree Celsius", "°C"),
+        0x0001_0000 => ("metre", "m"),
+        0xFD01_0000 => ("millimetre", "mm"),
+        0x0024_0000 => ("watt", "W"),
+        _ => return None,
+    };
+    Some((code, name, symbol))
 }
 
 fn access_attrs(a: Access) -> (&'static str, Option<(&'static str, &'static str)>) {

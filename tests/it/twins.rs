@@ -555,21 +555,33 @@ fn our_devices_generated_esi_loaded_as_twins_give_the_same_sii_and_sdo_informati
 }
 
 #[test]
-fn a_modular_devices_esi_is_refused_with_a_message_until_supported() {
-    let xml = ecat_esi::generate(&hcs_dma22::device::DEVICE).expect("ESI");
+fn a_modular_devices_generated_esi_as_a_twin_reports_what_the_device_does() {
+    // The DMA-22 node's ESI (<Slots> and <Modules>): the twin plugs each
+    // slot's default module (5), like the catalog's dma22x5.
+    let entry = device_catalog::find("dma22x5").expect("catalog device");
+    let dev = entry.description;
+    let xml = ecat_esi::generate(dev).expect("ESI");
     let file = EsiFile::parse(std::str::from_utf8(&xml).expect("utf-8")).expect("parses");
-    let e = ecat_twin::twin(
-        file.device(None, None).expect("device"),
-        None,
-        InputRule::Hold,
-    )
-    .err()
-    .expect("refused");
-    assert!(
-        e.to_string()
-            .contains("modular devices (<Slots>) cannot be twinned"),
-        "{e}"
+    let esi_dev = file.device(None, None).expect("device");
+    assert_eq!(
+        ecat_twin::coe_twin::default_modules(esi_dev),
+        [0x0022_0001; 5]
     );
+    let (desc, layout) = ecat_twin::coe_twin::describe(esi_dev).expect("description");
+    let m = desc.modules.expect("modular");
+    assert_eq!((m.slots, m.index_distance, m.pdo_increment), (5, 0x10, 1));
+    assert_eq!(desc.dictionary.entry_count(), dev.dictionary.entry_count());
+    let twin = ecat_twin::twin(esi_dev, None, InputRule::Hold).expect("twin");
+    let want = sdo_information(
+        vec![(entry.make)(device_catalog::Pdi::Direct)],
+        dev.layout(),
+    );
+    let got = sdo_information(vec![twin], layout);
+    assert!(want.len() > 1000, "{} lines", want.len());
+    for (k, (w, g)) in want.iter().zip(&got).enumerate() {
+        assert_eq!(g, w, "dma22x5: SDO Information line {k}");
+    }
+    assert_eq!(got.len(), want.len());
 }
 
 #[test]

@@ -77,9 +77,14 @@ pub enum DescriptionBuildError {
     /// A mailbox SyncManager is missing.
     #[error("{0}: the ESI has a mailbox protocol but no MBoxOut/MBoxIn SyncManager")]
     NoMailboxSm(String),
-    /// Modular devices are not twinned yet.
-    #[error("{0}: modular devices (<Slots>) cannot be twinned from their ESI yet")]
-    Modular(String),
+    /// A modular device's slots or modules cannot be used.
+    #[error("{at}: {problem}")]
+    Modular {
+        /// The element.
+        at: At,
+        /// What is wrong.
+        problem: String,
+    },
 }
 
 fn leak(s: &str) -> &'static str {
@@ -412,14 +417,197 @@ fn synthesize(dev: &EsiDevice) -> Result<Vec<Object>, DescriptionBuildError> {
     Ok(objects)
 }
 
+fn at_of(e: &crate::xml::Element) -> At {
+    At {
+        element: e.name.clone(),
+        line: e.line,
+    }
+}
+
+fn modular_error(e: &crate::xml::Element, problem: impl Into<String>) -> DescriptionBuildError {
+    DescriptionBuildError::Modular {
+        at: at_of(e),
+        problem: problem.into(),
+    }
+}
+
+/// Object `index` of slot 0 in slot `slot`: PDO mapping objects step by
+/// the PDO increment, the rest by the index distance.
+fn shifted(index: u16, slot: u16, distance: u16, pdo_increment: u16) -> Option<u16> {
+    let step = if (0x1600..=0x1BFF).contains(&index) {
+        pdo_increment
+    } else {
+        distance
+    };
+    index.checked_add(step.checked_mul(slot)?)
+}
+
+/// A modular device (ETG.2000 `Slots` and `Modules`, ETG.5001): the module
+/// types, every slot's copy of their objects appended to `objects` (PDO
+/// mapping entries pointing at the slot's objects), and the layout.
+fn modular(
+    dev: &EsiDevice,
+    slots_el: &crate::xml::Element,
+    objects: &mut Vec<Object>,
+) -> Result<ecat_slave::od::modules::ModularLayout, DescriptionBuildError> {
+    use ecat_slave::od::modules::{ModularLayout, ModuleType, SlotRange};
+    let num = |e: &crate::xml::Element, name: &str| -> Result<u16, DescriptionBuildError> {
+        let v = e
+            .attr(name)
+            .ok_or_else(|| modular_error(e, format!("missing attribute {name}")))?;
+        crate::eni::number(v)
+            .and_then(|v| u16::try_from(v).ok())
+            .ok_or_else(|| modular_error(e, format!("bad {name} '{v}'")))
+    };
+    let distance = num(slots_el, "SlotIndexIncrement")?;
+    let pdo_increment = num(slots_el, "SlotPdoIncrement")?;
+    let slots = u8::try_from(slots_el.children_named("Slot").count())
+        .map_err(|_| modular_error(slots_el, "more than 255 slots"))?;
+    if slots == 0 {
+        return Err(modular_error(slots_el, "no <Slot>"));
+    }
+    let modules_el = dev
+        .modules
+        .as_ref()
+        .ok_or_else(|| modular_error(slots_el, "the file has no <Modules>"))?;
+    let mut types = Vec::new();
+    let mut module_objects: Vec<Object> = Vec::new();
+    for m in modules_el.children_named("Module") {
+        let ty = m
+            .child("Type")
+            .ok_or_else(|| modular_error(m, "missing <Type>"))?;
+        let ident = ty
+            .attr("ModuleIdent")
+            .and_then(crate::eni::number)
+            .and_then(|v| u32::try_from(v).ok())
+            .ok_or_else(|| modular_error(ty, "missing or bad ModuleIdent"))?;
+        let pdo_list = |tag: &str| -> Result<Vec<u16>, DescriptionBuildError> {
+            m.children_named(tag)
+                .map(|p| {
+                    p.text_at("Index")
+                        .and_then(crate::eni::number)
+                        .and_then(|v| u16::try_from(v).ok())
+                        .ok_or_else(|| modular_error(p, "missing or bad <Index>"))
+                })
+                .collect()
+        };
+        types.push(ModuleType {
+            ident,
+            type_name: leak(ty.text.trim()),
+            name: leak(m.text_at("Name").unwrap_or(ty.text.trim())),
+            rx: leak_list(pdo_list("RxPdo")?),
+            tx: leak_list(pdo_list("TxPdo")?),
+        });
+        if let Some(d) = m.path("Profile/Dictionary") {
+            let (parsed, _) = dictionary::parse(d)?;
+            for p in parsed {
+                if !module_objects.iter().any(|o| o.index == p.object.index) {
+                    module_objects.push(p.object);
+                }
+            }
+        }
+    }
+    if types.is_empty() {
+        return Err(modular_error(modules_el, "no <Module>"));
+    }
+    let ranges: Vec<SlotRange> = module_objects
+        .iter()
+        .map(|o| SlotRange {
+            base: o.index,
+            distance: if (0x1600..=0x1BFF).contains(&o.index) {
+                pdo_increment
+            } else {
+                distance
+            },
+            width: 1,
+        })
+        .collect();
+    let slot_of_object = |index: u16| -> Option<u16> {
+        ranges.iter().find_map(|r| {
+            let off = index.checked_sub(r.base)?;
+            (r.distance != 0 && off % r.distance == 0 && off / r.distance < u16::from(slots))
+                .then_some(off / r.distance)
+        })
+    };
+    for slot in 0..u16::from(slots) {
+        for o in &module_objects {
+            let index = shifted(o.index, slot, distance, pdo_increment).ok_or_else(|| {
+                modular_error(
+                    slots_el,
+                    format!("object {:#06x} of slot {slot} beyond 0xFFFF", o.index),
+                )
+            })?;
+            let entries: Vec<Entry> = o
+                .entries
+                .iter()
+                .map(|e| {
+                    // A mapping entry of slot 0 points at slot 0's object.
+                    let default = match e.default {
+                        DefaultValue::Int(v)
+                            if (0x1600..=0x1BFF).contains(&o.index) && e.sub != 0 =>
+                        {
+                            let target = ((v >> 16) & 0xFFFF) as u16;
+                            match slot_of_object(target).filter(|s| *s == 0) {
+                                Some(_) => {
+                                    let moved = shifted(target, slot, distance, pdo_increment)
+                                        .unwrap_or(target);
+                                    DefaultValue::Int((v & 0xFFFF) | i64::from(moved) << 16)
+                                }
+                                None => DefaultValue::Int(v),
+                            }
+                        }
+                        d => d,
+                    };
+                    Entry { default, ..copy(e) }
+                })
+                .collect();
+            if objects.iter().any(|x| x.index == index) {
+                return Err(modular_error(
+                    slots_el,
+                    format!("object {index:#06x} of slot {slot} is also an object of the device"),
+                ));
+            }
+            objects.push(Object {
+                index,
+                entries: Box::leak(entries.into_boxed_slice()),
+                ..*o
+            });
+        }
+    }
+    objects.sort_by_key(|o| o.index);
+    Ok(ModularLayout {
+        slots,
+        index_distance: distance,
+        pdo_increment,
+        ranges: Box::leak(ranges.into_boxed_slice()),
+        modules: Box::leak(types.into_boxed_slice()),
+    })
+}
+
+/// The module idents of a modular device's slots: each `Slot`'s default
+/// `ModuleIdent` (`Default="1"`, else its first), in slot order.
+pub fn default_modules(dev: &EsiDevice) -> Vec<u32> {
+    let Some(slots) = dev.source.child("Slots") else {
+        return Vec::new();
+    };
+    slots
+        .children_named("Slot")
+        .filter_map(|s| {
+            let ids: Vec<&crate::xml::Element> = s.children_named("ModuleIdent").collect();
+            ids.iter()
+                .find(|i| i.attr("Default") == Some("1"))
+                .or(ids.first())
+                .and_then(|i| crate::eni::number(&i.text))
+                .and_then(|v| u32::try_from(v).ok())
+        })
+        .collect()
+}
+
 /// The twin's description and memory layout for `dev`.
 pub fn describe(
     dev: &EsiDevice,
 ) -> Result<(&'static DeviceDescription, MemoryLayout), DescriptionBuildError> {
     let label = dev.label();
-    if dev.source.child("Slots").is_some() {
-        return Err(DescriptionBuildError::Modular(label));
-    }
     // ETG.2000 requires it; the SII General category of a CoE device
     // carries it.
     if dev.group_type.is_empty() {
@@ -462,6 +650,10 @@ pub fn describe(
             objects.push(o);
         }
     }
+    let modular = match dev.source.child("Slots") {
+        Some(slots) => Some(modular(dev, slots, &mut objects)?),
+        None => None,
+    };
     let entries: usize = objects.iter().map(|o| o.entries.len()).sum();
     if entries > TWIN_ENTRIES {
         return Err(DescriptionBuildError::TooManyEntries {
@@ -546,7 +738,7 @@ pub fn describe(
             ebus_current_ma: dev.ebus_current_ma,
             physical_ports: crate::sii::physical_port(&dev.physics),
         },
-        modules: None,
+        modules: modular.map(|m| &*Box::leak(Box::new(m))),
     }));
     desc.validate()
         .map_err(|source| DescriptionBuildError::Contradiction {
@@ -562,6 +754,8 @@ pub fn describe(
 pub struct EsiApp {
     desc: &'static DeviceDescription,
     rule: InputRule,
+    /// Module idents a modular device detects at power-on, slot order.
+    modules: Vec<u32>,
     /// (input flat position, bit length, output flat position of the same
     /// type for the loopback).
     inputs: Vec<(usize, u16, Option<usize>)>,
@@ -606,9 +800,17 @@ impl EsiApp {
         EsiApp {
             desc,
             rule,
+            modules: Vec::new(),
             inputs,
             ticks: 0,
         }
+    }
+
+    /// The same with these modules plugged (a modular device; see
+    /// [`default_modules`]).
+    pub fn with_modules(mut self, idents: Vec<u32>) -> Self {
+        self.modules = idents;
+        self
     }
 }
 
@@ -618,6 +820,12 @@ impl Application for EsiApp {
     }
 
     type Values = [i64; TWIN_ENTRIES];
+
+    fn power_on(&mut self, od: &mut ecat_slave::od::store::Od) {
+        if let Some(m) = self.desc.modules {
+            m.set_detected(od, &self.modules);
+        }
+    }
 
     fn tick(&mut self, tick: &mut Tick<'_>) {
         self.ticks = self.ticks.wrapping_add(1);
@@ -645,13 +853,15 @@ impl Application for EsiApp {
     }
 }
 
-/// A software slave of `desc` laid out as `layout`.
+/// A software slave of `desc` laid out as `layout`, with `modules`
+/// plugged when it is a modular device.
 pub fn slave(
     desc: &'static DeviceDescription,
     layout: MemoryLayout,
     rule: InputRule,
+    modules: Vec<u32>,
 ) -> SoftSlave<EsiApp> {
-    SoftSlave::with_layout(EsiApp::new(desc, rule), layout)
+    SoftSlave::with_layout(EsiApp::new(desc, rule).with_modules(modules), layout)
 }
 
 #[cfg(test)]
@@ -752,16 +962,30 @@ mod tests {
                 .to_string()
                 .contains("<Device> at line 1: missing <GroupType>")
         );
-        // A modular ESI is refused.
+        // Slots without the file's Modules, and without any Slot.
         let mut m = d.clone();
         m.source.children.push(crate::xml::Element {
             name: "Slots".into(),
+            attrs: vec![
+                ("SlotIndexIncrement".into(), "#x10".into()),
+                ("SlotPdoIncrement".into(), "1".into()),
+            ],
+            children: vec![crate::xml::Element {
+                name: "Slot".into(),
+                ..Default::default()
+            }],
             ..Default::default()
         });
-        assert!(matches!(
-            describe(&m),
-            Err(DescriptionBuildError::Modular(_))
-        ));
+        let e = describe(&m).unwrap_err().to_string();
+        assert!(
+            e.contains("<Slots> at line 0: the file has no <Modules>"),
+            "{e}"
+        );
+        if let Some(slots) = m.source.children.last_mut() {
+            slots.children.clear();
+        }
+        let e = describe(&m).unwrap_err().to_string();
+        assert!(e.contains("no <Slot>"), "{e}");
         // CoE without mailbox SyncManagers.
         let mut n = d.clone();
         n.sms

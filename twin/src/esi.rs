@@ -250,6 +250,9 @@ pub struct EsiDevice {
     /// The whole `Device` element (the dictionary and the vendor-specific
     /// parts are read from it when a twin with a mailbox is built).
     pub source: Element,
+    /// The file's `Descriptions/Modules` (module types of modular
+    /// devices), when the device has `Slots`.
+    pub modules: Option<Element>,
 }
 
 impl EsiDevice {
@@ -719,6 +722,7 @@ fn parse_device(
         objects,
         at: At::of(d),
         source: d.clone(),
+        modules: None,
     };
     check_sms(&dev)?;
     Ok(dev)
@@ -811,7 +815,11 @@ impl EsiFile {
         let devs = required(desc.child("Devices"), desc, "<Devices>")?;
         let mut devices = Vec::new();
         for d in devs.children_named("Device") {
-            devices.push(parse_device(d, vendor_id, &vendor_name, &groups)?);
+            let mut dev = parse_device(d, vendor_id, &vendor_name, &groups)?;
+            if d.child("Slots").is_some() {
+                dev.modules = desc.child("Modules").cloned();
+            }
+            devices.push(dev);
         }
         if devices.is_empty() {
             return Err(EsiError::Missing {

@@ -20,8 +20,7 @@
 //! - [`xml`]: the small element tree (with line numbers) both readers use.
 //!
 //! **Not yet supported** (refused with an error naming the device and,
-//! where it is in the file, the element and line): modular devices
-//! (`<Slots>`), data types the core does not serve (`REAL`, `LREAL`,
+//! where it is in the file, the element and line): data types the core does not serve (`REAL`, `LREAL`,
 //! `UINT24`, `OCTET_STRING`, arrays of bytes), writable PDO mappings, EoE,
 //! SoE, AoE. DC op modes are read but the SII of a twin has no DC category
 //! yet. Built-in devices (the PAM, IO8, DMA-22) run their real behaviour
@@ -106,7 +105,7 @@ pub fn twin(
         return Ok(Box::new(esc_twin(dev, alias, rule)?));
     }
     let (desc, layout) = coe_twin::describe(dev)?;
-    let mut slave = coe_twin::slave(desc, layout, rule);
+    let mut slave = coe_twin::slave(desc, layout, rule, coe_twin::default_modules(dev));
     let esc = LineSlave::esc_mut(&mut slave);
     if dev.eeprom_data.is_some() {
         esc.program_sii(&sii::image(dev, alias)?);
