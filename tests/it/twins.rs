@@ -646,3 +646,78 @@ fn a_coe_device_whose_esi_has_no_dictionary_gets_one_from_its_pdos_and_runs() {
         );
     });
 }
+
+#[test]
+fn an_eni_configuring_three_modules_gets_a_modular_twin_holding_three_and_ethercrab_runs_it() {
+    // The DMA-22 node's ESI under another product code (so the catalog's
+    // node does not claim the slave), in an ENI whose CoE init commands
+    // write 0xF030 with three modules, as TwinCAT does for this machine.
+    const PRODUCT: u32 = 0x0022_00FF;
+    const IDENT: u32 = 0x0022_0001;
+    let dev = &hcs_dma22::device::DEVICE;
+    let esi = String::from_utf8(ecat_esi::generate(dev).expect("ESI"))
+        .expect("utf-8")
+        .replace(
+            &format!("ProductCode=\"#x{:08X}\"", dev.identity.product_code),
+            &format!("ProductCode=\"#x{PRODUCT:08X}\""),
+        );
+    let dir = std::env::temp_dir().join(format!("twin-modular-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("esi")).expect("dir");
+    std::fs::write(dir.join("esi/DMA22.xml"), esi).expect("write");
+    let cmd = |sub: u8, data: &str| {
+        format!(
+            "<InitCmd><Transition>PS</Transition><Ccs>1</Ccs><Index>#xf030</Index><SubIndex>{sub}</SubIndex><Data>{data}</Data></InitCmd>"
+        )
+    };
+    let ident = hex_le(IDENT);
+    let eni = format!(
+        r##"<EtherCATConfig><Config><Slave><Info><Name>Node</Name><PhysAddr>1001</PhysAddr>
+<VendorId>{}</VendorId><ProductCode>{PRODUCT}</ProductCode><RevisionNo>{}</RevisionNo></Info>
+<Mailbox><CoE><InitCmds>{}{}{}{}</InitCmds></CoE></Mailbox></Slave></Config></EtherCATConfig>"##,
+        dev.identity.vendor_id,
+        dev.identity.revision,
+        cmd(1, &ident),
+        cmd(2, &ident),
+        cmd(3, &ident),
+        cmd(0, "03"),
+    );
+    std::fs::write(dir.join("eni.xml"), eni).expect("write");
+    let line = twins::from_eni(
+        &dir.join("eni.xml"),
+        Some(&dir.join("esi")),
+        &ecat_twin::InputRules::default(),
+    )
+    .expect("line");
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(
+        line.slaves[0].od().get(0xF050, 0),
+        Some(3),
+        "three modules detected"
+    );
+    smol::block_on(async {
+        let bus = VirtualBus::with_chain(Chain::with_slaves(line.slaves), Clock::simulated(), None)
+            .expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let sd = group.subdevice(md, 0).expect("slave");
+        for k in 1..=3u8 {
+            sd.sdo_write(0xF030, k, IDENT).await.expect("0xF030 entry");
+        }
+        sd.sdo_write(0xF030, 0, 3u8).await.expect("0xF030 count");
+        let group = group
+            .into_op(md)
+            .await
+            .expect("OP with the ENI's module list");
+        let sd = group.subdevice(md, 0).expect("slave");
+        assert_eq!(
+            (sd.outputs_raw().len(), sd.inputs_raw().len()),
+            (15, 18),
+            "3 modules' PDOs"
+        );
+    });
+}
+
+/// Little-endian hex of a u32, as ENI `Data` writes it.
+fn hex_le(v: u32) -> String {
+    v.to_le_bytes().iter().map(|b| format!("{b:02x}")).collect()
+}

@@ -14,6 +14,21 @@
 use crate::esi::At;
 use crate::xml::{self, Element};
 
+/// One CoE init command of an ENI slave (`Mailbox/CoE/InitCmds/InitCmd`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CoeInitCmd {
+    /// Transitions it runs in (`IP`, `PS`, ...).
+    pub transitions: Vec<String>,
+    /// Object index.
+    pub index: u16,
+    /// Subindex.
+    pub sub: u8,
+    /// Data downloaded (little-endian).
+    pub data: Vec<u8>,
+    /// Complete access.
+    pub complete_access: bool,
+}
+
 /// One slave of an ENI.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct EniSlave {
@@ -42,6 +57,8 @@ pub struct EniSlave {
     pub init_cmds: usize,
     /// CoE init commands (`Mailbox/CoE/InitCmds/InitCmd`).
     pub coe_init_cmds: usize,
+    /// Those of them that download data, in order.
+    pub coe_init: Vec<CoeInitCmd>,
     /// Where it is in the file.
     pub at: At,
 }
@@ -145,6 +162,28 @@ fn parse_slave(s: &Element) -> Result<EniSlave, EniError> {
     let coe_init_cmds = s
         .path("Mailbox/CoE/InitCmds")
         .map_or(0, |i| i.children_named("InitCmd").count());
+    let mut coe_init = Vec::new();
+    if let Some(cmds) = s.path("Mailbox/CoE/InitCmds") {
+        for c in cmds.children_named("InitCmd") {
+            let Some(data) = c.child("Data") else {
+                continue;
+            };
+            coe_init.push(CoeInitCmd {
+                transitions: c
+                    .children_named("Transition")
+                    .map(|t| t.text.trim().to_string())
+                    .collect(),
+                index: value(req(c, "Index")?, "Index")?,
+                sub: opt(c, "SubIndex")?.unwrap_or(0),
+                data: crate::xml::hex_binary(&data.text).ok_or_else(|| EniError::BadValue {
+                    at: at(data),
+                    what: "Data",
+                    value: data.text.clone(),
+                })?,
+                complete_access: matches!(c.attr("CompleteAccess"), Some("1" | "true")),
+            });
+        }
+    }
     Ok(EniSlave {
         name: info.text_at("Name").unwrap_or("").to_string(),
         phys_addr: opt(info, "PhysAddr")?.unwrap_or(0),
@@ -160,6 +199,7 @@ fn parse_slave(s: &Element) -> Result<EniSlave, EniError> {
             .child("InitCmds")
             .map_or(0, |i| i.children_named("InitCmd").count()),
         coe_init_cmds,
+        coe_init,
         at: at(s),
     })
 }
@@ -230,6 +270,26 @@ mod tests {
         assert_eq!(s[1].alias, Some(7));
         assert_eq!(s[1].output_bits, 4);
         assert_eq!(s[1].at.line, 17);
+    }
+
+    #[test]
+    fn coe_init_commands_are_read_with_their_data() {
+        let eni = ENI.replace(
+            "</Info>\n      <InitCmds>",
+            "</Info>\n      <Mailbox><CoE><InitCmds><InitCmd CompleteAccess=\"1\"><Transition>PS</Transition><Transition>SO</Transition><Index>#xf030</Index><SubIndex>1</SubIndex><Data>01002200</Data></InitCmd></InitCmds></CoE></Mailbox>\n      <InitCmds>",
+        );
+        let s = parse(&eni).unwrap();
+        let c = &s[0].coe_init[0];
+        assert_eq!((c.index, c.sub, c.complete_access), (0xF030, 1, true));
+        assert_eq!(c.data, [1, 0, 0x22, 0]);
+        assert_eq!(c.transitions, ["PS", "SO"]);
+        let bad = eni.replace("<Data>01002200</Data>", "<Data>0100220</Data>");
+        assert!(
+            parse(&bad)
+                .unwrap_err()
+                .to_string()
+                .contains("bad Data '0100220'")
+        );
     }
 
     #[test]

@@ -101,11 +101,23 @@ pub fn twin(
     alias: Option<u16>,
     rule: InputRule,
 ) -> Result<Box<dyn LineSlave>, TwinError> {
+    twin_with_modules(dev, alias, rule, None)
+}
+
+/// [`twin`] with the modules a modular device holds (`None`: each slot's
+/// default module, [`coe_twin::default_modules`]).
+pub fn twin_with_modules(
+    dev: &EsiDevice,
+    alias: Option<u16>,
+    rule: InputRule,
+    modules: Option<&[u32]>,
+) -> Result<Box<dyn LineSlave>, TwinError> {
     if !dev.has_mailbox() {
         return Ok(Box::new(esc_twin(dev, alias, rule)?));
     }
     let (desc, layout) = coe_twin::describe(dev)?;
-    let mut slave = coe_twin::slave(desc, layout, rule, coe_twin::default_modules(dev));
+    let modules = modules.map_or_else(|| coe_twin::default_modules(dev), <[u32]>::to_vec);
+    let mut slave = coe_twin::slave(desc, layout, rule, modules);
     let esc = LineSlave::esc_mut(&mut slave);
     if dev.eeprom_data.is_some() {
         esc.program_sii(&sii::image(dev, alias)?);

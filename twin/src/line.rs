@@ -13,7 +13,7 @@ use ecat_slave::host::chain::LineSlave;
 
 use crate::eni::EniSlave;
 use crate::esi::{EsiDevice, EsiFile};
-use crate::{InputRules, TwinError, load_esi, twin};
+use crate::{InputRules, TwinError, load_esi, twin_with_modules};
 
 /// The ESI files a line takes its devices from.
 #[derive(Debug, Default)]
@@ -172,6 +172,52 @@ impl Placed {
     }
 }
 
+/// The module idents the ENI configures for a modular slave: what its
+/// CoE init commands write into 0xF030 (the configured module ident list
+/// TwinCAT downloads), sub 0 giving the count; `None` when it writes none.
+/// A twin of the slave detects exactly these modules, as the real line
+/// would hold them.
+pub fn configured_modules(s: &EniSlave) -> Option<Vec<u32>> {
+    let mut idents: Vec<(u8, u32)> = Vec::new();
+    let mut count = None;
+    for c in s.coe_init.iter().filter(|c| c.index == 0xF030) {
+        let word = |k: usize| {
+            c.data
+                .get(4 * k..4 * k + 4)
+                .and_then(|b| b.try_into().ok())
+                .map(u32::from_le_bytes)
+        };
+        if c.complete_access {
+            // Sub 0 (one byte, padded to two), then the idents.
+            let n = c.data.first().copied().unwrap_or(0);
+            count = Some(n);
+            let body = c.data.get(2..).unwrap_or(&[]);
+            for k in 0..usize::from(n) {
+                if let Some(v) = body.get(4 * k..4 * k + 4).and_then(|b| b.try_into().ok()) {
+                    idents.push((
+                        u8::try_from(k + 1).unwrap_or(u8::MAX),
+                        u32::from_le_bytes(v),
+                    ));
+                }
+            }
+        } else if c.sub == 0 {
+            count = c.data.first().copied();
+        } else if let Some(v) = word(0) {
+            idents.retain(|(s, _)| *s != c.sub);
+            idents.push((c.sub, v));
+        }
+    }
+    let n = count?;
+    idents.sort_by_key(|(s, _)| *s);
+    Some(
+        idents
+            .into_iter()
+            .filter(|(s, _)| *s >= 1 && *s <= n)
+            .map(|(_, v)| v)
+            .collect(),
+    )
+}
+
 /// A built-in device for an ENI slave, if the caller has one: its key and
 /// a slave in its power-on state.
 pub type BuiltIn<'a> = &'a dyn Fn(&EniSlave) -> Option<(String, Box<dyn LineSlave>)>;
@@ -202,12 +248,17 @@ pub fn build(
         }
         match lib.find(s.vendor_id, s.product_code, s.revision) {
             Some((path, dev, exact)) => {
-                let t = twin(dev, s.alias, rules.for_type(&dev.type_name)).map_err(|source| {
-                    LineError::Twin {
-                        position,
-                        name: s.name.clone(),
-                        source: Box::new(source),
-                    }
+                let modules = configured_modules(s);
+                let t = twin_with_modules(
+                    dev,
+                    s.alias,
+                    rules.for_type(&dev.type_name),
+                    modules.as_deref(),
+                )
+                .map_err(|source| LineError::Twin {
+                    position,
+                    name: s.name.clone(),
+                    source: Box::new(source),
                 })?;
                 slaves.push(t);
                 placed.push(Placed {
