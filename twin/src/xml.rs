@@ -69,21 +69,40 @@ impl Element {
     }
 }
 
-/// Line numbers of byte offsets of one document.
-struct Lines<'a>(&'a str);
+/// Line numbers of byte offsets of one document. The reader asks in
+/// document order, so the count continues from the last answer (linear in
+/// the document, not quadratic); an earlier offset counts from the start.
+struct Lines<'a> {
+    text: &'a str,
+    /// (byte offset, line at that offset) of the last answer.
+    last: std::cell::Cell<(usize, u32)>,
+}
 
-impl Lines<'_> {
+impl<'a> Lines<'a> {
+    fn new(text: &'a str) -> Self {
+        Lines {
+            text,
+            last: std::cell::Cell::new((0, 1)),
+        }
+    }
+
     /// The 1-based line of byte `position`.
     fn of(&self, position: u64) -> u32 {
         let end = usize::try_from(position)
             .unwrap_or(usize::MAX)
-            .min(self.0.len());
+            .min(self.text.len());
+        let (mut from, mut line) = self.last.get();
+        if end < from {
+            (from, line) = (0, 1);
+        }
         let newlines = self
-            .0
+            .text
             .as_bytes()
-            .get(..end)
+            .get(from..end)
             .map_or(0, |b| b.iter().filter(|c| **c == b'\n').count());
-        u32::try_from(newlines + 1).unwrap_or(u32::MAX)
+        let line = line.saturating_add(u32::try_from(newlines).unwrap_or(u32::MAX));
+        self.last.set((end, line));
+        line
     }
 
     fn error(&self, position: u64, message: String) -> XmlError {
@@ -120,7 +139,7 @@ fn start_element(
 /// Parses `text` into its root element.
 pub fn parse(text: &str) -> Result<Element, XmlError> {
     let mut reader = Reader::from_str(text);
-    let lines = Lines(text);
+    let lines = Lines::new(text);
     let mut stack: Vec<Element> = Vec::new();
     let mut root: Option<Element> = None;
     loop {
@@ -222,6 +241,15 @@ mod tests {
         assert_eq!(doc.path("c/d").unwrap().line, 4);
         let e = parse("<a>\n<b>\n</a>").unwrap_err();
         assert_eq!(e.line, 3, "{e}");
+    }
+
+    #[test]
+    fn line_numbers_are_right_when_asked_out_of_order() {
+        let l = Lines::new("a\nb\nc\nd");
+        assert_eq!(l.of(6), 4);
+        assert_eq!(l.of(2), 2, "an earlier offset counts again from the start");
+        assert_eq!(l.of(4), 3);
+        assert_eq!(l.of(99), 4, "beyond the end: the last line");
     }
 
     #[test]
