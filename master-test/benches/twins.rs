@@ -37,13 +37,6 @@ fn esi_twin(c: &mut Criterion) {
     g.finish();
 }
 
-fn io8_example_device() -> ecat_slave::device::DeviceDescription {
-    device_catalog::find("io8")
-        .expect("io8")
-        .description
-        .clone()
-}
-
 fn eni_line(c: &mut Criterion) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/testdata");
     let rules = InputRules::default();
