@@ -38,6 +38,27 @@ impl Bus {
         )?))
     }
 
+    /// The line an ENI describes on the virtual bus: each slave from the
+    /// catalog or a twin from an ESI file of `esi_dir` (see
+    /// `device_catalog::twins::from_eni`), inputs per `rules`.
+    pub fn virtual_eni(
+        eni: &std::path::Path,
+        esi_dir: Option<&std::path::Path>,
+        rules: &ecat_twin::InputRules,
+        pcap: Option<&std::path::Path>,
+    ) -> Result<Self, BusError> {
+        let line = device_catalog::twins::from_eni(eni, esi_dir, rules)
+            .map_err(|e| BusError::Twins(e.to_string()))?;
+        if line.slaves.len() > MAX_SUBDEVICES {
+            return Err(BusError::LineTooLong(line.slaves.len()));
+        }
+        Ok(Bus::Virtual(VirtualBus::with_chain(
+            ecat_slave::host::chain::Chain::with_slaves(line.slaves),
+            Clock::real(),
+            pcap,
+        )?))
+    }
+
     /// The segment on network interface `iface` (needs root or
     /// CAP_NET_RAW).
     pub fn raw(iface: &str) -> Result<Self, BusError> {

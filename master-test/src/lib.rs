@@ -73,6 +73,10 @@ pub enum BusError {
          lines run in tests through VirtualBus::init_long (up to {LONG_LINE}) or on pam-slave"
     )]
     LineTooLong(usize),
+    /// The ENI or an ESI file of a twin line is wrong (file, element and
+    /// line in the text).
+    #[error("{0}")]
+    Twins(String),
 }
 
 /// A line of `n` PAM-199-P-ETC slaves in their power-on state.

@@ -546,3 +546,41 @@ fn master_test_hcs_sends_cmd3_cmd6_cmd15_through_the_dma22_channel() {
     let (_, e) = expect(&mt, &["--device", "io8", "hcs", "read", "0x07"], 1);
     assert!(e.contains("no HCS telegram channel"), "{e}");
 }
+
+/// `master-test --eni FILE --esi-dir DIR` runs the commissioning commands on
+/// the virtual bus holding the ENI's line (twins and built-in devices),
+/// without root; an ENI whose slaves nothing matches is refused with exit
+/// 2 naming them.
+#[test]
+fn master_test_scans_and_reads_an_eni_line_of_twins() {
+    let mt = master_test();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/testdata");
+    let eni = root.join("machine.xml");
+    let dir = root.join("esi");
+    let (eni, dir) = (eni.to_str().expect("utf-8"), dir.to_str().expect("utf-8"));
+    let (o, _) = expect(&mt, &["--eni", eni, "--esi-dir", dir, "scan"], 0);
+    assert!(o.starts_with("5 slave(s) on the virtual bus"), "{o}");
+    for name in ["EK1100", "EL2004", "EL2828", "EL1008", "PAM-199-P-ETC"] {
+        assert!(o.contains(name), "{name} in {o}");
+    }
+    let (o, _) = expect(
+        &mt,
+        &[
+            "--eni",
+            eni,
+            "--esi-dir",
+            dir,
+            "--slave",
+            "4",
+            "sdo",
+            "read",
+            "0x1018:02",
+        ],
+        0,
+    );
+    assert!(o.contains("0x00C703F3"), "{o}");
+    let (_, e) = expect(&mt, &["--eni", eni, "scan"], 2);
+    assert!(e.contains("no device for slave 0 'Term 1 (EK1100)'"), "{e}");
+    let (_, e) = expect(&mt, &["--eni", eni, "--esi-dir", dir, "demo"], 2);
+    assert!(e.contains("use scan, state, sdo"), "{e}");
+}

@@ -67,6 +67,13 @@ struct Cli {
     /// driver and an emulated chip.
     #[arg(long, global = true, value_name = "SPEC", conflicts_with = "device")]
     line: Option<String>,
+    /// The virtual bus as the line of an ENI file (ETG.2100): each slave
+    /// from the catalog or a twin from an ESI file of --esi-dir.
+    #[arg(long, global = true, value_name = "FILE", conflicts_with_all = ["device", "line", "iface"])]
+    eni: Option<std::path::PathBuf>,
+    /// Directory of ESI files for --eni.
+    #[arg(long, global = true, value_name = "DIR", requires = "eni")]
+    esi_dir: Option<std::path::PathBuf>,
     /// The slave to talk to, by position (0 = first after the master).
     #[arg(long, global = true, value_name = "N", conflicts_with = "station")]
     slave: Option<usize>,
@@ -212,10 +219,16 @@ fn run(cli: Cli) -> Result<(), Failure> {
         slave: cli.slave,
         station: cli.station,
         pcap: None,
+        eni: cli.eni.map(|e| (e, cli.esi_dir)),
     };
     let cmd = cli.command.unwrap_or(Cmd::Demo(demo::DemoArgs::default()));
     match cmd {
         Cmd::Demo(args) => {
+            if w.eni.is_some() {
+                return Err(input(
+                    "the demo drives PAMs of its own; use scan, state, sdo, watch or od with --eni",
+                ));
+            }
             if cli.line.is_none() && cli.device.is_none() {
                 w.line = format!("pam*{}", args.slaves);
             } else if args.slaves != 1 {

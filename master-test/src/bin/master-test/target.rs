@@ -19,6 +19,8 @@ pub struct Where {
     pub station: Option<u16>,
     /// Capture of the virtual link.
     pub pcap: Option<std::path::PathBuf>,
+    /// The virtual bus as the line of an ENI file: (ENI, ESI directory).
+    pub eni: Option<(std::path::PathBuf, Option<std::path::PathBuf>)>,
 }
 
 /// An open segment with every slave in PRE-OP (ethercrab's
@@ -92,6 +94,16 @@ impl Session {
     pub async fn open(w: &Where) -> Result<Self, Failure> {
         let bus = match &w.iface {
             Some(iface) => Bus::raw(iface).map_err(|e| Failure::Comm(e.to_string()))?,
+            None if w.eni.is_some() => {
+                let (eni, dir) = w.eni.as_ref().map(|(e, d)| (e, d.as_deref())).unzip();
+                let eni = eni.ok_or_else(|| input("no ENI"))?;
+                Bus::virtual_eni(
+                    eni,
+                    dir.flatten(),
+                    &ecat_twin::InputRules::default(),
+                    w.pcap.as_deref(),
+                )?
+            }
             None => {
                 Bus::virtual_line(&w.line, w.pcap.as_deref()).map_err(|e| match (&w.pcap, e) {
                     (Some(p), BusError::Thread(e)) => {
