@@ -21,18 +21,17 @@
 //! [`Slave`]: ecat_slave::device::Slave
 
 use ecat_slave::device::{
-    Application, CoeServices, DeviceDescription, DeviceNames, EscConfig, Identity, MailboxConfig,
-    MemoryLayout, PdoSet, ProcessData, SoftSlave, Tick,
+    Application, CoeServices, DeviceDescription, EscConfig, MailboxConfig, MemoryLayout, PdoSet,
+    ProcessData, SoftSlave, Tick,
 };
 use ecat_slave::od::build::{assign, assign_count, constant, input, map, output, sub0, var};
 use ecat_slave::od::{DataType, DefaultValue, Entry, Object, ObjectCode, PdoMapping};
 use ecat_slave::sii::{SmType, protocols};
 
-use crate::dictionary;
 use crate::esc_twin::InputRule;
 use crate::esi::{At, EsiDevice, EsiError};
-use crate::sii::fit_name;
 use crate::xml::hex_binary;
+use crate::{dictionary, leak};
 
 /// Most dictionary entries a twin can hold (its value storage).
 pub const TWIN_ENTRIES: usize = 4096;
@@ -85,10 +84,6 @@ pub enum DescriptionBuildError {
         /// What is wrong.
         problem: String,
     },
-}
-
-fn leak(s: &str) -> &'static str {
-    Box::leak(s.to_string().into_boxed_str())
 }
 
 fn leak_list(v: Vec<u16>) -> &'static [u16] {
@@ -144,7 +139,7 @@ fn pdo_sets(dev: &EsiDevice, objects: &[Object]) -> Result<&'static [PdoSet], Es
                     _ => continue,
                 };
                 for p in sm.children_named("Pdo") {
-                    let v = crate::eni::number(&p.text)
+                    let v = crate::xml::number(&p.text)
                         .and_then(|v| u16::try_from(v).ok())
                         .ok_or_else(|| EsiError::BadValue {
                             at: At {
@@ -238,23 +233,6 @@ fn sm(dev: &EsiDevice, kind: SmType) -> Option<(u16, u16)> {
         .map(|s| (s.start, s.default_size))
 }
 
-/// The CoE data type of a PDO entry's type code.
-fn entry_type(code: u8) -> Option<DataType> {
-    Some(match code {
-        0x01 => DataType::Bool,
-        0x02 => DataType::Int8,
-        0x03 => DataType::Int16,
-        0x04 => DataType::Int32,
-        0x05 => DataType::UInt8,
-        0x06 => DataType::UInt16,
-        0x07 => DataType::UInt32,
-        0x15 => DataType::Int64,
-        0x1B => DataType::UInt64,
-        c @ 0x30..=0x37 => DataType::Bits(c - 0x2F),
-        _ => return None,
-    })
-}
-
 /// An entry a PDO maps: subindex, name, type, output (else input).
 type MappedEntry = (u8, String, DataType, bool);
 
@@ -285,7 +263,7 @@ fn synthesize(dev: &EsiDevice) -> Result<Vec<Object>, DescriptionBuildError> {
         .source
         .path("Profile/ChannelInfo/ProfileNo")
         .or_else(|| dev.source.path("Profile/ProfileNo"))
-        .and_then(|p| crate::eni::number(&p.text))
+        .and_then(|p| crate::xml::number(&p.text))
         .unwrap_or(0);
     let mut objects = vec![
         Object {
@@ -329,7 +307,7 @@ fn synthesize(dev: &EsiDevice) -> Result<Vec<Object>, DescriptionBuildError> {
                 if e.index == 0 {
                     continue;
                 }
-                let ty = entry_type(e.data_type).ok_or_else(|| {
+                let ty = dictionary::data_type_of_code(e.data_type).ok_or_else(|| {
                     DescriptionBuildError::UnsupportedEntryType {
                         at: p.at.clone(),
                         index: e.index,
@@ -417,16 +395,9 @@ fn synthesize(dev: &EsiDevice) -> Result<Vec<Object>, DescriptionBuildError> {
     Ok(objects)
 }
 
-fn at_of(e: &crate::xml::Element) -> At {
-    At {
-        element: e.name.clone(),
-        line: e.line,
-    }
-}
-
 fn modular_error(e: &crate::xml::Element, problem: impl Into<String>) -> DescriptionBuildError {
     DescriptionBuildError::Modular {
-        at: at_of(e),
+        at: At::of(e),
         problem: problem.into(),
     }
 }
@@ -455,7 +426,7 @@ fn modular(
         let v = e
             .attr(name)
             .ok_or_else(|| modular_error(e, format!("missing attribute {name}")))?;
-        crate::eni::number(v)
+        crate::xml::number(v)
             .and_then(|v| u16::try_from(v).ok())
             .ok_or_else(|| modular_error(e, format!("bad {name} '{v}'")))
     };
@@ -478,14 +449,14 @@ fn modular(
             .ok_or_else(|| modular_error(m, "missing <Type>"))?;
         let ident = ty
             .attr("ModuleIdent")
-            .and_then(crate::eni::number)
+            .and_then(crate::xml::number)
             .and_then(|v| u32::try_from(v).ok())
             .ok_or_else(|| modular_error(ty, "missing or bad ModuleIdent"))?;
         let pdo_list = |tag: &str| -> Result<Vec<u16>, DescriptionBuildError> {
             m.children_named(tag)
                 .map(|p| {
                     p.text_at("Index")
-                        .and_then(crate::eni::number)
+                        .and_then(crate::xml::number)
                         .and_then(|v| u16::try_from(v).ok())
                         .ok_or_else(|| modular_error(p, "missing or bad <Index>"))
                 })
@@ -597,7 +568,7 @@ pub fn default_modules(dev: &EsiDevice) -> Vec<u32> {
             ids.iter()
                 .find(|i| i.attr("Default") == Some("1"))
                 .or(ids.first())
-                .and_then(|i| crate::eni::number(&i.text))
+                .and_then(|i| crate::xml::number(&i.text))
                 .and_then(|v| u32::try_from(v).ok())
         })
         .collect()
@@ -699,20 +670,10 @@ pub fn describe(
     };
     let coe = dev.coe_details;
     let cd = &dev.config_data;
+    let (identity, names) = crate::identity_and_names(dev);
     let desc: &'static DeviceDescription = Box::leak(Box::new(DeviceDescription {
-        identity: Identity {
-            vendor_id: dev.vendor_id,
-            product_code: dev.product_code,
-            revision: dev.revision,
-            serial: 0,
-        },
-        names: DeviceNames {
-            vendor: leak(&dev.vendor_name),
-            type_name: leak(fit_name(&dev.type_name)),
-            name: leak(fit_name(&dev.name)),
-            group_type: leak(fit_name(&dev.group_type)),
-            group_name: leak(&dev.group_name),
-        },
+        identity,
+        names,
         dictionary: dictionary::build(objects, enums),
         process_data: ProcessData { sets },
         mailbox: MailboxConfig {

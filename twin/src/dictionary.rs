@@ -19,43 +19,47 @@ use std::collections::BTreeMap;
 
 use ecat_slave::coe::sdo_info::unit_text;
 use ecat_slave::od::build::sub_name;
+use ecat_slave::od::dictionary::natural_bits;
 use ecat_slave::od::{
     Access, DataType, DefaultValue, Dictionary, Entry, EnumDesc, Object, ObjectCode, PdoMapping,
 };
 
 use crate::esi::{At, EsiError, base_type_code};
+use crate::leak;
 use crate::xml::{Element, hex_binary};
-
-fn leak(s: &str) -> &'static str {
-    Box::leak(s.to_string().into_boxed_str())
-}
-
-fn at(e: &Element) -> At {
-    At {
-        element: e.name.clone(),
-        line: e.line,
-    }
-}
 
 fn bad(e: &Element, what: &'static str, value: &str) -> EsiError {
     EsiError::BadValue {
-        at: at(e),
+        at: At::of(e),
         what,
         value: value.trim().chars().take(40).collect(),
     }
 }
 
 fn number(e: &Element, what: &'static str) -> Result<i64, EsiError> {
-    let t = e.text.trim();
-    let v = match t.strip_prefix("#x").or_else(|| t.strip_prefix("#X")) {
-        Some(h) => i64::from_str_radix(h, 16).ok(),
-        None => t.parse().ok(),
-    };
-    v.ok_or_else(|| bad(e, what, t))
+    crate::xml::number(&e.text).ok_or_else(|| bad(e, what, &e.text))
 }
 
 fn child_u(e: &Element, name: &str, what: &'static str) -> Result<Option<i64>, EsiError> {
     e.child(name).map(|c| number(c, what)).transpose()
+}
+
+/// The core's data type of a CoE base type code (`None` for types the
+/// core does not serve: REAL, UINT24, ...).
+pub(crate) fn data_type_of_code(code: u8) -> Option<DataType> {
+    Some(match code {
+        0x01 => DataType::Bool,
+        0x02 => DataType::Int8,
+        0x03 => DataType::Int16,
+        0x04 => DataType::Int32,
+        0x05 => DataType::UInt8,
+        0x06 => DataType::UInt16,
+        0x07 => DataType::UInt32,
+        0x15 => DataType::Int64,
+        0x1B => DataType::UInt64,
+        c @ 0x30..=0x37 => DataType::Bits(c - 0x2F),
+        _ => return None,
+    })
 }
 
 /// A scalar type the core can serve.
@@ -75,29 +79,11 @@ fn base_scalar(name: &str) -> Option<Scalar> {
             bits: len.checked_mul(8)?,
         });
     }
-    let ty = match base_type_code(n)? {
-        0x01 => DataType::Bool,
-        0x02 => DataType::Int8,
-        0x03 => DataType::Int16,
-        0x04 => DataType::Int32,
-        0x05 => DataType::UInt8,
-        0x06 => DataType::UInt16,
-        0x07 => DataType::UInt32,
-        0x15 => DataType::Int64,
-        0x1B => DataType::UInt64,
-        c @ 0x30..=0x37 => DataType::Bits(c - 0x2F),
-        _ => return None,
-    };
-    let bits = match ty {
-        DataType::Bool => 1,
-        DataType::Int8 | DataType::UInt8 => 8,
-        DataType::Int16 | DataType::UInt16 => 16,
-        DataType::Int32 | DataType::UInt32 => 32,
-        DataType::Int64 | DataType::UInt64 => 64,
-        DataType::Bits(n) => u16::from(n),
-        _ => 0,
-    };
-    Some(Scalar { ty, bits })
+    let ty = data_type_of_code(base_type_code(n)?)?;
+    Some(Scalar {
+        ty,
+        bits: natural_bits(&ty),
+    })
 }
 
 /// One item of a record or array data type.
@@ -133,7 +119,7 @@ impl<'a> Types<'a> {
         };
         for dt in dts.children_named("DataType") {
             let name_el = dt.child("Name").ok_or_else(|| EsiError::Missing {
-                at: at(dt),
+                at: At::of(dt),
                 what: "<Name>",
             })?;
             let name = name_el.text.trim().to_string();
@@ -166,7 +152,7 @@ impl<'a> Types<'a> {
                 let base = dt
                     .text_at("BaseType")
                     .ok_or_else(|| EsiError::Missing {
-                        at: at(dt),
+                        at: At::of(dt),
                         what: "<BaseType>",
                     })?
                     .to_string();
@@ -216,7 +202,7 @@ impl<'a> Types<'a> {
         match self.defs.get(name.trim()) {
             Some((TypeDef::Scalar(s), _)) => Ok(*s),
             _ => Err(EsiError::UnknownDataType {
-                at: at(el),
+                at: At::of(el),
                 name: name.trim().to_string(),
             }),
         }
@@ -405,14 +391,14 @@ pub struct ParsedObject {
 
 fn parse_object(o: &Element, types: &Types<'_>) -> Result<ParsedObject, EsiError> {
     let index_el = o.child("Index").ok_or_else(|| EsiError::Missing {
-        at: at(o),
+        at: At::of(o),
         what: "<Index>",
     })?;
     let index = u16::try_from(number(index_el, "Index")?)
         .map_err(|_| bad(index_el, "Index", &index_el.text))?;
     let name = o.text_at("Name").unwrap_or("").to_string();
     let type_el = o.child("Type").ok_or_else(|| EsiError::Missing {
-        at: at(o),
+        at: At::of(o),
         what: "<Type>",
     })?;
     let ty = type_el.text.trim();
@@ -424,7 +410,7 @@ fn parse_object(o: &Element, types: &Types<'_>) -> Result<ParsedObject, EsiError
     };
     let Some(def) = def else {
         return Err(EsiError::UnknownDataType {
-            at: at(type_el),
+            at: At::of(type_el),
             name: ty.to_string(),
         });
     };
@@ -493,7 +479,7 @@ fn parse_object(o: &Element, types: &Types<'_>) -> Result<ParsedObject, EsiError
                 None => {
                     for s in &subs {
                         let sub = s.sub.ok_or_else(|| EsiError::Missing {
-                            at: at(s.el),
+                            at: At::of(s.el),
                             what: "<SubIdx>",
                         })?;
                         let sc = types.scalar(&s.type_name, s.el)?;
@@ -560,7 +546,7 @@ fn parse_object(o: &Element, types: &Types<'_>) -> Result<ParsedObject, EsiError
             code,
             entries: Box::leak(entries.into_boxed_slice()),
         },
-        at: at(o),
+        at: At::of(o),
     })
 }
 

@@ -95,32 +95,13 @@ pub enum EniError {
     NoSlaves,
 }
 
-fn at(e: &Element) -> At {
-    At {
-        element: e.name.clone(),
-        line: e.line,
-    }
-}
-
-/// A number as ENI files write them: decimal, `#x` or `0x` hex.
-pub fn number(text: &str) -> Option<i64> {
-    let t = text.trim();
-    match t
-        .strip_prefix("#x")
-        .or_else(|| t.strip_prefix("#X"))
-        .or_else(|| t.strip_prefix("0x"))
-        .or_else(|| t.strip_prefix("0X"))
-    {
-        Some(h) => i64::from_str_radix(h, 16).ok(),
-        None => t.parse().ok(),
-    }
-}
+pub use crate::xml::number;
 
 fn value<T: TryFrom<i64>>(e: &Element, what: &'static str) -> Result<T, EniError> {
     number(&e.text)
         .and_then(|v| T::try_from(v).ok())
         .ok_or_else(|| EniError::BadValue {
-            at: at(e),
+            at: At::of(e),
             what,
             value: e.text.clone(),
         })
@@ -128,7 +109,7 @@ fn value<T: TryFrom<i64>>(e: &Element, what: &'static str) -> Result<T, EniError
 
 fn req<'a>(e: &'a Element, name: &'static str) -> Result<&'a Element, EniError> {
     e.child(name).ok_or_else(|| EniError::Missing {
-        at: at(e),
+        at: At::of(e),
         what: name,
     })
 }
@@ -176,7 +157,7 @@ fn parse_slave(s: &Element) -> Result<EniSlave, EniError> {
                 index: value(req(c, "Index")?, "Index")?,
                 sub: opt(c, "SubIndex")?.unwrap_or(0),
                 data: crate::xml::hex_binary(&data.text).ok_or_else(|| EniError::BadValue {
-                    at: at(data),
+                    at: At::of(data),
                     what: "Data",
                     value: data.text.clone(),
                 })?,
@@ -200,7 +181,7 @@ fn parse_slave(s: &Element) -> Result<EniSlave, EniError> {
             .map_or(0, |i| i.children_named("InitCmd").count()),
         coe_init_cmds,
         coe_init,
-        at: at(s),
+        at: At::of(s),
     })
 }
 

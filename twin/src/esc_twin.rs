@@ -12,9 +12,7 @@
 use std::any::Any;
 
 use ecat_slave::al::{AlState, AlStatus, AlStatusCode};
-use ecat_slave::device::{
-    CoeServices, DeviceDescription, DeviceNames, EscConfig, Identity, MailboxConfig, ProcessData,
-};
+use ecat_slave::device::{CoeServices, DeviceDescription, EscConfig, MailboxConfig, ProcessData};
 use ecat_slave::esc::soft::{FrameOutcome, SoftEsc};
 use ecat_slave::esc::{Esc, EscError};
 use ecat_slave::firmware::ImageStore;
@@ -122,31 +120,15 @@ struct PdSm {
     output: bool,
 }
 
-/// Leaks a string for the `'static` description (a twin lives as long as
-/// its line; a line is built once per process).
-fn leak(s: &str) -> &'static str {
-    Box::leak(s.to_string().into_boxed_str())
-}
-
 static EMPTY: Dictionary = Dictionary::new(&[], &[], &[]);
 
 /// The description of an ESC-only device: identity and names; no
 /// dictionary, no mailbox, no PDO sets (its PDOs are fixed in the SII).
 fn description(dev: &EsiDevice) -> &'static DeviceDescription {
+    let (identity, names) = crate::identity_and_names(dev);
     Box::leak(Box::new(DeviceDescription {
-        identity: Identity {
-            vendor_id: dev.vendor_id,
-            product_code: dev.product_code,
-            revision: dev.revision,
-            serial: 0,
-        },
-        names: DeviceNames {
-            vendor: leak(&dev.vendor_name),
-            type_name: leak(&dev.type_name),
-            name: leak(&dev.name),
-            group_type: leak(&dev.group_type),
-            group_name: leak(&dev.group_name),
-        },
+        identity,
+        names,
         dictionary: &EMPTY,
         process_data: ProcessData { sets: &[] },
         mailbox: MailboxConfig {

@@ -28,7 +28,8 @@ pub struct At {
 }
 
 impl At {
-    fn of(e: &Element) -> Self {
+    /// Where `e` is.
+    pub fn of(e: &Element) -> Self {
         At {
             element: e.name.clone(),
             line: e.line,
@@ -312,17 +313,7 @@ pub struct EsiFile {
 
 fn number(e: &Element, text: &str, what: &'static str) -> Result<i64, EsiError> {
     let t = text.trim();
-    let v = if let Some(h) = t
-        .strip_prefix("#x")
-        .or_else(|| t.strip_prefix("#X"))
-        .or_else(|| t.strip_prefix("0x"))
-        .or_else(|| t.strip_prefix("0X"))
-    {
-        i64::from_str_radix(h, 16).ok()
-    } else {
-        t.parse().ok()
-    };
-    v.ok_or_else(|| EsiError::BadValue {
+    xml::number(t).ok_or_else(|| EsiError::BadValue {
         at: At::of(e),
         what,
         value: t.to_string(),

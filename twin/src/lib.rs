@@ -42,6 +42,37 @@ use std::path::Path;
 
 use ecat_slave::host::chain::LineSlave;
 
+/// `s` as `'static` text: a twin's description lives as long as its line,
+/// which a process builds once, so it is leaked on purpose.
+pub(crate) fn leak(s: &str) -> &'static str {
+    Box::leak(s.to_string().into_boxed_str())
+}
+
+/// Identity and names of `dev` for a description (names cut to what
+/// ethercrab accepts, [`sii::fit_name`]).
+pub(crate) fn identity_and_names(
+    dev: &EsiDevice,
+) -> (
+    ecat_slave::device::Identity,
+    ecat_slave::device::DeviceNames,
+) {
+    (
+        ecat_slave::device::Identity {
+            vendor_id: dev.vendor_id,
+            product_code: dev.product_code,
+            revision: dev.revision,
+            serial: 0,
+        },
+        ecat_slave::device::DeviceNames {
+            vendor: leak(&dev.vendor_name),
+            type_name: leak(sii::fit_name(&dev.type_name)),
+            name: leak(sii::fit_name(&dev.name)),
+            group_type: leak(sii::fit_name(&dev.group_type)),
+            group_name: leak(&dev.group_name),
+        },
+    )
+}
+
 /// Why a twin cannot be made.
 #[derive(Debug, thiserror::Error)]
 pub enum TwinError {

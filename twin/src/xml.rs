@@ -195,6 +195,21 @@ pub fn parse(text: &str) -> Result<Element, XmlError> {
     root.ok_or_else(|| lines.error(0, "no root element".into()))
 }
 
+/// A number as ESI and ENI files write them: signed decimal, `#x` (ETG
+/// `HexDecValue`) or `0x` hex.
+pub fn number(text: &str) -> Option<i64> {
+    let t = text.trim();
+    match t
+        .strip_prefix("#x")
+        .or_else(|| t.strip_prefix("#X"))
+        .or_else(|| t.strip_prefix("0x"))
+        .or_else(|| t.strip_prefix("0X"))
+    {
+        Some(h) => i64::from_str_radix(h, 16).ok(),
+        None => t.parse().ok(),
+    }
+}
+
 /// Parses an ETG `HexDecValue`: `#x`-prefixed hex or signed decimal.
 pub fn hex_dec(s: &str) -> Option<i64> {
     let s = s.trim();
