@@ -2,8 +2,7 @@
 //! fuzzer's own finds go to the ignored `fuzz/corpus/<target>/`).
 //!
 //! ```text
-//! cd fuzz && cargo run --example seed            # ../../shared beside the checkout
-//! cd fuzz && cargo run --example seed -- DIR     # another shared folder
+//! cd fuzz && cargo run --example seed
 //! ```
 //!
 //! - `line_frames`, `mailbox`: frames of real ethercrab sessions on the
@@ -14,7 +13,7 @@
 //!   firmware download. The master's frames become `line_frames` inputs;
 //!   the mailbox messages it wrote into SM0 become `mailbox` inputs.
 //! - `sii`: the PAM's and the IO8's generated SII images, the PAM's as
-//!   Intel HEX, and the vendor dumps of `shared/reference/sii-dumps`.
+//!   Intel HEX, and the vendor dumps of `tests/data/sii-dumps`.
 //! - `esi`: the generated ESIs (the PAM's without its 155 KB dictionary
 //!   and with a dictionary of one object, the IO8's whole). The ETG schema
 //!   files of `shared/esi-schema` are not copied into the repository.
@@ -153,10 +152,6 @@ async fn session_mailbox(pcap: &Path) -> Result<(), Error> {
 fn main() -> Result<(), Error> {
     let fuzz = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let seeds = fuzz.join("seeds");
-    let shared = std::env::args()
-        .nth(1)
-        .map(PathBuf::from)
-        .unwrap_or_else(|| fuzz.join("../../shared"));
     let tmp = std::env::temp_dir().join(format!("ecat-fuzz-seed-{}", std::process::id()));
     std::fs::create_dir_all(&tmp)?;
 
@@ -260,7 +255,7 @@ fn main() -> Result<(), Error> {
         "pam-used.hex",
         ecat_esi::ihex::encode(&pam[..used]).as_bytes(),
     )?;
-    let dumps = shared.join("reference/sii-dumps");
+    let dumps = fuzz.join("../tests/data/sii-dumps");
     let mut names: Vec<_> = std::fs::read_dir(&dumps)?
         .filter_map(Result::ok)
         .map(|e| e.path())

@@ -16,6 +16,8 @@ pub enum Bus {
         iface: String,
         /// The master on it.
         maindevice: &'static MainDevice<'static>,
+        /// Real time since the bus opened.
+        clock: Clock,
         /// The raw-socket link thread.
         _link: crate::link::RawLink,
     },
@@ -33,7 +35,7 @@ impl Bus {
         }
         Ok(Bus::Virtual(VirtualBus::line_with(
             spec,
-            Clock::real(),
+            Clock::frames_paced(),
             pcap,
         )?))
     }
@@ -54,7 +56,7 @@ impl Bus {
         }
         Ok(Bus::Virtual(VirtualBus::with_chain(
             ecat_slave::host::chain::Chain::with_slaves(line.slaves),
-            Clock::real(),
+            Clock::frames_paced(),
             pcap,
         )?))
     }
@@ -83,6 +85,7 @@ impl Bus {
         Ok(Bus::Raw {
             iface: iface.to_string(),
             maindevice,
+            clock: Clock::real(),
             _link: link,
         })
     }
@@ -92,6 +95,16 @@ impl Bus {
         match self {
             Bus::Virtual(v) => &v.maindevice,
             Bus::Raw { maindevice, .. } => maindevice,
+        }
+    }
+
+    /// The time a master on this bus waits and measures in: real time on
+    /// a network interface, the slaves' (paced) frame clock on the
+    /// virtual bus ([`Clock::sleep`]).
+    pub fn clock(&self) -> &Clock {
+        match self {
+            Bus::Virtual(v) => &v.clock,
+            Bus::Raw { clock, .. } => clock,
         }
     }
 

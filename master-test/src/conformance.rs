@@ -20,13 +20,14 @@
 
 use crate::eeprom;
 use crate::foe;
+use crate::link::Clock;
 use crate::mailbox::{ClientError, MailboxClient, MailboxGeometry, sm_register};
 use crate::sdo_info::{self, EntryInfo};
 use ecat_slave::wire::coe::{CoeHeader, CoeService, SdoRequest};
 use ecat_slave::wire::mailbox::{MailboxError as WireMailboxError, MailboxType};
 use ethercrab::{Command, MainDevice};
 use std::fmt::Write as _;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// A group of checks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -131,6 +132,10 @@ pub struct Options {
     pub esi: Option<String>,
     /// FoE checks: the file to download in BOOT.
     pub foe: Option<FoeOptions>,
+    /// The time the checker waits and measures in: real time on a wire;
+    /// on a virtual bus the slaves' clock, so a check that waits for a
+    /// watchdog sees the same on an idle and on a busy machine.
+    pub clock: Clock,
 }
 
 /// The FoE group's input.
@@ -297,6 +302,7 @@ struct Run<'a> {
     checks: Vec<CheckResult>,
     group: Group,
     emergencies: Vec<Vec<u8>>,
+    clock: Clock,
 }
 
 /// A check's outcome before it is recorded.
@@ -361,16 +367,16 @@ impl<'a> Run<'a> {
     /// code.
     async fn request(&self, control: u16) -> Result<(u16, u16), String> {
         self.write(0x0120, &control.to_le_bytes()).await?;
-        let start = Instant::now();
+        let start = self.clock.elapsed();
         loop {
             let (st, code) = self.al().await?;
             if st & 0x10 != 0 || (st & 0x0F == control & 0x0F) {
                 return Ok((st, code));
             }
-            if start.elapsed() > Duration::from_secs(3) {
+            if (self.clock.elapsed() - start) > Duration::from_secs(3) {
                 return Ok((st, code));
             }
-            smol::Timer::after(Duration::from_micros(500)).await;
+            self.clock.sleep(Duration::from_micros(500)).await;
         }
     }
 
@@ -378,13 +384,13 @@ impl<'a> Run<'a> {
     /// returns the status afterwards.
     async fn acknowledge(&self, state: u16) -> Result<(u16, u16), String> {
         self.write(0x0120, &(state | 0x10).to_le_bytes()).await?;
-        let start = Instant::now();
+        let start = self.clock.elapsed();
         loop {
             let (st, code) = self.al().await?;
-            if st & 0x10 == 0 || start.elapsed() > Duration::from_secs(3) {
+            if st & 0x10 == 0 || (self.clock.elapsed() - start) > Duration::from_secs(3) {
                 return Ok((st, code));
             }
-            smol::Timer::after(Duration::from_micros(500)).await;
+            self.clock.sleep(Duration::from_micros(500)).await;
         }
     }
 
@@ -459,6 +465,7 @@ pub async fn run(md: &MainDevice<'_>, station: u16, label: &str, opts: &Options)
         checks: Vec::new(),
         group: Group::Esc,
         emergencies: Vec::new(),
+        clock: opts.clock.clone(),
     };
     for g in Group::ALL {
         if !wanted(g) {
@@ -1206,8 +1213,8 @@ async fn watchdog_checks(r: &mut Run<'_>, sm2: [u8; 8]) {
     let _ = r.request(0x04).await;
     let mut reached = None;
     let _ = r.write(0x0120, &0x08u16.to_le_bytes()).await;
-    let t0 = Instant::now();
-    while t0.elapsed() < Duration::from_secs(3) {
+    let t0 = r.clock.elapsed();
+    while (r.clock.elapsed() - t0) < Duration::from_secs(3) {
         send(r).await;
         if let Ok((st, code)) = r.al().await
             && (st == 0x08 || st & 0x10 != 0)
@@ -1215,7 +1222,7 @@ async fn watchdog_checks(r: &mut Run<'_>, sm2: [u8; 8]) {
             reached = Some((st, code));
             break;
         }
-        smol::Timer::after(Duration::from_millis(1)).await;
+        r.clock.sleep(Duration::from_millis(1)).await;
     }
     let o = match reached {
         Some((0x08, _)) => Outcome::Pass("OP".into()),
@@ -1247,16 +1254,16 @@ async fn watchdog_checks(r: &mut Run<'_>, sm2: [u8; 8]) {
     let o = if !in_op {
         Outcome::NotApplicable("OP was not reached".into())
     } else {
-        let stop = Instant::now();
+        let stop = r.clock.elapsed();
         let mut seen = None;
-        while stop.elapsed() < wd_time * 5 + Duration::from_secs(2) {
+        while (r.clock.elapsed() - stop) < wd_time * 5 + Duration::from_secs(2) {
             if let Ok((st, code)) = r.al().await
                 && st != 0x08
             {
-                seen = Some((st, code, stop.elapsed()));
+                seen = Some((st, code, r.clock.elapsed() - stop));
                 break;
             }
-            smol::Timer::after(Duration::from_millis(1)).await;
+            r.clock.sleep(Duration::from_millis(1)).await;
         }
         match seen {
             Some((0x14, 0x001B, t)) => Outcome::Pass(format!(
@@ -1267,7 +1274,7 @@ async fn watchdog_checks(r: &mut Run<'_>, sm2: [u8; 8]) {
             Some((st, code, _)) => Outcome::Fail(al_text(st, code)),
             None => Outcome::Fail(format!(
                 "still OP {} ms after the outputs stopped (watchdog {} ms)",
-                stop.elapsed().as_millis(),
+                (r.clock.elapsed() - stop).as_millis(),
                 wd_time.as_millis()
             )),
         }
@@ -1281,15 +1288,15 @@ async fn watchdog_checks(r: &mut Run<'_>, sm2: [u8; 8]) {
         // acknowledge, then OP, outputs flowing all along.
         for _ in 0..5 {
             send(r).await;
-            smol::Timer::after(Duration::from_millis(1)).await;
+            r.clock.sleep(Duration::from_millis(1)).await;
         }
         let _ = r.write(0x0120, &0x14u16.to_le_bytes()).await;
         for _ in 0..5 {
             send(r).await;
-            smol::Timer::after(Duration::from_millis(1)).await;
+            r.clock.sleep(Duration::from_millis(1)).await;
         }
         let _ = r.write(0x0120, &0x08u16.to_le_bytes()).await;
-        let t0 = Instant::now();
+        let t0 = r.clock.elapsed();
         let mut last = (0, 0);
         loop {
             send(r).await;
@@ -1299,10 +1306,10 @@ async fn watchdog_checks(r: &mut Run<'_>, sm2: [u8; 8]) {
                     break Outcome::Pass("OP".into());
                 }
             }
-            if t0.elapsed() > Duration::from_secs(3) {
+            if (r.clock.elapsed() - t0) > Duration::from_secs(3) {
                 break Outcome::Fail(al_text(last.0, last.1));
             }
-            smol::Timer::after(Duration::from_millis(1)).await;
+            r.clock.sleep(Duration::from_millis(1)).await;
         }
     };
     r.record(ids[2].0, "ETG.1000.6 6.4.1.3", ids[2].1, o);
@@ -1529,7 +1536,7 @@ async fn mailbox_checks(r: &mut Run<'_>) {
     // After INIT -> PRE-OP nothing from before may wait in SM1.
     let _ = r.request(0x01).await;
     let _ = r.request(0x02).await;
-    smol::Timer::after(Duration::from_millis(20)).await;
+    r.clock.sleep(Duration::from_millis(20)).await;
     let o = match r.read::<u8>(0x080D).await {
         Ok(st) if st & 0x08 == 0 => Outcome::Pass("SM1 empty".into()),
         Ok(st) => {

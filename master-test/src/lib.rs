@@ -123,9 +123,11 @@ pub fn fault_timeouts() -> (Timeouts, RetryBehaviour) {
 }
 
 impl VirtualBus {
-    /// `n` PAM-199-P-ETC slaves on real time.
+    /// `n` PAM-199-P-ETC slaves on a frame clock ([`Clock::frames`]): their
+    /// time follows the traffic, so what they do does not depend on how
+    /// busy the machine is.
     pub fn new(n: usize) -> Result<Self, BusError> {
-        Self::with_clock(n, Clock::real())
+        Self::with_clock(n, Clock::frames())
     }
 
     /// `n` PAM-199-P-ETC slaves whose firmware sees `clock`.

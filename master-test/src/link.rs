@@ -28,7 +28,28 @@ pub enum Clock {
     Real(Instant),
     /// Simulated time in nanoseconds, advanced only by the test.
     Simulated(Arc<AtomicU64>),
+    /// Simulated time in nanoseconds that the test advances and that every
+    /// frame on the wire advances by `step_ns`: the slaves' time follows
+    /// the traffic, not the machine, so a test runs the same on an idle
+    /// and on a loaded machine ([`Clock::frames`]).
+    Frames {
+        /// The time now.
+        now: Arc<AtomicU64>,
+        /// What one frame costs, ns.
+        step_ns: u64,
+        /// Whether [`Clock::sleep`] also waits the time in real time (for
+        /// people watching), or only moves the slaves' time on (tests).
+        paced: bool,
+    },
 }
+
+/// Simulated time one frame takes on a [`Clock::frames`] clock: 20 µs,
+/// a short frame's trip through a line and back plus a master's
+/// turn-around. A master that configures 64 slaves' DC start times one
+/// after the other (4 frames each) then spends 5 ms, as on a real line;
+/// the slaves' timers (SM watchdog 100 ms = 5000 frames without process
+/// data) never see more time than the traffic says, whatever the machine.
+pub const FRAME_STEP_NS: u64 = 20_000;
 
 impl Clock {
     /// Real time starting now.
@@ -41,20 +62,85 @@ impl Clock {
         Clock::Simulated(Arc::new(AtomicU64::new(0)))
     }
 
+    /// Simulated time starting at 0 that every frame advances by
+    /// [`FRAME_STEP_NS`] (and [`Clock::advance`] as the test says).
+    pub fn frames() -> Self {
+        Clock::Frames {
+            now: Arc::new(AtomicU64::new(0)),
+            step_ns: FRAME_STEP_NS,
+            paced: false,
+        }
+    }
+
+    /// [`Clock::frames`] whose [`Clock::sleep`] also waits in real time:
+    /// the slaves' time is as reproducible as in a test, and a person
+    /// watching the demo sees it at the speed it claims.
+    pub fn frames_paced() -> Self {
+        Clock::Frames {
+            now: Arc::new(AtomicU64::new(0)),
+            step_ns: FRAME_STEP_NS,
+            paced: true,
+        }
+    }
+
     /// Current time in nanoseconds.
     pub fn now_ns(&self) -> u64 {
         match self {
             Clock::Real(start) => u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX),
-            Clock::Simulated(t) => t.load(Ordering::Acquire),
+            Clock::Simulated(t) | Clock::Frames { now: t, .. } => t.load(Ordering::Acquire),
         }
     }
 
     /// Advances simulated time (no effect on real time).
     pub fn advance(&self, d: Duration) {
-        if let Clock::Simulated(t) = self {
+        if let Clock::Simulated(t) | Clock::Frames { now: t, .. } = self {
             let ns = u64::try_from(d.as_nanos()).unwrap_or(u64::MAX);
             t.fetch_add(ns, Ordering::AcqRel);
         }
+    }
+
+    /// A frame passed the wire: a [`Clock::frames`] clock advances by its
+    /// step; the others do not change.
+    pub fn frame_passed(&self) {
+        if let Clock::Frames { now, step_ns, .. } = self {
+            now.fetch_add(*step_ns, Ordering::AcqRel);
+        }
+    }
+
+    /// Whether the time is simulated (does not follow the machine's clock).
+    pub fn is_simulated(&self) -> bool {
+        !matches!(self, Clock::Real(_))
+    }
+
+    /// [`Clock::now_ns`] as a duration since the clock started.
+    pub fn elapsed(&self) -> Duration {
+        Duration::from_nanos(self.now_ns())
+    }
+
+    /// A master's wait of `d` in this clock's time: real time sleeps; a
+    /// simulated clock moves on by `d` at once and the task yields, so the
+    /// slaves see the time pass however long the machine takes.
+    pub async fn sleep(&self, d: Duration) {
+        match self {
+            Clock::Real(_) => {
+                smol::Timer::after(d).await;
+            }
+            Clock::Frames { paced: true, .. } => {
+                self.advance(d);
+                smol::Timer::after(d).await;
+            }
+            Clock::Simulated(_) | Clock::Frames { .. } => {
+                self.advance(d);
+                smol::future::yield_now().await;
+            }
+        }
+    }
+}
+
+impl Default for Clock {
+    /// Real time starting now.
+    fn default() -> Self {
+        Clock::real()
     }
 }
 
@@ -142,6 +228,7 @@ impl Link {
                         if let Some(p) = pcap.as_mut() {
                             let _ = p.write_frame(&buf);
                         }
+                        clock.frame_passed();
                         let now = clock.now_ns();
                         let fate = faults.as_ref().map_or(Fate::Deliver, |f| {
                             lock_faults(f).fate(Duration::from_nanos(now.saturating_sub(start_ns)))

@@ -10,7 +10,7 @@ use std::process::Command;
 fn virtual_link_capture_holds_requests_and_replies_of_the_bring_up() {
     let path = std::env::temp_dir().join(format!("pam-capture-{}.pcap", std::process::id()));
     smol::block_on(async {
-        let bus = VirtualBus::with_options(1, Clock::real(), Some(&path)).expect("bus");
+        let bus = VirtualBus::with_options(1, Clock::frames(), Some(&path)).expect("bus");
         let md = &*bus.maindevice;
         let group = bus.init().await.expect("init");
         let sd = group.subdevice(md, 0).expect("slave");
@@ -50,7 +50,7 @@ fn capture_decodes_with_tshark_where_installed() {
     }
     let path = std::env::temp_dir().join(format!("pam-tshark-{}.pcap", std::process::id()));
     smol::block_on(async {
-        let bus = VirtualBus::with_options(1, Clock::real(), Some(&path)).expect("bus");
+        let bus = VirtualBus::with_options(1, Clock::frames(), Some(&path)).expect("bus");
         let md = &*bus.maindevice;
         let group = bus.init().await.expect("init");
         let sd = group.subdevice(md, 0).expect("slave");
@@ -99,7 +99,7 @@ fn tshark_decodes_every_sdo_abort_in_a_capture_with_its_code() {
         0x0609_0011,
     ];
     smol::block_on(async {
-        let bus = VirtualBus::with_options(1, Clock::real(), Some(&path)).expect("bus");
+        let bus = VirtualBus::with_options(1, Clock::frames(), Some(&path)).expect("bus");
         let md = &*bus.maindevice;
         let group = bus.init().await.expect("init");
         let sd = group.subdevice(md, 0).expect("slave");

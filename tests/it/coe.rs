@@ -338,7 +338,7 @@ fn a_48_byte_mailbox_is_advertised_in_the_sii_and_long_uploads_are_segmented() {
             pam_199_p_etc::Pam::default(),
             layout,
         ))]);
-        let bus = VirtualBus::with_chain(chain, Clock::real(), None).expect("bus");
+        let bus = VirtualBus::with_chain(chain, Clock::frames(), None).expect("bus");
         let md = &*bus.maindevice;
         let group = bus
             .init()

@@ -210,6 +210,7 @@ fn check(bus: &VirtualBus, esi: bool) -> conformance::Report {
             only: Vec::new(),
             esi,
             foe: None,
+            clock: bus.clock.clone(),
         };
         conformance::run(md, 0x1000, "slave 0", &opts).await
     })
@@ -222,7 +223,7 @@ fn failed(report: &conformance::Report) -> BTreeSet<&'static str> {
 #[test]
 fn every_catalog_device_passes_the_checker_on_the_virtual_bus() {
     for device in device_catalog::DEVICES {
-        let bus = VirtualBus::line(device.key, Clock::real()).expect("bus");
+        let bus = VirtualBus::line(device.key, Clock::frames()).expect("bus");
         let report = smol::block_on(async {
             let md = &*bus.maindevice;
             bus.init().await.expect("PRE-OP");
@@ -237,6 +238,7 @@ fn every_catalog_device_passes_the_checker_on_the_virtual_bus() {
                 only: Vec::new(),
                 esi: Some(esi),
                 foe,
+                clock: bus.clock.clone(),
             };
             conformance::run(md, 0x1000, device.key, &opts).await
         });
@@ -275,7 +277,7 @@ fn each_broken_slave_fails_exactly_the_check_meant_for_its_defect() {
         (Defect::WrongAlCode, "state.init-to-op-refused"),
     ] {
         let chain = Chain::with_slaves(vec![Box::new(Defective::pam(defect))]);
-        let bus = VirtualBus::with_chain(chain, Clock::real(), None).expect("bus");
+        let bus = VirtualBus::with_chain(chain, Clock::frames(), None).expect("bus");
         let report = check(&bus, true);
         assert_eq!(
             failed(&report),

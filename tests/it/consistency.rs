@@ -248,7 +248,7 @@ fn esi_equals_sdo_information(key: &str) -> Compared {
     let xml = ecat_esi::generate(dev).expect("ESI");
     let doc = ecat_esi::xml::parse(std::str::from_utf8(&xml).unwrap()).expect("parse");
     smol::block_on(async {
-        let bus = VirtualBus::line(key, master_test::link::Clock::real()).expect("bus");
+        let bus = VirtualBus::line(key, master_test::link::Clock::frames()).expect("bus");
         let md = &*bus.maindevice;
         let group = bus.init().await.expect("init");
         let station = group.subdevice(md, 0).expect("slave").configured_address();

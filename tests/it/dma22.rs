@@ -43,7 +43,7 @@ macro_rules! configure {
 #[test]
 fn ethercrab_runs_the_manual_5_4_2_example_on_three_modules_after_writing_0xf030() {
     smol::block_on(async {
-        let bus = VirtualBus::line("dma22", Clock::real()).expect("bus");
+        let bus = VirtualBus::line("dma22", Clock::frames()).expect("bus");
         let md: &Md = &bus.maindevice;
         let group = bus.init().await.expect("PRE-OP");
         let sd = group.subdevice(md, 0).expect("node");
@@ -121,7 +121,7 @@ fn ethercrab_runs_the_manual_5_4_2_example_on_three_modules_after_writing_0xf030
 #[test]
 fn a_configured_module_list_that_differs_is_refused_with_al_status_0x0070() {
     smol::block_on(async {
-        let bus = VirtualBus::line("dma22", Clock::real()).expect("bus");
+        let bus = VirtualBus::line("dma22", Clock::frames()).expect("bus");
         let md: &Md = &bus.maindevice;
         let group = bus.init().await.expect("PRE-OP");
         let sd = group.subdevice(md, 0).expect("node");
@@ -149,7 +149,7 @@ fn a_configured_module_list_that_differs_is_refused_with_al_status_0x0070() {
 #[test]
 fn objects_and_pdos_of_empty_slots_do_not_exist() {
     smol::block_on(async {
-        let bus = VirtualBus::line("dma22", Clock::real()).expect("bus");
+        let bus = VirtualBus::line("dma22", Clock::frames()).expect("bus");
         let md: &Md = &bus.maindevice;
         let group = bus.init().await.expect("PRE-OP");
         let sd = group.subdevice(md, 0).expect("node");
@@ -170,7 +170,7 @@ fn objects_and_pdos_of_empty_slots_do_not_exist() {
 }
 
 #[test]
-fn the_dma22_esi_describes_slots_and_modules_and_validates() {
+fn the_dma22_esi_describes_slots_and_modules() {
     let xml = ecat_esi::generate(&hcs_dma22::device::DEVICE).expect("ESI");
     let text = std::str::from_utf8(&xml).unwrap();
     let doc = ecat_esi::xml::parse(text).expect("parse");
@@ -206,30 +206,7 @@ fn the_dma22_esi_describes_slots_and_modules_and_validates() {
             .filter_map(|o| o.text_at("Index"))
             .all(|i| !i.starts_with("#x6") && !i.starts_with("#x7") && !i.starts_with("#x8"))
     );
-    let schema = std::path::Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../shared/esi-schema/EtherCATInfo.xsd"
-    ));
-    if !schema.is_file() {
-        return crate::common::skip("ESI schema not found");
-    }
-    let file = std::env::temp_dir().join(format!("dma22-{}.xml", std::process::id()));
-    std::fs::write(&file, &xml).unwrap();
-    let out = std::process::Command::new("xmllint")
-        .arg("--noout")
-        .arg("--schema")
-        .arg(schema)
-        .arg(&file)
-        .output();
-    let _ = std::fs::remove_file(&file);
-    let Ok(out) = out else {
-        return crate::common::skip("xmllint not installed");
-    };
-    assert!(
-        out.status.success(),
-        "xmllint: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    // Its schema validation: `shared::every_catalog_devices_generated_esi_validates_against_the_etg_schema`.
 }
 
 /// Writes `telegram` into the node's request object (complete access from
@@ -249,7 +226,7 @@ async fn exchange(c: &mut master_test::mailbox::MailboxClient<'_>, telegram: &[u
 fn hcs_telegrams_through_the_coe_channel_reach_the_module_parameters() {
     use master_test::mailbox::{MailboxClient, MailboxGeometry};
     smol::block_on(async {
-        let bus = VirtualBus::line("dma22", Clock::real()).expect("bus");
+        let bus = VirtualBus::line("dma22", Clock::frames()).expect("bus");
         let md: &Md = &bus.maindevice;
         let group = bus.init().await.expect("PRE-OP");
         let station = group.subdevice(md, 0).expect("node").configured_address();

@@ -212,7 +212,7 @@ fn a_store_that_cannot_commit_the_image_reports_0x0007_at_boot_to_init() {
             vec![Box::new(pam_199_p_etc::soft_slave())],
             vec![Box::new(store)],
         );
-        let bus = VirtualBus::with_chain(chain, Clock::real(), None).expect("bus");
+        let bus = VirtualBus::with_chain(chain, Clock::frames(), None).expect("bus");
         let md: &Md = &bus.maindevice;
         let group = bus.init().await.expect("init");
         let s = group.subdevice(md, 0).expect("slave").configured_address();

@@ -28,7 +28,7 @@ fn one_percent_loss_keeps_the_group_in_op_and_the_error_counter_matches_the_corr
         .parse()
         .expect("faults");
     let bus =
-        VirtualBus::with_faults(pam_line(8), Clock::real(), FaultConfig::default()).expect("bus");
+        VirtualBus::with_faults(pam_line(8), Clock::frames(), FaultConfig::default()).expect("bus");
     let wire = bus.faults.clone().expect("faulty wire");
     smol::block_on(async {
         let md = &*bus.maindevice;
@@ -205,7 +205,7 @@ fn an_sdo_download_interrupted_at_any_frame_is_all_or_nothing() {
     // How many frames a clean segmented download takes.
     let frames = {
         let (chain, geometry) = small_mailbox_pam();
-        let bus = VirtualBus::with_faults(chain, Clock::real(), FaultConfig::default()).unwrap();
+        let bus = VirtualBus::with_faults(chain, Clock::frames(), FaultConfig::default()).unwrap();
         smol::block_on(async {
             let md = &*bus.maindevice;
             bus.init().await.expect("init");
@@ -224,7 +224,7 @@ fn an_sdo_download_interrupted_at_any_frame_is_all_or_nothing() {
         for fate in [Fate::DropBefore, Fate::DropAfter, Fate::Corrupt] {
             let (chain, geometry) = small_mailbox_pam();
             let bus =
-                VirtualBus::with_faults(chain, Clock::real(), FaultConfig::default()).unwrap();
+                VirtualBus::with_faults(chain, Clock::frames(), FaultConfig::default()).unwrap();
             let f = bus.faults.clone().expect("faults");
             smol::block_on(async {
                 let md = &*bus.maindevice;
@@ -274,7 +274,7 @@ fn an_sdo_download_interrupted_at_any_frame_is_all_or_nothing() {
 /// version after the retry, frames of the first transfer).
 fn foe_run(img: &[u8], k: Option<(u64, Fate)>) -> (bool, String, Option<String>, u64) {
     let bus =
-        VirtualBus::with_faults(pam_line(1), Clock::real(), FaultConfig::default()).expect("bus");
+        VirtualBus::with_faults(pam_line(1), Clock::frames(), FaultConfig::default()).expect("bus");
     let f = bus.faults.clone().expect("faults");
     smol::block_on(async {
         let md = &*bus.maindevice;

@@ -21,6 +21,7 @@ mod long_line;
 mod mixed_line;
 mod power_cut;
 mod sdo;
+mod shared;
 mod sii;
 mod soem;
 mod spi_pdi;

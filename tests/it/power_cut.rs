@@ -179,7 +179,7 @@ fn boot(state: &Path) -> Result<(u16, bool, String), String> {
     let entries = device_catalog::parse_line("pam").map_err(|e| e.to_string())?;
     let (chain, _states) = persistent_chain(state, device_catalog::slaves(&entries))
         .map_err(|e| format!("the runner refuses the state: {e}"))?;
-    let bus = VirtualBus::with_chain(chain, Clock::real(), None).map_err(|e| e.to_string())?;
+    let bus = VirtualBus::with_chain(chain, Clock::frames(), None).map_err(|e| e.to_string())?;
     smol::block_on(async {
         let md = &*bus.maindevice;
         let group = bus.init().await.map_err(|e| e.to_string())?;

@@ -148,7 +148,7 @@ fn ethercrab_brings_a_line_whose_firmware_talks_spi_to_et1100_and_lan9252_chips_
 /// A 40 kB image through the mailbox in BOOT, through the driver: the new
 /// version runs after BOOT -> INIT and a power cycle.
 async fn foe_update_through(spec: &str) {
-    let bus = VirtualBus::line(spec, Clock::real()).expect("bus");
+    let bus = VirtualBus::line(spec, Clock::frames()).expect("bus");
     let md = &*bus.maindevice;
     let group = bus.init().await.expect("init");
     let station = group.subdevice(md, 0).expect("slave").configured_address();

@@ -22,17 +22,13 @@ fn testdata(p: &str) -> PathBuf {
         .join(p)
 }
 
-/// A real device's SII dump from `../shared/reference/sii-dumps`.
+/// A real device's SII dump from `tests/data/sii-dumps` (provenance in
+/// `tests/data/README.md`).
 fn dump(name: &str) -> Vec<u8> {
     let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/reference/sii-dumps")
+        .join("data/sii-dumps")
         .join(name);
-    std::fs::read(&p).unwrap_or_else(|e| {
-        panic!(
-            "{}: {e} (../shared must be beside the checkout)",
-            p.display()
-        )
-    })
+    std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 
 /// Output and input bytes a master gives the device of this SII: its

@@ -239,7 +239,7 @@ pub struct EsiDevice {
     pub eeprom_bytes: Option<u32>,
     /// `Eeprom/ConfigData`: SII words 0x00.. (PDI control, config, ...).
     pub config_data: Vec<u8>,
-    /// `Electrical/EBusCurrent`, mA (negative: the device feeds the E-Bus).
+    /// `Info/Electrical/EBusCurrent`, mA (negative: the device feeds the E-Bus).
     pub ebus_current_ma: i16,
     /// DC operation modes.
     pub dc_modes: Vec<EsiDcMode>,
@@ -671,7 +671,8 @@ fn parse_device(
         Some(e) => child_num(e, "ByteSize", "ByteSize")?,
         None => None,
     };
-    let ebus_current_ma = match d.child("Electrical") {
+    // ETG.2000: `Device/Info/Electrical/EBusCurrent`.
+    let ebus_current_ma = match d.child("Info").and_then(|i| i.child("Electrical")) {
         Some(el) => child_num(el, "EBusCurrent", "EBusCurrent")?.unwrap_or(0),
         None => 0,
     };

@@ -227,8 +227,8 @@ mod tests {
     use ecat_slave::sii::SiiReader;
 
     const DEV: &str = r##"<EtherCATInfo><Vendor><Id>#x2</Id><Name>V</Name></Vendor><Descriptions><Devices>
-<Device Physics="YKY"><Type ProductCode="#x044c2c52" RevisionNo="#x00120000">EK1100</Type><Name>Coupler</Name>
-<GroupType>SystemBk</GroupType><Electrical><EBusCurrent>-2000</EBusCurrent></Electrical>
+<Device Physics="YKY"><Type ProductCode="#x044c2c52" RevisionNo="#x00120000">EK1100</Type><Name>Coupler</Name><Info><Electrical><EBusCurrent>-2000</EBusCurrent></Electrical></Info>
+<GroupType>SystemBk</GroupType>
 <Eeprom><ByteSize>2048</ByteSize><ConfigData>000D0000000000000000</ConfigData></Eeprom></Device>
 </Devices></Descriptions></EtherCATInfo>"##;
 

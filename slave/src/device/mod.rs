@@ -12,9 +12,9 @@
 //!
 //! Contradictions do not compile: a description that `validate` refuses
 //! fails the `const` assertion. Value storage too small for the dictionary
-//! is a programming error that [`Slave::new`] stops in debug builds (the
-//! description may be made at run time, so this check cannot be a
-//! `const`; in release builds the missing entries read as 0):
+//! is a programming error that [`Slave::new`] stops with a panic in every
+//! build (the description may be made at run time, so this check cannot be
+//! a `const`):
 //!
 //! ```should_panic
 //! use ecat_slave::device::*;

@@ -319,10 +319,16 @@ impl<E: Esc, A: Application> Slave<E, A> {
     /// The firmware in its power-on state on `esc`, running `app`.
     ///
     /// The application's `Values` must hold at least its dictionary's
-    /// entry count ([`Application::Values`]; checked in debug builds).
+    /// entry count ([`Application::Values`]).
+    ///
+    /// # Panics
+    ///
+    /// When `Values` is too small: a programming error, stopped in every
+    /// build (for a static description the comparison is a constant and
+    /// costs nothing in the firmware).
     pub fn new(esc: E, mut app: A) -> Self {
         let desc = app.description();
-        debug_assert!(
+        assert!(
             <A::Values as ValueStorage>::LEN >= desc.dictionary.entry_count(),
             "Application::Values must hold the dictionary's entry count"
         );

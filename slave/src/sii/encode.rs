@@ -61,7 +61,7 @@ pub fn encode(cfg: &SiiConfig<'_>, out: &mut [u8]) -> Result<usize, SiiError> {
     // String 1 is what SOEM (ecx_config_init) shows as the slave's name,
     // while ethercrab follows the General category's name index. Vendors'
     // EEPROMs put the device type (order code) first, then group and name
-    // (see the Beckhoff dumps in shared/reference/sii-dumps): order code
+    // (see the Beckhoff dumps in tests/data/sii-dumps): order code
     // first, then the name, so string 1 is the device type, or the name
     // when there is no order code.
     for name in [g.order, g.name, g.group, g.image] {

@@ -814,19 +814,13 @@ pub(crate) mod tests {
     use std::string::String;
     use std::vec::Vec;
 
-    /// The reference dump folder: next to the workspace when run from
-    /// `slave/`, else the absolute shared path; `None` when absent.
-    pub(crate) fn dump_dir() -> Option<PathBuf> {
-        [
-            concat!(
-                env!("CARGO_MANIFEST_DIR"),
-                "/../../shared/reference/sii-dumps"
-            ),
-            "/work/shared/reference/sii-dumps",
-        ]
-        .into_iter()
-        .map(PathBuf::from)
-        .find(|p| p.is_dir())
+    /// The real devices' SII dumps committed with the repository
+    /// (`tests/data/sii-dumps`, provenance in `tests/data/README.md`).
+    pub(crate) fn dump_dir() -> PathBuf {
+        PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../tests/data/sii-dumps"
+        ))
     }
 
     /// All `*.bin` files of `dir`, sorted by name.
@@ -1185,10 +1179,7 @@ pub(crate) mod tests {
 
     #[test]
     fn real_dumps_decode_without_error() {
-        let Some(dir) = dump_dir() else {
-            std::println!("sii-dumps folder absent, skipping");
-            return;
-        };
+        let dir = dump_dir();
         let all = dumps(&dir);
         assert!(!all.is_empty());
         for (name, image) in &all {
@@ -1258,10 +1249,7 @@ pub(crate) mod tests {
 
     #[test]
     fn el2828_dump_decodes_to_known_values() {
-        let Some(dir) = dump_dir() else {
-            std::println!("sii-dumps folder absent, skipping");
-            return;
-        };
+        let dir = dump_dir();
         let image = std::fs::read(dir.join("el2828.bin")).unwrap();
         let r = SiiReader::new(&image).unwrap();
         assert_eq!(r.identity().vendor_id, 2);
@@ -1277,10 +1265,7 @@ pub(crate) mod tests {
 
     #[test]
     fn el2262_dump_has_dc_entries() {
-        let Some(dir) = dump_dir() else {
-            std::println!("sii-dumps folder absent, skipping");
-            return;
-        };
+        let dir = dump_dir();
         let image = std::fs::read(dir.join("el2262.bin")).unwrap();
         let r = SiiReader::new(&image).unwrap();
         let dc: Vec<DcEntry> = r.dc().unwrap().collect();

@@ -88,6 +88,7 @@ pub async fn conformance(w: &Where, args: &ConformanceArgs) -> Result<(), Failur
         only: args.only.clone(),
         esi,
         foe,
+        clock: s.bus.clock().clone(),
     };
     let report = conformance::run(s.md(), sel.station, &sel.label(), &opts).await;
     out_text(&report.to_text());

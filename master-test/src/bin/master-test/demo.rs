@@ -172,7 +172,8 @@ pub async fn run(w: &Where, a: &DemoArgs) -> Result<(), Failure> {
     outln!("  deadband compensation (TRIGGER 200), IA/IB = simulated solenoid currents");
     outln!("  (dither 5 % at 120 Hz rides on IA: 0x800D:03/04).");
     outln!("  t/ms  READY       W       C       U   IA/mA   IB/mA   (first PAM)");
-    let start = std::time::Instant::now();
+    let clock = bus.clock().clone();
+    let start = clock.elapsed();
     let mut next_print = 0u128;
     let mut done = 0u32;
     let mut result = Ok(());
@@ -195,7 +196,7 @@ pub async fn run(w: &Where, a: &DemoArgs) -> Result<(), Failure> {
             }
         };
         done += 1;
-        let t = start.elapsed().as_millis();
+        let t = (clock.elapsed() - start).as_millis();
         if t >= next_print || done == a.cycles {
             next_print = t + 20;
             if let Some((sd, _)) = group.iter(md).zip(&pams).find(|(_, p)| **p) {
@@ -207,7 +208,7 @@ pub async fn run(w: &Where, a: &DemoArgs) -> Result<(), Failure> {
                 );
             }
         }
-        smol::Timer::after(Duration::from_millis(1)).await;
+        clock.sleep(Duration::from_millis(1)).await;
     }
     let last: Vec<Last> = group
         .iter(md)

@@ -8,7 +8,7 @@ use ethercrab::{Command, MainDevice};
 use master_test::eeprom;
 use master_test::mailbox::MailboxClient;
 use serde::Serialize;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// An AL state a command can request.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -449,7 +449,8 @@ pub async fn watch(w: &Where, a: &WatchArgs) -> Result<(), Failure> {
                 .join(", ")
         }
     ));
-    let start = Instant::now();
+    let clock = bus.clock().clone();
+    let start = clock.elapsed();
     let mut next = Duration::ZERO;
     let mut cycles = 0u32;
     let mut result = Ok(());
@@ -459,14 +460,14 @@ pub async fn watch(w: &Where, a: &WatchArgs) -> Result<(), Failure> {
             break;
         }
         cycles += 1;
-        let t = start.elapsed();
+        let t = clock.elapsed() - start;
         if t >= next {
             next = t + Duration::from_millis(u64::from(a.interval));
             let sd = group.subdevice(md, sel.position)?;
             let image = sd.inputs_raw();
             print_inputs(t, &image, &mapping, a.json);
         }
-        smol::Timer::after(Duration::from_millis(1)).await;
+        clock.sleep(Duration::from_millis(1)).await;
     }
     let group = group.into_safe_op(md).await?;
     let _ = group.into_pre_op(md).await?;
