@@ -1,8 +1,13 @@
 //! Integration tests live in `it/`; this crate has no library code.
 //!
-//! Under `cfg(doctest)` it holds the Rust blocks of the book's chapters
-//! (`docs/book/src`) as doctests, so `cargo test --workspace` compiles and
-//! runs every one of them against today's API.
+//! Under `cfg(doctest)` it holds the Rust blocks of the README and of the
+//! book's chapters (`docs/book/src`) as doctests, so `cargo test
+//! --workspace` compiles and runs every one of them against today's API.
+
+/// The README's Rust blocks (the device for embedded teams).
+#[cfg(doctest)]
+#[doc = include_str!("../../README.md")]
+pub struct Readme;
 
 /// Book: "Write your own device" (a description and an application).
 #[cfg(doctest)]
