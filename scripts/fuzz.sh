@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# cargo-fuzz (libFuzzer) runs of the targets in fuzz/ (see fuzz/README or
-# the "Fuzzing" section of the README for what each target checks).
+# cargo-fuzz (libFuzzer) runs of the targets in fuzz/ (see "Fuzzing" in
+# docs/book/src/reliability.md for what each target checks).
 #
 #   bash scripts/fuzz.sh smoke          # every target a few seconds; CI
 #   bash scripts/fuzz.sh long           # every target to 10^7 runs (or a time cap)

@@ -16,7 +16,7 @@
 //! | `foe` | (opt-in) BOOT, file download, wrong password refused |
 //!
 //! Not a replacement for the ETG Conformance Test Tool: it checks what the
-//! sections cited say, as this project reads them (see the README).
+//! sections cited say, as this project reads them (see docs/book/src/conformance.md).
 
 use crate::eeprom;
 use crate::foe;

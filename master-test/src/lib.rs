@@ -9,7 +9,7 @@
 //! SII [`eeprom`] interface, and the live dictionary ([`od`]).
 //!
 //! The `master-test` binary is the commissioning tool built from these
-//! (see its `--help` and the README); the integration tests use the same
+//! (see its `--help` and docs/book/src/commissioning.md); the integration tests use the same
 //! pieces.
 
 pub mod bus;

@@ -1,7 +1,7 @@
 //! Why a command failed, and the exit status that says so.
 //!
 //! One scheme for every tool of the workspace (`master-test`, `esi`,
-//! `pam-slave`), documented in their `--help` and the README:
+//! `pam-slave`), documented in their `--help` and docs/book/src/commissioning.md:
 //!
 //! | status | meaning |
 //! |---|---|

@@ -100,7 +100,7 @@ enum Cmd {
     /// List the slaves: position, station, alias, identity, name, AL
     /// state and status code, mailbox protocols, process data sizes.
     Scan {
-        /// JSON (schema in the README) instead of a table.
+        /// JSON (schema in docs/book/src/commissioning.md) instead of a table.
         #[arg(long)]
         json: bool,
     },

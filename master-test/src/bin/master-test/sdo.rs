@@ -64,7 +64,7 @@ pub enum OdCmd {
     /// name, type, access, unit and the current value.
     Dump {
         /// A JSON array of objects with their entries, including default,
-        /// minimum and maximum (schema in the README).
+        /// minimum and maximum (schema in docs/book/src/commissioning.md).
         #[arg(long)]
         json: bool,
     },
@@ -287,7 +287,7 @@ fn check_range(e: &EntryInfo, bytes: &[u8]) -> Result<(), Failure> {
     Ok(())
 }
 
-/// One entry of `od dump --json` (the schema the README documents).
+/// One entry of `od dump --json` (the schema docs/book/src/commissioning.md documents).
 #[derive(Serialize)]
 struct JsonEntry {
     sub: u8,
