@@ -27,11 +27,21 @@ impl Bus {
     /// The virtual line `spec` (`pam`, `pam,io8,pam`, ...) with an optional
     /// capture.
     pub fn virtual_line(spec: &str, pcap: Option<&std::path::Path>) -> Result<Self, BusError> {
+        Self::virtual_line_of(spec, pcap, MAX_SUBDEVICES)
+    }
+
+    /// [`Bus::virtual_line`] of at most `max` slaves (a long line for a
+    /// [`crate::LongGroup`] has up to [`crate::LONG_LINE`]).
+    pub fn virtual_line_of(
+        spec: &str,
+        pcap: Option<&std::path::Path>,
+        max: usize,
+    ) -> Result<Self, BusError> {
         let n = device_catalog::parse_line(spec)
             .map_err(BusError::Line)?
             .len();
-        if n > MAX_SUBDEVICES {
-            return Err(BusError::LineTooLong(n));
+        if n > max {
+            return Err(BusError::LineTooLong(n, max));
         }
         Ok(Bus::Virtual(VirtualBus::line_with(
             spec,
@@ -52,7 +62,7 @@ impl Bus {
         let line = device_catalog::twins::from_eni(eni, esi_dir, rules)
             .map_err(|e| BusError::Twins(e.to_string()))?;
         if line.slaves.len() > MAX_SUBDEVICES {
-            return Err(BusError::LineTooLong(line.slaves.len()));
+            return Err(BusError::LineTooLong(line.slaves.len(), MAX_SUBDEVICES));
         }
         Ok(Bus::Virtual(VirtualBus::with_chain(
             ecat_slave::host::chain::Chain::with_slaves(line.slaves),
@@ -118,10 +128,38 @@ impl Bus {
 
     /// Discovers the slaves and brings them to PRE-OP.
     pub async fn init(&self) -> Result<Group<ethercrab::subdevice_group::PreOp>, BusError> {
+        self.init_group::<MAX_SUBDEVICES, PDI_LEN>().await
+    }
+
+    /// [`Bus::init`] into a group of up to `N` slaves and `P` bytes of
+    /// process data (a [`crate::LongGroup`] is large: keep it off small
+    /// thread stacks).
+    pub async fn init_group<const N: usize, const P: usize>(
+        &self,
+    ) -> Result<
+        ethercrab::SubDeviceGroup<N, P, ethercrab::DefaultLock, ethercrab::subdevice_group::PreOp>,
+        BusError,
+    > {
         Ok(self
             .maindevice()
-            .init_single_group::<MAX_SUBDEVICES, PDI_LEN>(ethercrab::std::ethercat_now)
+            .init_single_group::<N, P>(ethercrab::std::ethercat_now)
             .await?)
+    }
+
+    /// How far the master has brought the slaves (virtual bus only).
+    pub fn progress(&self) -> Option<crate::LineProgress> {
+        match self {
+            Bus::Virtual(v) => Some(crate::LineProgress::of(&lock(&v.chain))),
+            Bus::Raw { .. } => None,
+        }
+    }
+
+    /// The slaves of the virtual bus, shared with its link thread.
+    pub fn shared_chain(&self) -> Option<crate::link::SharedChain> {
+        match self {
+            Bus::Virtual(v) => Some(v.chain.clone()),
+            Bus::Raw { .. } => None,
+        }
     }
 
     /// A power cycle of slave `i` (virtual bus only): the version that then

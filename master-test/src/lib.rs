@@ -67,12 +67,14 @@ pub enum BusError {
     /// The line named an unknown device.
     #[error("{0}")]
     Line(device_catalog::CatalogError),
-    /// A line longer than the tools' group ([`MAX_SUBDEVICES`]).
+    /// A line longer than the group of the command (`.1`: its most
+    /// slaves; [`MAX_SUBDEVICES`] for the commissioning commands,
+    /// [`LONG_LINE`] for the demo).
     #[error(
-        "a line of {0} slaves: the commissioning tool drives at most {MAX_SUBDEVICES}; longer \
-         lines run in tests through VirtualBus::init_long (up to {LONG_LINE}) or on pam-slave"
+        "a line of {0} slaves: this command drives at most {1} (the demo up to {LONG_LINE}; \
+         longer lines run on pam-slave)"
     )]
-    LineTooLong(usize),
+    LineTooLong(usize, usize),
     /// The ENI or an ESI file of a twin line is wrong (file, element and
     /// line in the text).
     #[error("{0}")]
@@ -281,14 +283,73 @@ impl VirtualBus {
     }
 }
 
+/// How far a master has brought a line of software slaves, read from
+/// their registers: SII read (EEPROM address 0x0504 moved), AL state
+/// (0x0130) at least PRE-OP, at least SAFE-OP, OP.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LineProgress {
+    /// Slaves on the line.
+    pub slaves: usize,
+    /// Slaves whose SII the master has read.
+    pub sii_read: usize,
+    /// Slaves in PRE-OP, SAFE-OP or OP.
+    pub pre_op: usize,
+    /// Slaves in SAFE-OP or OP.
+    pub safe_op: usize,
+    /// Slaves in OP.
+    pub op: usize,
+}
+
+impl LineProgress {
+    /// The progress of `chain` now.
+    pub fn of(chain: &Chain) -> Self {
+        let mut p = LineProgress {
+            slaves: chain.slaves().len(),
+            ..LineProgress::default()
+        };
+        for s in chain.slaves() {
+            let mem = s.esc().raw_memory();
+            let word = |a: usize| {
+                mem.get(a..a + 2)
+                    .map_or(0, |b| u16::from_le_bytes([b[0], b[1]]))
+            };
+            p.sii_read += usize::from(word(0x0504) != 0);
+            let state = word(0x0130) & 0x0F;
+            p.pre_op += usize::from(matches!(state, 2 | 4 | 8));
+            p.safe_op += usize::from(matches!(state, 4 | 8));
+            p.op += usize::from(state == 8);
+        }
+        p
+    }
+
+    /// Steps done of [`LineProgress::total`]: each slave's SII, PRE-OP,
+    /// SAFE-OP and OP.
+    pub fn done(&self) -> usize {
+        self.sii_read + self.pre_op + self.safe_op + self.op
+    }
+
+    /// All steps of a bring-up to OP.
+    pub fn total(&self) -> usize {
+        self.slaves * 4
+    }
+}
+
 /// Brings a PRE-OP group to OP the way a real master does for devices
 /// with a SyncManager watchdog: request OP and keep exchanging process
 /// data (fresh outputs every `cycle`) until every slave reports OP.
-pub async fn into_op_cyclic(
-    group: Group<ethercrab::subdevice_group::PreOp>,
+pub async fn into_op_cyclic<const N: usize, const P: usize>(
+    group: ethercrab::SubDeviceGroup<
+        N,
+        P,
+        ethercrab::DefaultLock,
+        ethercrab::subdevice_group::PreOp,
+    >,
     md: &MainDevice<'_>,
     cycle: Duration,
-) -> Result<Group<ethercrab::subdevice_group::Op>, BusError> {
+) -> Result<
+    ethercrab::SubDeviceGroup<N, P, ethercrab::DefaultLock, ethercrab::subdevice_group::Op>,
+    BusError,
+> {
     let group = group.into_safe_op(md).await?.request_into_op(md).await?;
     let deadline = std::time::Instant::now() + Duration::from_secs(10);
     loop {

@@ -177,9 +177,10 @@ fn cli_limits_are_refused_before_anything_runs() {
         (&["demo", "--current", "-1"][..], "500..=3000"),
         (&["demo", "--command", "20000"][..], "-10000..=10000"),
         (&["demo", "--cycles", "4000000000"][..], "3600000"),
-        (&["demo", "--slaves", "0"][..], "1..=64"),
-        (&["demo", "--slaves", "65"][..], "1..=64"),
-        (&["demo", "--line", "io8*65"][..], "at most 64"),
+        (&["demo", "--slaves", "0"][..], "1..=1024"),
+        (&["demo", "--slaves", "1025"][..], "1..=1024"),
+        (&["demo", "--line", "io8*1025"][..], "at most 1024"),
+        (&["--line", "io8*65", "scan"][..], "at most 64"),
         (&["--line", "pam*4097", "scan"][..], "1 to 4096"),
     ] {
         let (o, e) = expect(&mt, args, 2);
@@ -197,6 +198,34 @@ fn cli_limits_are_refused_before_anything_runs() {
         !o.contains("slave") && !e.contains("Ctrl-C stops"),
         "{o}{e}"
     );
+}
+
+/// The demo runs lines up to the long group's 1024 slaves (the runner's
+/// 4096 are beyond ethercrab's group here): every slave reaches OP, the
+/// working counter counts them all, and the last slave is shown.
+#[test]
+fn the_demo_brings_1024_slaves_to_op_and_shows_the_last() {
+    let mt = master_test();
+    let (o, e) = expect(&mt, &["demo", "--slaves", "1024", "--cycles", "1"], 0);
+    assert!(o.contains("(1024 slave(s): pam*1024)"), "{o}{e}");
+    assert!(o.contains("found 0x13ff PAM-199-P-ETC"), "{o}");
+    assert!(o.contains("state: OP"), "{o}");
+    // 1024 PAMs, each read (+1) and written (+2) by the LRWs (ethercrab
+    // sums the frames' counters: a slave whose image spans two frames
+    // counts in both).
+    let wkc: u32 = o
+        .split("wkc ")
+        .nth(1)
+        .and_then(|t| t.split_whitespace().next())
+        .and_then(|t| t.parse().ok())
+        .expect("a working counter");
+    assert!(wkc >= 3072, "wkc {wkc}");
+    assert!(
+        o.lines()
+            .any(|l| l.starts_with("slave 1023 PAM-199-P-ETC: ENABLE = 1")),
+        "{o}"
+    );
+    assert!(o.contains("... the same on 1020 more PAM(s)"), "{o}");
 }
 
 #[test]

@@ -2,7 +2,11 @@
 
 use crate::failure::{Failure, input};
 use crate::output::{long_command, outln, stop_requested};
-use crate::target::{Session, Where};
+use crate::target::{Where, connect, initialised};
+use master_test::bus::Bus;
+use master_test::{LONG_LINE, LONG_PDI_LEN, LineProgress, MAX_SUBDEVICES, PDI_LEN};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 /// Range and unit of a PAM dictionary entry, for `--help` and clap.
@@ -57,8 +61,10 @@ pub const MAX_CYCLES: u32 = 3_600_000;
 /// Options of `demo`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct DemoArgs {
-    /// Number of PAM slaves on the virtual line, 1..=64 (or use --line).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=64))]
+    /// Number of PAM slaves on the virtual line, 1..=1024 (or use
+    /// --line); a progress bar shows the bring-up of long lines.
+    #[arg(long, default_value_t = 1,
+          value_parser = clap::value_parser!(u16).range(1..=LONG_LINE as i64))]
     pub slaves: u16,
     #[arg(long, default_value_t = 1500, help = current_help(), value_parser = current_parser(),
           allow_negative_numbers = true)]
@@ -95,26 +101,126 @@ struct Last {
     outputs: Vec<u8>,
 }
 
-/// Runs the demo.
+/// Lines longer than this list only their first and last slaves.
+const LIST_ALL_UP_TO: usize = 16;
+
+/// The positions of `n` slaves the demo prints: all of a short line, the
+/// first two and the last two of a long one (`None` stands for the rest).
+fn shown(n: usize) -> Vec<Option<usize>> {
+    if n <= LIST_ALL_UP_TO {
+        (0..n).map(Some).collect()
+    } else {
+        vec![Some(0), Some(1), None, Some(n - 2), Some(n - 1)]
+    }
+}
+
+/// A progress bar of the bring-up of a virtual line (on a terminal; it
+/// draws nothing into a pipe), fed from the slaves' registers.
+struct BringUp {
+    stop: Arc<AtomicBool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl BringUp {
+    /// Starts watching `bus` (nothing on a network interface).
+    fn watch(bus: &Bus) -> Self {
+        let stop = Arc::new(AtomicBool::new(false));
+        let thread = bus.shared_chain().map(|chain| {
+            let stop = stop.clone();
+            std::thread::spawn(move || {
+                let total = LineProgress::of(&master_test::link::lock(&chain)).total();
+                let bar = indicatif::ProgressBar::new(total as u64);
+                bar.set_style(
+                    indicatif::ProgressStyle::with_template("{bar:40} {msg} {elapsed}")
+                        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+                );
+                while !stop.load(Ordering::Acquire) {
+                    let p = LineProgress::of(&master_test::link::lock(&chain));
+                    bar.set_position(p.done() as u64);
+                    bar.set_message(format!(
+                        "{} slaves: SII read {}, PRE-OP {}, SAFE-OP {}, OP {}",
+                        p.slaves, p.sii_read, p.pre_op, p.safe_op, p.op
+                    ));
+                    std::thread::sleep(Duration::from_millis(100));
+                }
+                bar.finish_and_clear();
+            })
+        });
+        BringUp { stop, thread }
+    }
+}
+
+impl Drop for BringUp {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Release);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// Slaves on the virtual line `w` names (0 on an interface or for an
+/// unknown device, which the bus then reports).
+fn line_length(w: &Where) -> usize {
+    if w.iface.is_some() || w.eni.is_some() {
+        return 0;
+    }
+    device_catalog::parse_line(&w.line).map_or(0, |l| l.len())
+}
+
+/// Runs the demo: a line of up to [`MAX_SUBDEVICES`] in the tools' group,
+/// longer ones (up to [`LONG_LINE`]) in a long group.
 pub async fn run(w: &Where, a: &DemoArgs) -> Result<(), Failure> {
     if w.iface.is_some() && a.pcap.is_some() {
         return Err(input(
             "--pcap captures the virtual bus; on an interface use tshark or tcpdump",
         ));
     }
-    let Session { bus, group } = Session::open(w).await?;
+    if line_length(w) > MAX_SUBDEVICES {
+        let bus = connect(w, LONG_LINE)?;
+        let bring_up = BringUp::watch(&bus);
+        let group = bus.init_group::<LONG_LINE, LONG_PDI_LEN>().await;
+        drop(bring_up);
+        let group = initialised(&bus, group)?;
+        drive(w, a, bus, group).await
+    } else {
+        let bus = connect(w, MAX_SUBDEVICES)?;
+        let bring_up = BringUp::watch(&bus);
+        let group = bus.init_group::<MAX_SUBDEVICES, PDI_LEN>().await;
+        drop(bring_up);
+        let group = initialised(&bus, group)?;
+        drive(w, a, bus, group).await
+    }
+}
+
+/// The demo on an initialised group of up to `N` slaves.
+async fn drive<const N: usize, const P: usize>(
+    w: &Where,
+    a: &DemoArgs,
+    bus: Bus,
+    group: ethercrab::SubDeviceGroup<
+        N,
+        P,
+        ethercrab::DefaultLock,
+        ethercrab::subdevice_group::PreOp,
+    >,
+) -> Result<(), Failure> {
     let md = bus.maindevice();
     let line = if w.iface.is_none() {
         format!(": {}", w.line)
     } else {
         String::new()
     };
+    let n = group.len();
     outln!(
-        "== PAM-199-P-ETC demo on {} ({} slave(s){line}) ==",
+        "== PAM-199-P-ETC demo on {} ({n} slave(s){line}) ==",
         bus.describe(),
-        group.len(),
     );
-    for sd in group.iter(md) {
+    for i in shown(n) {
+        let Some(sd) = i.and_then(|i| group.subdevice(md, i).ok()) else {
+            outln!("... ({} more)", n.saturating_sub(4));
+            continue;
+        };
         let id = sd.identity();
         outln!(
             "found {:#06x} {:<14} vendor {:#010x} product {:#010x} rev {}",
@@ -136,18 +242,41 @@ pub async fn run(w: &Where, a: &DemoArgs) -> Result<(), Failure> {
     if !pams.contains(&true) {
         outln!("no PAM-199-P-ETC on the segment: the other devices get a walking bit");
     }
-    for (sd, _) in group.iter(md).zip(&pams).filter(|(_, pam)| **pam) {
+    let listed = shown(n);
+    let mut quiet = 0;
+    for (i, (sd, _)) in group
+        .iter(md)
+        .zip(&pams)
+        .enumerate()
+        .filter(|(_, (_, pam))| **pam)
+    {
         sd.sdo_write(0x800D, 2, a.current).await?;
         let back: u16 = sd.sdo_read(0x800D, 2).await?;
+        // Show the device's own range check: one value above the range.
+        let (_, max, _) = pam_range(0x800D, 2);
+        let above = u16::try_from(max + 1).unwrap_or(u16::MAX);
+        let refused = sd.sdo_write(0x800D, 2, above).await;
+        if !listed.contains(&Some(i)) {
+            quiet += 1;
+            if refused.is_ok() || back != a.current {
+                outln!(
+                    "{:#06x}: CURRENT read back {back} mA, {above} mA {}",
+                    sd.configured_address(),
+                    if refused.is_ok() {
+                        "accepted (unexpected)"
+                    } else {
+                        "refused"
+                    }
+                );
+            }
+            continue;
+        }
         outln!(
             "{:#06x}: SDO write 0x800D:02 CURRENT = {} mA, read back {back} mA",
             sd.configured_address(),
             a.current
         );
-        // Show the device's own range check: one value above the range.
-        let (_, max, _) = pam_range(0x800D, 2);
-        let above = u16::try_from(max + 1).unwrap_or(u16::MAX);
-        match sd.sdo_write(0x800D, 2, above).await {
+        match refused {
             Err(e) => outln!(
                 "{:#06x}: CURRENT = {above} mA refused by the slave: {e}",
                 sd.configured_address()
@@ -158,8 +287,18 @@ pub async fn run(w: &Where, a: &DemoArgs) -> Result<(), Failure> {
             ),
         }
     }
+    if quiet > 0 {
+        outln!(
+            "... the same on {quiet} more PAM(s): CURRENT = {} mA written and read back, \
+             {} mA refused",
+            a.current,
+            pam_range(0x800D, 2).1 + 1
+        );
+    }
     long_command();
+    let bring_up = BringUp::watch(&bus);
     let group = master_test::into_op_cyclic(group, md, Duration::from_millis(1)).await?;
+    drop(bring_up);
     outln!("state: OP{}", leds_of(&bus));
     let base = io_base() as f64;
     outln!(
@@ -222,7 +361,14 @@ pub async fn run(w: &Where, a: &DemoArgs) -> Result<(), Failure> {
     let group = group.into_safe_op(md).await?;
     let group = group.into_pre_op(md).await?;
     let _ = group.into_init(md).await?;
-    for (i, ((l, pam), name)) in last.iter().zip(&pams).zip(&names).enumerate() {
+    for i in shown(last.len()) {
+        let Some(((l, pam), name)) =
+            i.and_then(|i| Some((last.get(i)?, pams.get(i)?)).zip(names.get(i)))
+        else {
+            outln!("... ({} more)", last.len().saturating_sub(4));
+            continue;
+        };
+        let i = i.unwrap_or_default();
         if *pam {
             outln!("slave {i} {name}: {}", pam_summary(l));
         } else {

@@ -106,7 +106,7 @@ impl From<ethercrab::error::Error> for Failure {
 impl From<BusError> for Failure {
     fn from(e: BusError) -> Self {
         match e {
-            BusError::Line(_) | BusError::LineTooLong(_) | BusError::Twins(_) => {
+            BusError::Line(_) | BusError::LineTooLong(..) | BusError::Twins(_) => {
                 Failure::Input(e.to_string())
             }
             BusError::Ethercrab(e) => e.into(),

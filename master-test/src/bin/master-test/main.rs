@@ -235,7 +235,15 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 return Err(input("--slaves cannot be combined with --line or --device"));
             }
             w.pcap.clone_from(&args.pcap);
-            smol::block_on(demo::run(&w, &args))
+            // A long line's group is large (see master_test::LongGroup):
+            // the demo runs on a thread with a big stack.
+            std::thread::Builder::new()
+                .name("demo".into())
+                .stack_size(64 << 20)
+                .spawn(move || smol::block_on(demo::run(&w, &args)))
+                .map_err(|e| Failure::Comm(format!("cannot start the demo thread: {e}")))?
+                .join()
+                .unwrap_or_else(|_| Err(Failure::Comm("the demo thread panicked".into())))
         }
         Cmd::Scan { json } => smol::block_on(scan::scan(&w, json)),
         Cmd::State { target } => smol::block_on(scan::state(&w, target)),

@@ -23,6 +23,55 @@ pub struct Where {
     pub eni: Option<(std::path::PathBuf, Option<std::path::PathBuf>)>,
 }
 
+/// The bus `w` names, not yet initialised; a virtual line of more than
+/// `max` slaves is refused.
+pub fn connect(w: &Where, max: usize) -> Result<Bus, Failure> {
+    Ok(match &w.iface {
+        Some(iface) => Bus::raw(iface).map_err(|e| Failure::Comm(e.to_string()))?,
+        None if w.eni.is_some() => {
+            let (eni, dir) = w.eni.as_ref().map(|(e, d)| (e, d.as_deref())).unzip();
+            let eni = eni.ok_or_else(|| input("no ENI"))?;
+            Bus::virtual_eni(
+                eni,
+                dir.flatten(),
+                &ecat_twin::InputRules::default(),
+                w.pcap.as_deref(),
+            )?
+        }
+        None => Bus::virtual_line_of(&w.line, w.pcap.as_deref(), max).map_err(|e| {
+            match (&w.pcap, e) {
+                (Some(p), BusError::Thread(e)) => {
+                    input(format!("cannot write the capture {}: {e}", p.display()))
+                }
+                (_, e) => e.into(),
+            }
+        })?,
+    })
+}
+
+/// The group `init` gave on `bus`, or the failure naming the bus (no
+/// slave at all is a failure too).
+pub fn initialised<const N: usize, const P: usize>(
+    bus: &Bus,
+    group: Result<
+        ethercrab::SubDeviceGroup<N, P, ethercrab::DefaultLock, ethercrab::subdevice_group::PreOp>,
+        BusError,
+    >,
+) -> Result<
+    ethercrab::SubDeviceGroup<N, P, ethercrab::DefaultLock, ethercrab::subdevice_group::PreOp>,
+    Failure,
+> {
+    let group =
+        group.map_err(|e| Failure::from(e).context(format!("no slaves on {}", bus.describe())))?;
+    if group.is_empty() {
+        return Err(Failure::Comm(format!(
+            "no slave answered on {}",
+            bus.describe()
+        )));
+    }
+    Ok(group)
+}
+
 /// An open segment with every slave in PRE-OP (ethercrab's
 /// `init_single_group`: addresses, SII, mailboxes, process data image).
 pub struct Session {
@@ -92,37 +141,9 @@ pub fn device_by_identity(
 impl Session {
     /// Opens the bus of `w` and brings every slave to PRE-OP.
     pub async fn open(w: &Where) -> Result<Self, Failure> {
-        let bus = match &w.iface {
-            Some(iface) => Bus::raw(iface).map_err(|e| Failure::Comm(e.to_string()))?,
-            None if w.eni.is_some() => {
-                let (eni, dir) = w.eni.as_ref().map(|(e, d)| (e, d.as_deref())).unzip();
-                let eni = eni.ok_or_else(|| input("no ENI"))?;
-                Bus::virtual_eni(
-                    eni,
-                    dir.flatten(),
-                    &ecat_twin::InputRules::default(),
-                    w.pcap.as_deref(),
-                )?
-            }
-            None => {
-                Bus::virtual_line(&w.line, w.pcap.as_deref()).map_err(|e| match (&w.pcap, e) {
-                    (Some(p), BusError::Thread(e)) => {
-                        input(format!("cannot write the capture {}: {e}", p.display()))
-                    }
-                    (_, e) => e.into(),
-                })?
-            }
-        };
-        let group = bus
-            .init()
-            .await
-            .map_err(|e| Failure::from(e).context(format!("no slaves on {}", bus.describe())))?;
-        if group.is_empty() {
-            return Err(Failure::Comm(format!(
-                "no slave answered on {}",
-                bus.describe()
-            )));
-        }
+        let bus = connect(w, master_test::MAX_SUBDEVICES)?;
+        let group = bus.init().await;
+        let group = initialised(&bus, group)?;
         Ok(Session { bus, group })
     }
 
