@@ -107,6 +107,19 @@ pub fn byte_len(entry: &Entry) -> usize {
     usize::from(entry.bit_len).div_ceil(8)
 }
 
+/// The value of `raw` (the entry's bits, zero-extended to 64) in the
+/// entry's signedness: signed types are sign-extended from their bit size,
+/// as the store holds them.
+pub fn from_raw(entry: &Entry, raw: u64) -> i64 {
+    let bits = u32::from(entry.bit_len).min(64);
+    if entry.data_type.is_signed() && bits > 0 && bits < 64 {
+        let shift = 64 - bits;
+        ((raw << shift) as i64) >> shift
+    } else {
+        raw as i64
+    }
+}
+
 impl Od {
     /// The dictionary this store holds the values of.
     pub fn dictionary(&self) -> &'static Dictionary {
@@ -265,12 +278,7 @@ impl Od {
         }
         let unsigned = u64::from_le_bytes(raw);
         let bits = u32::from(entry.bit_len).min(64);
-        let value = if entry.data_type.is_signed() && bits < 64 {
-            let shift = 64 - bits;
-            ((unsigned << shift) as i64) >> shift
-        } else {
-            unsigned as i64
-        };
+        let value = from_raw(entry, unsigned);
         // Enumerations and booleans accept their members only (0x06090030),
         // whatever the bit pattern; other unsigned types must have no bits
         // set above their bit size.
