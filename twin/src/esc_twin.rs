@@ -326,6 +326,8 @@ impl LineSlave for EscTwin {
         self.esc.set_port1_link(link);
     }
     fn set_firmware_version(&mut self, _version: &str) {}
+    /// An ESC-only device runs no firmware: nothing to start or refuse.
+    fn set_no_valid_firmware(&mut self, _none: bool) {}
     fn firmware_version(&self) -> String {
         String::new()
     }
