@@ -925,17 +925,22 @@ mod tests {
         );
         // Slots without the file's Modules, and without any Slot.
         let mut m = d.clone();
+        // (Full literals: `Element` has a Drop impl, so no `..Default`.)
         m.source.children.push(crate::xml::Element {
             name: "Slots".into(),
             attrs: vec![
                 ("SlotIndexIncrement".into(), "#x10".into()),
                 ("SlotPdoIncrement".into(), "1".into()),
             ],
+            text: String::new(),
             children: vec![crate::xml::Element {
                 name: "Slot".into(),
-                ..Default::default()
+                attrs: Vec::new(),
+                text: String::new(),
+                children: Vec::new(),
+                line: 0,
             }],
-            ..Default::default()
+            line: 0,
         });
         let e = describe(&m).unwrap_err().to_string();
         assert!(

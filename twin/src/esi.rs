@@ -789,7 +789,7 @@ impl EsiFile {
     pub fn parse(text: &str) -> Result<Self, EsiError> {
         let root = xml::parse(text)?;
         if root.name != "EtherCATInfo" {
-            return Err(EsiError::NotEsi(root.name));
+            return Err(EsiError::NotEsi(root.name.clone()));
         }
         let vendor = required(root.child("Vendor"), &root, "<Vendor>")?;
         let vendor_id: u32 = required(child_num(vendor, "Id", "vendor Id")?, vendor, "<Id>")?;

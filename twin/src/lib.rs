@@ -158,3 +158,34 @@ pub fn twin_with_modules(
     esc.power_on();
     Ok(Box::new(slave))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An ESI (or ENI) root with `depth` levels of `<a>` below it, one per
+    /// line (250 000 levels: about 2 MB).
+    fn deep(root: &str, depth: usize) -> String {
+        format!(
+            "<{root}>\n{}{}</{root}>",
+            "<a>\n".repeat(depth),
+            "</a>".repeat(depth)
+        )
+    }
+
+    #[test]
+    fn the_loaders_refuse_a_250000_deep_file_naming_file_and_line() {
+        let path = std::env::temp_dir().join(format!("twin-deep-{}.xml", std::process::id()));
+        std::fs::write(&path, deep("EtherCATInfo", 250_000)).unwrap();
+        let e = load_esi(&path).unwrap_err().to_string();
+        let _ = std::fs::remove_file(&path);
+        assert!(e.starts_with(&path.display().to_string()), "{e}");
+        assert!(
+            e.contains("XML error at line 257 ")
+                && e.contains("XML nested deeper than 256 elements"),
+            "{e}"
+        );
+        let e = eni::parse(&deep("EtherCATConfig", 250_000)).unwrap_err();
+        assert!(matches!(&e, eni::EniError::Xml(x) if x.line == 257), "{e}");
+    }
+}
