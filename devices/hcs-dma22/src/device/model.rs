@@ -533,7 +533,7 @@ impl Module {
             p(ids.comparator2),
             p(ids.comparator2 + 1),
         );
-        let limit = p(ids.i_limit).abs() * 1000;
+        let limit = p(ids.i_limit).saturating_abs().saturating_mul(1000);
         // Ramps r.01 0 -> -, r.02 - -> 0, r.03 0 -> +, r.04 + -> 0:
         // 1 == 10 ms for 10 V, i.e. (1 / r) µV per ns.
         let target = sum * 1000;
@@ -549,14 +549,16 @@ impl Module {
         } else {
             ramps[1]
         };
+        // A gap of any length (u64 ns) moves at most to the target.
+        let dt_ns = i64::try_from(dt).unwrap_or(i64::MAX);
         st.ramped_uv = if ramp <= 0 || !enabled {
             target
         } else {
-            let step = (dt as i64 / ramp).max(1);
+            let step = (dt_ns / ramp).max(1);
             if target > cur {
-                (cur + step).min(target)
+                cur.saturating_add(step).min(target)
             } else {
-                (cur - step).max(target)
+                cur.saturating_sub(step).max(target)
             }
         };
         let d02 = clamp_mv(st.ramped_uv / 1000);
@@ -584,9 +586,13 @@ impl Module {
         let e = clamp_mv(w - x);
         let kp = if e.abs() < threshold { kp1 } else { kp2 };
         if enabled {
-            // I part C.17: 1000 == 1.000 1/s.
-            st.integral_uv =
-                (st.integral_uv + e * ki * dt as i64 / 1_000_000_000).clamp(-limit, limit);
+            // I part C.17: 1000 == 1.000 1/s, limited to C.33 (anti-windup).
+            // In i128: e * ki * dt overflows i64 after minutes without a
+            // tick; any gap saturates at the limit.
+            let delta = i128::from(e) * i128::from(ki) * i128::from(dt) / 1_000_000_000;
+            let sum =
+                (i128::from(st.integral_uv) + delta).clamp(-i128::from(limit), i128::from(limit));
+            st.integral_uv = i64::try_from(sum).unwrap_or(0);
         } else {
             st.integral_uv = 0;
         }

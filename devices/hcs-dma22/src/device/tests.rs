@@ -178,7 +178,46 @@ fn without_hw_enable_the_control_byte_is_reset_and_nothing_drives() {
     assert_eq!(model::get(od, 0, id::D1_07), 0);
 }
 
-/// Serves one telegram through the channel of a fresh node with `N`
+#[test]
+fn a_gap_of_hours_saturates_the_ramp_and_the_integral_instead_of_overflowing() {
+    // Closed loop (mode 3, PI controller C1.00 = 1) at the I part's limits.
+    let setup = |od: &mut Od, ramp: i64| {
+        model::set(od, 0, id::C1_00 + 17, 4000); // C1.17 I portion, maximum
+        model::set(od, 0, id::C1_33, 9999); // C1.33 limit 9.999 V
+        for k in 0..4 {
+            model::set(od, 0, id::R1_01 + k, ramp);
+        }
+        outputs(od, 0, 0, 5000, 0);
+    };
+    // A ramp of 1 (10 ms for 10 V) over half of u64's nanoseconds.
+    let mut s = node3();
+    let od = s.slave_mut().od_mut();
+    let mut m = model::Module::new();
+    setup(od, 1);
+    m.tick(od, 0, 3, 0, true);
+    m.tick(od, 0, 3, u64::MAX / 2, true);
+    assert_eq!(
+        model::get(od, 0, id::D1_10),
+        5000,
+        "ramp reached, not wrapped"
+    );
+    assert_eq!(model::get(od, 0, id::D1_13), 9999, "I part at its limit");
+    m.tick(od, 0, 3, u64::MAX, true);
+    assert_eq!(model::get(od, 0, id::D1_13), 9999);
+    // No ramp, two hours between cycles, both signs.
+    for (sv, y) in [(5000i16, 9999), (-5000, -9999)] {
+        let mut s = node3();
+        let od = s.slave_mut().od_mut();
+        let mut m = model::Module::new();
+        setup(od, 0);
+        outputs(od, 0, 0, sv, 0);
+        run(&mut m, od, 0, 3, 0, true);
+        run(&mut m, od, 0, 3, 2 * 3600 * 1000, true);
+        assert_eq!(model::get(od, 0, id::D1_13), y, "set value {sv}");
+    }
+}
+
+/// Serves one telegram through the channel of a fresh node with `N`/// Serves one telegram through the channel of a fresh node with `N`
 /// modules (after one tick, so the modules' inputs are current).
 struct Bench<const N: usize> {
     slave: SoftSlave<Dma22Node<N>>,
