@@ -587,8 +587,20 @@ pub fn default_modules(dev: &EsiDevice) -> Vec<u32> {
         .collect()
 }
 
-/// The twin's description and memory layout for `dev`.
+/// Descriptions built so far, one per distinct device.
+static DESCRIPTIONS: crate::Cache<(&'static DeviceDescription, MemoryLayout)> = crate::Cache::new();
+
+/// The twin's description and memory layout for `dev`. Built and leaked
+/// once per distinct device: describing an equal device again returns the
+/// same description.
 pub fn describe(
+    dev: &EsiDevice,
+) -> Result<(&'static DeviceDescription, MemoryLayout), DescriptionBuildError> {
+    DESCRIPTIONS.get_or_build(dev, build_description)
+}
+
+/// [`describe`] without the cache.
+fn build_description(
     dev: &EsiDevice,
 ) -> Result<(&'static DeviceDescription, MemoryLayout), DescriptionBuildError> {
     let label = dev.label();
