@@ -174,5 +174,5 @@ fuzz_target!(|data: &[u8]| {
         "{decision:?}"
     );
     assert_eq!(decision.version, h.version);
-    assert_eq!(decision.slot, slot);
+    assert_eq!(decision.slot, Some(slot));
 });

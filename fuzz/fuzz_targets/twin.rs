@@ -9,9 +9,10 @@
 //! Invariants: no panic; a twin that builds serves an SII image of the
 //! emulated EEPROM's size; every error names a line inside the input.
 //!
-//! A twin's description is leaked on purpose (a line is built once per
-//! process), so a long run grows slowly; the input rule is picked by the
-//! input's length to keep one twin per device and input.
+//! A twin's description is leaked on purpose, once per distinct device
+//! (`ecat-twin` keeps what it built), so a long run grows with the new
+//! devices it finds; the input rule is picked by the input's length to
+//! keep one twin per device and input.
 #![no_main]
 
 use ecat_twin::{EsiFile, InputRule, eni};

@@ -615,7 +615,7 @@ mod tests {
             commit_pending(&mut *store).unwrap();
             let d = power_on(&mut *store);
             assert_eq!(d.version.as_str(), "2.1.0");
-            assert_eq!(d.slot, Slot::B);
+            assert_eq!(d.slot, Some(Slot::B));
             assert_eq!(d.outcome, BootOutcome::Trial { attempt: 1 });
         });
     }
@@ -870,7 +870,7 @@ mod tests {
             let d = power_on(&mut store);
             assert_eq!(
                 (d.slot, d.version.as_str()),
-                (Slot::A, "1.0.0"),
+                (Some(Slot::A), "1.0.0"),
                 "cut {cut}"
             );
         }

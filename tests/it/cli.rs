@@ -404,6 +404,66 @@ fn esi_tool_exit_codes_and_pipes() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A 250 000-deep XML file (1.75 MB) is refused by every tool that reads
+/// ESI or ENI files with exit 2 and the line where it nests too deep; it
+/// used to overflow the stack and abort them.
+#[test]
+fn deeply_nested_xml_is_refused_by_the_tools_with_its_line() {
+    let dir = std::env::temp_dir().join(format!("deep-xml-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let deep = |root: &str| {
+        let path = dir.join(format!("{root}.xml"));
+        let text = format!(
+            "<{root}>\n{}{}</{root}>",
+            "<a>\n".repeat(250_000),
+            "</a>".repeat(250_000)
+        );
+        std::fs::write(&path, text).expect("write");
+        path.to_string_lossy().into_owned()
+    };
+    let (esi_file, eni_file) = (deep("EtherCATInfo"), deep("EtherCATConfig"));
+    let says = |e: &str| {
+        assert!(
+            e.contains("line 257") && e.contains("XML nested deeper than 256 elements"),
+            "{e}"
+        );
+    };
+    let sii = dir.join("pam.bin").to_string_lossy().into_owned();
+    expect(&esi(), &["sii", "-o", &sii], 0);
+    let (_, e) = expect(&esi(), &["check", &esi_file, &sii], 2);
+    says(&e);
+    let esi_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/testdata/esi");
+    let esi_dir = esi_dir.to_str().expect("utf-8");
+    let (_, e) = expect(
+        &master_test(),
+        &["--eni", &eni_file, "--esi-dir", esi_dir, "scan"],
+        2,
+    );
+    says(&e);
+    if let Some(runner) = runner_binary() {
+        let (_, e) = expect(
+            &runner,
+            &["--iface", "no-such-if0", "--esi", &esi_file, "--type", "X"],
+            2,
+        );
+        says(&e);
+        let (_, e) = expect(
+            &runner,
+            &[
+                "--iface",
+                "no-such-if0",
+                "--eni",
+                &eni_file,
+                "--esi-dir",
+                esi_dir,
+            ],
+            2,
+        );
+        says(&e);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn master_test_iface_drives_the_raw_runner_over_veth() {
     let Some(runner) = runner_binary() else {

@@ -156,6 +156,9 @@ impl LineSlave for Defective {
     fn set_firmware_version(&mut self, version: &str) {
         self.inner.set_firmware_version(version);
     }
+    fn set_no_valid_firmware(&mut self, none: bool) {
+        self.inner.set_no_valid_firmware(none);
+    }
     fn firmware_version(&self) -> String {
         self.inner.firmware_version()
     }

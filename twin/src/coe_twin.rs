@@ -73,6 +73,19 @@ pub enum DescriptionBuildError {
         /// What the core's check found.
         source: ecat_slave::od::DescriptionError,
     },
+    /// A process-data area the ESI gives no SyncManager for would be placed
+    /// (after the SyncManager named) beyond the ESC's address space.
+    #[error(
+        "{at}: the {what} placed after this SyncManager would start at {start:#x}, beyond the ESC address space (0xffff)"
+    )]
+    NoRoomFor {
+        /// The `Sm` element it would follow.
+        at: At,
+        /// `outputs` or `inputs`.
+        what: &'static str,
+        /// Where it would start.
+        start: u32,
+    },
     /// A mailbox SyncManager is missing.
     #[error("{0}: the ESI has a mailbox protocol but no MBoxOut/MBoxIn SyncManager")]
     NoMailboxSm(String),
@@ -204,8 +217,8 @@ pub fn alternative_sets(dev: &EsiDevice, rx: &[u16], tx: &[u16]) -> Vec<(Vec<u16
                 .iter()
                 .filter(|q| is_rx(q.index) == is_rx(p.index))
                 .map(|q| q.bits())
-                .sum();
-            if bits + p.bits() <= limit {
+                .fold(0, u32::saturating_add);
+            if bits.saturating_add(p.bits()) <= limit {
                 set.push(p);
             }
         }
@@ -574,8 +587,20 @@ pub fn default_modules(dev: &EsiDevice) -> Vec<u32> {
         .collect()
 }
 
-/// The twin's description and memory layout for `dev`.
+/// Descriptions built so far, one per distinct device.
+static DESCRIPTIONS: crate::Cache<(&'static DeviceDescription, MemoryLayout)> = crate::Cache::new();
+
+/// The twin's description and memory layout for `dev`. Built and leaked
+/// once per distinct device: describing an equal device again returns the
+/// same description.
 pub fn describe(
+    dev: &EsiDevice,
+) -> Result<(&'static DeviceDescription, MemoryLayout), DescriptionBuildError> {
+    DESCRIPTIONS.get_or_build(dev, build_description)
+}
+
+/// [`describe`] without the cache.
+fn build_description(
     dev: &EsiDevice,
 ) -> Result<(&'static DeviceDescription, MemoryLayout), DescriptionBuildError> {
     let label = dev.label();
@@ -658,8 +683,34 @@ pub fn describe(
         None => None,
     }
     .filter(|((_, out_len), _)| *out_len != 0);
-    let pd_out = sm(dev, SmType::ProcessOut).map_or(mbx_in.0 + mbx_in.1, |s| s.0);
-    let pd_in = sm(dev, SmType::ProcessIn).map_or(pd_out + 0x100, |s| s.0);
+    // Process data without an <Sm> of its own: outputs right after the
+    // input mailbox, inputs 0x100 bytes after the outputs; within 0xFFFF.
+    let after = |base: u16, gap: u16, kind: SmType, what: &'static str| {
+        let start = u32::from(base) + u32::from(gap);
+        u16::try_from(start).map_err(|_| DescriptionBuildError::NoRoomFor {
+            at: dev
+                .sms
+                .iter()
+                .find(|s| s.kind == kind)
+                .map_or_else(|| dev.at.clone(), |s| s.at.clone()),
+            what,
+            start,
+        })
+    };
+    let pd_out = match sm(dev, SmType::ProcessOut) {
+        Some(s) => s.0,
+        None => after(mbx_in.0, mbx_in.1, SmType::MailboxIn, "outputs")?,
+    };
+    let pd_in = match (sm(dev, SmType::ProcessIn), sm(dev, SmType::ProcessOut)) {
+        (Some(s), _) => s.0,
+        (None, Some(_)) => after(pd_out, 0x100, SmType::ProcessOut, "inputs")?,
+        (None, None) => after(pd_out, 0x100, SmType::MailboxIn, "inputs")?,
+    };
+    let eeprom_kbit = dev.eeprom_kbit().ok_or_else(|| EsiError::BadValue {
+        at: dev.at.clone(),
+        what: crate::esi::EEPROM_SIZE,
+        value: dev.eeprom_bytes.unwrap_or(0).to_string(),
+    })?;
     let layout = MemoryLayout {
         mbx_out,
         mbx_in,
@@ -692,10 +743,7 @@ pub fn describe(
                 cd.first().copied().unwrap_or(0x05),
                 cd.get(1).copied().unwrap_or(0),
             ]),
-            eeprom_kbit: dev
-                .eeprom_bytes
-                .map_or(16, |b| u16::try_from(b * 8 / 1024).unwrap_or(16))
-                .max(1),
+            eeprom_kbit,
             ebus_current_ma: dev.ebus_current_ma,
             physical_ports: crate::sii::physical_port(&dev.physics),
         },
@@ -856,6 +904,72 @@ mod tests {
         )
     }
 
+    /// A device with mailbox SyncManagers `sms` (and no process-data
+    /// ones unless `sms` has them).
+    fn dev_with_sms(sms: &str) -> EsiDevice {
+        let text = format!(
+            r##"<EtherCATInfo><Vendor><Id>1</Id></Vendor><Descriptions><Devices><Device>
+<Type ProductCode="#x1" RevisionNo="#x1">D</Type><Name>D</Name><GroupType>G</GroupType>
+{sms}
+<Mailbox><CoE SdoInfo="1"/></Mailbox>
+</Device></Devices></Descriptions></EtherCATInfo>"##
+        );
+        EsiFile::parse(&text).unwrap().devices.remove(0)
+    }
+
+    #[test]
+    fn process_data_placed_beyond_0xffff_is_a_load_error_naming_the_sm() {
+        let mbx = |out: u16, inp: u16| {
+            format!(
+                "<Sm StartAddress=\"#x{out:04x}\" DefaultSize=\"128\" ControlByte=\"#x26\" Enable=\"1\">MBoxOut</Sm>\n\
+                 <Sm StartAddress=\"#x{inp:04x}\" DefaultSize=\"128\" ControlByte=\"#x22\" Enable=\"1\">MBoxIn</Sm>"
+            )
+        };
+        // MBoxIn ends at the top: the outputs would start at 0x10000.
+        let e = describe(&dev_with_sms(&mbx(0xFF00, 0xFF80))).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "<Sm> at line 4: the outputs placed after this SyncManager would start at 0x10000, beyond the ESC address space (0xffff)"
+        );
+        // Outputs fit, the inputs 0x100 bytes later would not.
+        let e = describe(&dev_with_sms(&mbx(0xFE00, 0xFE80))).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("the inputs placed after this SyncManager would start at 0x10000"),
+            "{e}"
+        );
+        // An output SM near the top and no input SM.
+        let sms = format!(
+            "{}\n<Sm StartAddress=\"#xfff0\" ControlByte=\"#x64\" Enable=\"1\">Outputs</Sm>",
+            mbx(0x1000, 0x1080)
+        );
+        let e = describe(&dev_with_sms(&sms)).unwrap_err();
+        assert!(
+            e.to_string().starts_with("<Sm> at line 5: the inputs"),
+            "{e}"
+        );
+        // Normal places still work.
+        let (_, layout) = describe(&dev_with_sms(&mbx(0x1000, 0x1080))).unwrap();
+        assert_eq!((layout.pd_out, layout.pd_in), (0x1100, 0x1200));
+    }
+
+    #[test]
+    fn an_absurd_eeprom_size_set_by_code_is_an_error_not_a_wrap() {
+        let mut d = dev_with_sms(
+            "<Sm StartAddress=\"#x1000\" DefaultSize=\"128\" ControlByte=\"#x26\" Enable=\"1\">MBoxOut</Sm>\n\
+             <Sm StartAddress=\"#x1080\" DefaultSize=\"128\" ControlByte=\"#x22\" Enable=\"1\">MBoxIn</Sm>",
+        );
+        d.eeprom_bytes = Some(u32::MAX);
+        let e = describe(&d).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("bad EEPROM ByteSize (at most 65535 kbit) '4294967295'"),
+            "{e}"
+        );
+        d.eeprom_bytes = Some(4096);
+        assert_eq!(describe(&d).unwrap().0.esc.eeprom_kbit, 32);
+    }
+
     #[test]
     fn alternative_sets_honour_excludes_and_cover_every_pdo() {
         let d = dev_with(
@@ -925,17 +1039,22 @@ mod tests {
         );
         // Slots without the file's Modules, and without any Slot.
         let mut m = d.clone();
+        // (Full literals: `Element` has a Drop impl, so no `..Default`.)
         m.source.children.push(crate::xml::Element {
             name: "Slots".into(),
             attrs: vec![
                 ("SlotIndexIncrement".into(), "#x10".into()),
                 ("SlotPdoIncrement".into(), "1".into()),
             ],
+            text: String::new(),
             children: vec![crate::xml::Element {
                 name: "Slot".into(),
-                ..Default::default()
+                attrs: Vec::new(),
+                text: String::new(),
+                children: Vec::new(),
+                line: 0,
             }],
-            ..Default::default()
+            line: 0,
         });
         let e = describe(&m).unwrap_err().to_string();
         assert!(

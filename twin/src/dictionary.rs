@@ -13,7 +13,8 @@
 //! record's `SubItem` without `Flags` of a `BITn` type is a padding gap.
 //!
 //! Everything is leaked into `'static` data: a twin lives as long as its
-//! line, which a process builds once. Errors name the element and its line.
+//! line; [`crate::coe_twin::describe`] builds a dictionary once per
+//! distinct device. Errors name the element and its line.
 
 use std::collections::BTreeMap;
 

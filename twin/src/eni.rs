@@ -189,7 +189,7 @@ fn parse_slave(s: &Element) -> Result<EniSlave, EniError> {
 pub fn parse(text: &str) -> Result<Vec<EniSlave>, EniError> {
     let root = xml::parse(text)?;
     if root.name != "EtherCATConfig" {
-        return Err(EniError::NotEni(root.name));
+        return Err(EniError::NotEni(root.name.clone()));
     }
     let config = req(&root, "Config")?;
     let slaves = config

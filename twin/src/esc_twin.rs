@@ -122,9 +122,23 @@ struct PdSm {
 
 static EMPTY: Dictionary = Dictionary::new(&[], &[], &[]);
 
+/// Descriptions built so far, one per distinct device.
+static DESCRIPTIONS: crate::Cache<&'static DeviceDescription> = crate::Cache::new();
+
 /// The description of an ESC-only device: identity and names; no
 /// dictionary, no mailbox, no PDO sets (its PDOs are fixed in the SII).
+/// Leaked once per distinct device.
 fn description(dev: &EsiDevice) -> &'static DeviceDescription {
+    let built: Result<_, core::convert::Infallible> =
+        DESCRIPTIONS.get_or_build(dev, |dev| Ok(build_description(dev)));
+    match built {
+        Ok(d) => d,
+        Err(never) => match never {},
+    }
+}
+
+/// [`description`] without the cache.
+fn build_description(dev: &EsiDevice) -> &'static DeviceDescription {
     let (identity, names) = crate::identity_and_names(dev);
     Box::leak(Box::new(DeviceDescription {
         identity,
@@ -326,6 +340,8 @@ impl LineSlave for EscTwin {
         self.esc.set_port1_link(link);
     }
     fn set_firmware_version(&mut self, _version: &str) {}
+    /// An ESC-only device runs no firmware: nothing to start or refuse.
+    fn set_no_valid_firmware(&mut self, _none: bool) {}
     fn firmware_version(&self) -> String {
         String::new()
     }

@@ -102,6 +102,20 @@ pub enum EsiError {
         /// What needs them.
         what: &'static str,
     },
+    /// A SyncManager runs past the ESC's 64 KiB address space.
+    #[error(
+        "{at}: SM{sm} at {start:#06x} with {size} bytes runs past the end of the ESC address space (0xffff)"
+    )]
+    SmBeyondMemory {
+        /// The `Sm` element.
+        at: At,
+        /// SyncManager number.
+        sm: u8,
+        /// Its start address.
+        start: u16,
+        /// Its size.
+        size: u16,
+    },
     /// A PDO names a SyncManager the device does not have, or one of the
     /// wrong direction.
     #[error("{at}: PDO {index:#06x} is assigned to SM{sm}, which is {problem}")]
@@ -187,7 +201,9 @@ pub struct EsiPdo {
 impl EsiPdo {
     /// Total bit length of the entries.
     pub fn bits(&self) -> u32 {
-        self.entries.iter().map(|e| u32::from(e.bit_len)).sum()
+        self.entries
+            .iter()
+            .fold(0u32, |acc, e| acc.saturating_add(u32::from(e.bit_len)))
     }
 }
 
@@ -280,7 +296,7 @@ impl EsiDevice {
             .chain(&self.tx_pdos)
             .filter(|p| p.sm == Some(sm))
             .map(EsiPdo::bits)
-            .sum();
+            .fold(0, u32::saturating_add);
         u16::try_from(bits.div_ceil(8)).unwrap_or(u16::MAX)
     }
 
@@ -294,13 +310,25 @@ impl EsiDevice {
         self.pd_bytes(&self.tx_pdos)
     }
 
+    /// The EEPROM size in kbit the SII declares: `ByteSize / 128`, at
+    /// least 1; 16 without a `<ByteSize>`. `None` beyond the SII's 65535
+    /// kbit (a load error: [`EsiFile::parse`] refuses such a file).
+    pub fn eeprom_kbit(&self) -> Option<u16> {
+        match self.eeprom_bytes {
+            None => Some(16),
+            Some(b) => u16::try_from(b / 128).ok().map(|k| k.max(1)),
+        }
+    }
+
     fn pd_bytes(&self, pdos: &[EsiPdo]) -> u16 {
         // Per SyncManager, rounded up to whole bytes (as a master sizes
         // the SMs).
         let mut sms: Vec<u8> = pdos.iter().filter_map(|p| p.sm).collect();
         sms.sort_unstable();
         sms.dedup();
-        sms.iter().map(|sm| self.sm_bytes(*sm)).sum()
+        sms.iter()
+            .map(|sm| self.sm_bytes(*sm))
+            .fold(0, u16::saturating_add)
     }
 }
 
@@ -667,10 +695,19 @@ fn parse_device(
         })?,
         None => Vec::new(),
     };
-    let eeprom_bytes = match ee {
+    let eeprom_bytes: Option<u32> = match ee {
         Some(e) => child_num(e, "ByteSize", "ByteSize")?,
         None => None,
     };
+    if let (Some(b), Some(el)) = (eeprom_bytes, ee.and_then(|e| e.child("ByteSize")))
+        && b / 128 > u32::from(u16::MAX)
+    {
+        return Err(EsiError::BadValue {
+            at: At::of(el),
+            what: EEPROM_SIZE,
+            value: el.text.clone(),
+        });
+    }
     // ETG.2000: `Device/Info/Electrical/EBusCurrent`.
     let ebus_current_ma = match d.child("Info").and_then(|i| i.child("Electrical")) {
         Some(el) => child_num(el, "EBusCurrent", "EBusCurrent")?.unwrap_or(0),
@@ -720,12 +757,24 @@ fn parse_device(
     Ok(dev)
 }
 
+/// What an EEPROM `ByteSize` beyond the SII's 65535 kbit is called in
+/// [`EsiError::BadValue`].
+pub(crate) const EEPROM_SIZE: &str = "EEPROM ByteSize (at most 65535 kbit)";
+
 /// The smallest mailbox: a 6-byte header and a 10-byte CoE SDO.
 const MIN_MAILBOX: u16 = 16;
 
 fn check_sms(dev: &EsiDevice) -> Result<(), EsiError> {
     for (i, s) in dev.sms.iter().enumerate() {
         let sm = u8::try_from(i).unwrap_or(u8::MAX);
+        if u32::from(s.start) + u32::from(s.default_size) > 0x1_0000 {
+            return Err(EsiError::SmBeyondMemory {
+                at: s.at.clone(),
+                sm,
+                start: s.start,
+                size: s.default_size,
+            });
+        }
         match s.kind {
             SmType::MailboxOut | SmType::MailboxIn if s.default_size < MIN_MAILBOX => {
                 return Err(EsiError::SmTooSmall {
@@ -790,7 +839,7 @@ impl EsiFile {
     pub fn parse(text: &str) -> Result<Self, EsiError> {
         let root = xml::parse(text)?;
         if root.name != "EtherCATInfo" {
-            return Err(EsiError::NotEsi(root.name));
+            return Err(EsiError::NotEsi(root.name.clone()));
         }
         let vendor = required(root.child("Vendor"), &root, "<Vendor>")?;
         let vendor_id: u32 = required(child_num(vendor, "Id", "vendor Id")?, vendor, "<Id>")?;
@@ -1025,6 +1074,46 @@ mod tests {
                 .contains("SM0 DefaultSize 8 bytes is too small for 16 bytes"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn absurd_sm_addresses_and_eeprom_sizes_are_refused_at_load() {
+        // A SyncManager running past the ESC's 64 KiB.
+        let text = ONE.replace(
+            "StartAddress=\"#x0f00\"",
+            "StartAddress=\"#xfff0\" DefaultSize=\"256\"",
+        );
+        assert_eq!(
+            EsiFile::parse(&text).unwrap_err().to_string(),
+            "<Sm> at line 13: SM0 at 0xfff0 with 256 bytes runs past the end of the ESC address space (0xffff)"
+        );
+        // Ending exactly at the top is fine.
+        let top = ONE.replace(
+            "StartAddress=\"#x0f00\"",
+            "StartAddress=\"#xff00\" DefaultSize=\"256\"",
+        );
+        assert!(EsiFile::parse(&top).is_ok());
+        // An EEPROM beyond the SII's 65535 kbit (ByteSize / 128).
+        for (size, ok) in [("8388607", true), ("8388608", false), ("4294967295", false)] {
+            let text = ONE.replace(
+                "<ByteSize>2048</ByteSize>",
+                &format!("<ByteSize>{size}</ByteSize>"),
+            );
+            match EsiFile::parse(&text) {
+                Ok(f) => assert!(ok, "{size}: {:?}", f.devices[0].eeprom_kbit()),
+                Err(e) => {
+                    assert!(!ok, "{size}: {e}");
+                    assert_eq!(
+                        e.to_string(),
+                        format!(
+                            "<ByteSize> at line 20: bad EEPROM ByteSize (at most 65535 kbit) '{size}'"
+                        )
+                    );
+                }
+            }
+        }
+        let f = EsiFile::parse(ONE).unwrap();
+        assert_eq!(f.devices[0].eeprom_kbit(), Some(16));
     }
 
     #[test]

@@ -43,9 +43,60 @@ use std::path::Path;
 use ecat_slave::host::chain::LineSlave;
 
 /// `s` as `'static` text: a twin's description lives as long as its line,
-/// which a process builds once, so it is leaked on purpose.
+/// which a process builds once, so it is leaked on purpose (once per
+/// device, see [`Cache`]).
 pub(crate) fn leak(s: &str) -> &'static str {
     Box::leak(s.to_string().into_boxed_str())
+}
+
+/// What was built (and leaked) for each distinct device: building the
+/// same twin again (a line of identical devices, a benchmark, a fuzz
+/// target, the same file loaded again) finds it instead of leaking another
+/// copy. A device is the same when its whole [`EsiDevice`] is equal (what
+/// the description is made of: identity, type, revision, SyncManagers,
+/// PDOs, dictionary, slots and modules), whatever file it came from.
+pub(crate) struct Cache<T> {
+    /// By [`CacheKey`], then the devices.
+    built: std::sync::Mutex<std::collections::BTreeMap<CacheKey, Vec<(EsiDevice, T)>>>,
+}
+
+/// Vendor, product code, revision and type of a device: where [`Cache`]
+/// looks first.
+type CacheKey = (u32, u32, u32, String);
+
+impl<T: Copy> Cache<T> {
+    /// An empty cache (for a `static`).
+    pub(crate) const fn new() -> Self {
+        Cache {
+            built: std::sync::Mutex::new(std::collections::BTreeMap::new()),
+        }
+    }
+
+    /// What was built for `dev`, or `build(dev)`, kept when it succeeds.
+    pub(crate) fn get_or_build<E>(
+        &self,
+        dev: &EsiDevice,
+        build: impl FnOnce(&EsiDevice) -> Result<T, E>,
+    ) -> Result<T, E> {
+        // A panic elsewhere while the lock was held leaves the map usable.
+        let mut built = self
+            .built
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let key = (
+            dev.vendor_id,
+            dev.product_code,
+            dev.revision,
+            dev.type_name.clone(),
+        );
+        let same = built.entry(key).or_default();
+        if let Some((_, t)) = same.iter().find(|(d, _)| d == dev) {
+            return Ok(*t);
+        }
+        let t = build(dev)?;
+        same.push((dev.clone(), t));
+        Ok(t)
+    }
 }
 
 /// Identity and names of `dev` for a description (names cut to what
@@ -157,4 +208,78 @@ pub fn twin_with_modules(
     }
     esc.power_on();
     Ok(Box::new(slave))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An ESI (or ENI) root with `depth` levels of `<a>` below it, one per
+    /// line (250 000 levels: about 2 MB).
+    fn deep(root: &str, depth: usize) -> String {
+        format!(
+            "<{root}>\n{}{}</{root}>",
+            "<a>\n".repeat(depth),
+            "</a>".repeat(depth)
+        )
+    }
+
+    #[test]
+    fn the_loaders_refuse_a_250000_deep_file_naming_file_and_line() {
+        let path = std::env::temp_dir().join(format!("twin-deep-{}.xml", std::process::id()));
+        std::fs::write(&path, deep("EtherCATInfo", 250_000)).unwrap();
+        let e = load_esi(&path).unwrap_err().to_string();
+        let _ = std::fs::remove_file(&path);
+        assert!(e.starts_with(&path.display().to_string()), "{e}");
+        assert!(
+            e.contains("XML error at line 257 ")
+                && e.contains("XML nested deeper than 256 elements"),
+            "{e}"
+        );
+        let e = eni::parse(&deep("EtherCATConfig", 250_000)).unwrap_err();
+        assert!(matches!(&e, eni::EniError::Xml(x) if x.line == 257), "{e}");
+    }
+
+    /// A device with CoE (mailbox SMs, one PDO each way, no dictionary).
+    const COE: &str = r##"<EtherCATInfo><Vendor><Id>1</Id></Vendor><Descriptions><Devices><Device>
+<Type ProductCode="#x1" RevisionNo="#x1">D</Type><Name>D</Name><GroupType>G</GroupType>
+<Sm StartAddress="#x1000" DefaultSize="128" ControlByte="#x26" Enable="1">MBoxOut</Sm>
+<Sm StartAddress="#x1080" DefaultSize="128" ControlByte="#x22" Enable="1">MBoxIn</Sm>
+<Sm StartAddress="#x1100" ControlByte="#x64" Enable="1">Outputs</Sm>
+<Sm StartAddress="#x1180" ControlByte="#x20" Enable="1">Inputs</Sm>
+<RxPdo Sm="2"><Index>#x1600</Index><Name>P</Name><Entry><Index>#x7000</Index><SubIndex>1</SubIndex><BitLen>16</BitLen><Name>v</Name><DataType>UINT</DataType></Entry></RxPdo>
+<TxPdo Sm="3"><Index>#x1A00</Index><Name>P</Name><Entry><Index>#x6000</Index><SubIndex>1</SubIndex><BitLen>16</BitLen><Name>v</Name><DataType>UINT</DataType></Entry></TxPdo>
+<Mailbox><CoE SdoInfo="1" PdoAssign="1"/></Mailbox>
+</Device></Devices></Descriptions></EtherCATInfo>"##;
+
+    #[test]
+    fn the_same_twin_built_twice_shares_one_description() {
+        let same =
+            |a: &dyn LineSlave, b: &dyn LineSlave| std::ptr::eq(a.description(), b.description());
+        // A device with CoE, and one copy of it parsed again.
+        let f = EsiFile::parse(COE).unwrap();
+        let dev = &f.devices[0];
+        let a = twin(dev, None, InputRule::Loopback).unwrap();
+        let b = twin(dev, Some(3), InputRule::Counter).unwrap();
+        assert!(same(&*a, &*b), "CoE twin");
+        let again = EsiFile::parse(COE).unwrap();
+        let c = twin(&again.devices[0], None, InputRule::Loopback).unwrap();
+        assert!(same(&*a, &*c), "the same device from another parse");
+        // ESC-only devices; two types of one file stay apart.
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/esi/EL2xxx.xml");
+        let f = load_esi(&path).unwrap();
+        let (el2004, el2828) = (&f.devices[0], &f.devices[1]);
+        let a = twin(el2004, None, InputRule::Loopback).unwrap();
+        let b = twin(el2004, Some(1), InputRule::Loopback).unwrap();
+        assert!(same(&*a, &*b), "ESC-only twin");
+        let other = twin(el2828, None, InputRule::Loopback).unwrap();
+        assert!(!same(&*a, &*other), "another device type");
+        // A changed device is another description.
+        let mut changed = dev.clone();
+        changed.name.push('2');
+        let d = twin(&changed, None, InputRule::Loopback).unwrap();
+        let e = twin(dev, None, InputRule::Loopback).unwrap();
+        assert!(!same(&*d, &*e));
+        assert_eq!(d.description().names.name, "D2");
+    }
 }

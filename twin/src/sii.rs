@@ -150,12 +150,8 @@ fn mailbox_area(dev: &EsiDevice, kind: SmType) -> (u16, u16) {
 
 fn encode(dev: &EsiDevice) -> Result<Vec<u8>, SiiBuildError> {
     let cd = &dev.config_data;
-    let kbit = dev
-        .eeprom_bytes
-        .map_or(16, |b| {
-            u16::try_from(b.saturating_mul(8) / 1024).unwrap_or(u16::MAX)
-        })
-        .max(1);
+    // A loaded ESI's size fits (EsiFile::parse refuses larger ones).
+    let kbit = dev.eeprom_kbit().unwrap_or(u16::MAX);
     let (rx_offset, rx_size) = mailbox_area(dev, SmType::MailboxOut);
     let (tx_offset, tx_size) = mailbox_area(dev, SmType::MailboxIn);
     let sms: Vec<SiiSyncManager> = dev

@@ -10,6 +10,12 @@
 use quick_xml::Reader;
 use quick_xml::events::{BytesStart, Event};
 
+/// Deepest element nesting [`parse`] accepts (the root is level 1). Real
+/// ESI and ENI files nest fewer than 20 levels; the limit keeps a hostile
+/// file from building a tree deep enough to exhaust the stack in the
+/// recursive code that walks it (clone, compare, the loaders).
+pub const MAX_DEPTH: usize = 256;
+
 /// An XML document could not be parsed.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("XML error at line {line} (byte {position}): {message}")]
@@ -35,6 +41,18 @@ pub struct Element {
     pub children: Vec<Element>,
     /// Line (1-based) of the element's start tag (0 when built by hand).
     pub line: u32,
+}
+
+/// Drops the subtree iteratively: a tree built deep by code (the parser
+/// stops at [`MAX_DEPTH`]) would overflow the stack in the recursive drop
+/// the compiler generates.
+impl Drop for Element {
+    fn drop(&mut self) {
+        let mut pending = std::mem::take(&mut self.children);
+        while let Some(mut e) = pending.pop() {
+            pending.append(&mut e.children);
+        }
+    }
 }
 
 impl Element {
@@ -131,8 +149,9 @@ fn start_element(
     Ok(Element {
         name,
         attrs,
+        text: String::new(),
+        children: Vec::new(),
         line: lines.of(position),
-        ..Element::default()
     })
 }
 
@@ -146,6 +165,9 @@ pub fn parse(text: &str) -> Result<Element, XmlError> {
         let position = reader.buffer_position();
         let err = |message: String| lines.error(position, message);
         let event = reader.read_event().map_err(|e| err(e.to_string()))?;
+        if matches!(event, Event::Start(_) | Event::Empty(_)) && stack.len() >= MAX_DEPTH {
+            return Err(err(format!("XML nested deeper than {MAX_DEPTH} elements")));
+        }
         match event {
             Event::Start(s) => stack.push(start_element(&s, position, &lines)?),
             Event::Empty(s) => {
@@ -272,6 +294,51 @@ mod tests {
         assert!(parse("<a><b></a>").is_err());
         assert!(parse("<a>").is_err());
         assert!(parse("").is_err());
+    }
+
+    /// `depth` nested `<a>` elements, one per line.
+    fn nested(depth: usize) -> String {
+        let mut doc = String::with_capacity(depth * 8);
+        for _ in 0..depth {
+            doc.push_str("<a>\n");
+        }
+        for _ in 0..depth {
+            doc.push_str("</a>");
+        }
+        doc
+    }
+
+    #[test]
+    fn a_document_nested_250000_deep_is_an_error_naming_the_line_not_a_crash() {
+        let doc = nested(250_000);
+        assert!(doc.len() > 1_000_000);
+        let e = parse(&doc).unwrap_err();
+        assert_eq!(e.line, MAX_DEPTH as u32 + 1, "{e}");
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "XML error at line 257 (byte {}): XML nested deeper than 256 elements",
+                4 * 256
+            )
+        );
+        // Exactly the limit is fine.
+        assert!(parse(&nested(MAX_DEPTH)).is_ok());
+        assert!(parse(&format!("{}<b/>{}", "<a>".repeat(256), "</a>".repeat(256))).is_err());
+    }
+
+    #[test]
+    fn a_tree_built_250000_deep_by_code_drops_without_overflowing_the_stack() {
+        let mut e = Element::default();
+        for _ in 0..250_000 {
+            e = Element {
+                name: "a".into(),
+                attrs: Vec::new(),
+                text: String::new(),
+                children: vec![e],
+                line: 0,
+            };
+        }
+        drop(e);
     }
 
     #[test]

@@ -91,6 +91,8 @@ pub struct Slave<E: Esc, A: Application> {
     /// DC mode: outputs received (length, bytes), applied at the next
     /// SYNC0.
     dc_outputs: Option<(usize, [u8; MAX_IMAGE])>,
+    /// The bootloader started no image ([`Slave::set_no_valid_firmware`]).
+    no_valid_firmware: bool,
 }
 
 impl<E: Esc, A: Application> core::fmt::Debug for Slave<E, A> {
@@ -143,6 +145,8 @@ struct Checks<'a, E: Esc, A: Application> {
     pdi_error: Option<EscError>,
     /// The synchronisation the PRE-OP→SAFE-OP check found.
     sync_mode: Option<SyncMode>,
+    /// Only the bootloader runs: INIT→PRE-OP is refused (0x0014).
+    no_valid_firmware: bool,
 }
 
 impl<E: Esc, A: Application> Checks<'_, E, A> {
@@ -202,6 +206,9 @@ impl<E: Esc, A: Application> Checks<'_, E, A> {
 
 impl<E: Esc, A: Application> TransitionChecks for Checks<'_, E, A> {
     fn check_mailbox(&mut self) -> Result<(), AlStatusCode> {
+        if self.no_valid_firmware {
+            return Err(AlStatusCode::NoValidFirmware);
+        }
         match mailbox_matches(self.esc, self.layout.mbx_out, self.layout.mbx_in) {
             Ok(true) => Ok(()),
             Ok(false) => Err(AlStatusCode::InvalidMailboxPreOp),
@@ -357,6 +364,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
             sm_event_missed: 0,
             outputs_since_sync0: false,
             dc_outputs: None,
+            no_valid_firmware: false,
         }
     }
 
@@ -458,6 +466,22 @@ impl<E: Esc, A: Application> Slave<E, A> {
     /// Sets 0x100A to the version the bootloader started.
     pub fn set_firmware_version(&mut self, version: &str) -> bool {
         self.od_mut().set_string(0x100A, 0, version)
+    }
+
+    /// Whether the bootloader started no image
+    /// ([`BootDecision::slot`](crate::firmware::BootDecision::slot)
+    /// `None`): then only the bootloader runs, INIT and BOOT are accepted
+    /// (a firmware download stays possible) and INIT→PRE-OP is refused
+    /// with AL status 0x0014 "no valid firmware". Kept across
+    /// [`Slave::restart`]; whoever runs the bootloader sets it at every
+    /// power-on.
+    pub fn set_no_valid_firmware(&mut self, none: bool) {
+        self.no_valid_firmware = none;
+    }
+
+    /// Whether only the bootloader runs ([`Slave::set_no_valid_firmware`]).
+    pub fn no_valid_firmware(&self) -> bool {
+        self.no_valid_firmware
     }
 
     /// Runs the firmware once at time `now_ns`: AL control, mailbox,
@@ -764,6 +788,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
             now_ns: self.now_ns,
             pdi_error: None,
             sync_mode: None,
+            no_valid_firmware: self.no_valid_firmware,
         };
         let after = al::transition(before, control, &mut checks);
         if let Some(e) = checks.pdi_error {

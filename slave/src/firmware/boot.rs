@@ -41,13 +41,23 @@ pub enum BootOutcome {
     },
     /// No valid boot state (blank device): slot A, version unknown.
     NoState,
+    /// The boot records could not be read ([`ImageStore::read_state`]
+    /// failed with an error other than [`StoreError::NoState`]): no image
+    /// could be verified, so none is started and the device stays in the
+    /// bootloader (INIT and BOOT only; AL status 0x0014 "no valid
+    /// firmware" for any other state).
+    StateUnreadable {
+        /// The error reading the records.
+        error: StoreError,
+    },
 }
 
 /// The slot the bootloader starts, and the version it holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct BootDecision {
-    /// Slot to start.
-    pub slot: Slot,
+    /// Slot to start; `None`: no image may be started, the device stays in
+    /// the bootloader ([`BootOutcome::StateUnreadable`]).
+    pub slot: Option<Slot>,
     /// Version of the image in it ([`FirmwareVersion::EMPTY`] if unknown).
     pub version: FirmwareVersion,
     /// How the decision came about.
@@ -221,18 +231,38 @@ pub fn verify_slot<S: ImageStore + ?Sized>(store: &S, slot: Slot, image: &ImageI
 /// verified against its CRC and started on trial, counting attempts; a
 /// failed verify or [`MAX_BOOT_ATTEMPTS`] unconfirmed boots roll back to
 /// the active slot and clear the candidate. A merely downloaded
-/// (uncommitted) image is left alone. Never fails: without a readable
-/// state it starts slot A.
+/// (uncommitted) image is left alone. Never fails, but may start nothing:
+///
+/// - A blank store (no valid record, [`StoreError::NoState`]) starts
+///   slot A with an unknown version ([`BootOutcome::NoState`]): the
+///   factory image written without records.
+/// - Records that cannot be read (any other error) start no image
+///   (`slot: None`, [`BootOutcome::StateUnreadable`]). The slots hold the
+///   bare payload; its length and CRC live only in the records, so no
+///   image can be verified without them, and slot A may hold a
+///   half-written download (after an update, downloads go to slot A). The
+///   caller stays in the bootloader: INIT and BOOT only, AL status 0x0014
+///   "no valid firmware" for any other state requested.
 pub fn power_on<S: ImageStore + ?Sized>(store: &mut S) -> BootDecision {
-    let Ok(state) = store.read_state() else {
-        return BootDecision {
-            slot: Slot::A,
-            version: FirmwareVersion::EMPTY,
-            outcome: BootOutcome::NoState,
-        };
+    let state = match store.read_state() {
+        Ok(state) => state,
+        Err(StoreError::NoState) => {
+            return BootDecision {
+                slot: Some(Slot::A),
+                version: FirmwareVersion::EMPTY,
+                outcome: BootOutcome::NoState,
+            };
+        }
+        Err(error) => {
+            return BootDecision {
+                slot: None,
+                version: FirmwareVersion::EMPTY,
+                outcome: BootOutcome::StateUnreadable { error },
+            };
+        }
     };
     let active = |outcome| BootDecision {
-        slot: state.active,
+        slot: Some(state.active),
         version: state.active_image.version,
         outcome,
     };
@@ -275,7 +305,7 @@ pub fn power_on<S: ImageStore + ?Sized>(store: &mut S) -> BootDecision {
         });
     }
     BootDecision {
-        slot: candidate.slot,
+        slot: Some(candidate.slot),
         version: candidate.image.version,
         outcome: BootOutcome::Trial { attempt },
     }
@@ -375,15 +405,66 @@ mod tests {
     fn blank_store_boots_slot_a_with_unknown_version() {
         let mut s = Store::new();
         let d = power_on(&mut s);
-        assert_eq!((d.slot, d.outcome), (Slot::A, BootOutcome::NoState));
+        assert_eq!((d.slot, d.outcome), (Some(Slot::A), BootOutcome::NoState));
         assert_eq!(d.version, FirmwareVersion::EMPTY);
+    }
+
+    /// A store whose boot records cannot be read (a flash read error);
+    /// slots and everything else work.
+    struct UnreadableState(Store);
+
+    impl ImageStore for UnreadableState {
+        fn slot_capacity(&self) -> usize {
+            self.0.slot_capacity()
+        }
+        fn erase(&mut self, slot: Slot) -> Result<(), StoreError> {
+            self.0.erase(slot)
+        }
+        fn write(&mut self, slot: Slot, offset: usize, data: &[u8]) -> Result<(), StoreError> {
+            self.0.write(slot, offset, data)
+        }
+        fn read(&self, slot: Slot, offset: usize, buf: &mut [u8]) -> Result<usize, StoreError> {
+            self.0.read(slot, offset, buf)
+        }
+        fn read_state(&self) -> Result<BootState, StoreError> {
+            Err(StoreError::Io)
+        }
+        fn write_state(&mut self, state: &BootState) -> Result<(), StoreError> {
+            self.0.write_state(state)
+        }
+    }
+
+    #[test]
+    fn unreadable_boot_records_start_no_image_not_a_half_written_slot_a() {
+        // 2.0.0 in slot B is active; a download of 3.0.0 into slot A was
+        // interrupted halfway.
+        let mut s = provisioned();
+        download(&mut s, &efw("2.0.0", &[0x22; 600]), 100).unwrap();
+        commit_pending(&mut s).unwrap();
+        power_on(&mut s);
+        confirm_boot(&mut s).unwrap();
+        assert_eq!(begin_download(&mut s), Ok(Slot::A));
+        write_chunk(&mut s, Slot::A, 0, &[0x33; 300]).unwrap();
+        let mut s = UnreadableState(s);
+        let d = power_on(&mut s);
+        assert_eq!(d.slot, None, "nothing verifiable may start");
+        assert_eq!(
+            d.outcome,
+            BootOutcome::StateUnreadable {
+                error: StoreError::Io
+            }
+        );
+        assert_eq!(d.version, FirmwareVersion::EMPTY);
+        // Once the records read again, the verified image runs.
+        let d = power_on(&mut s.0);
+        assert_eq!((d.slot, d.version.as_str()), (Some(Slot::B), "2.0.0"));
     }
 
     #[test]
     fn provisioned_store_boots_the_factory_image() {
         let mut s = provisioned();
         let d = power_on(&mut s);
-        assert_eq!(d.slot, Slot::A);
+        assert_eq!(d.slot, Some(Slot::A));
         assert_eq!(d.version.as_str(), "1.0.0");
         assert_eq!(d.outcome, BootOutcome::Normal);
     }
@@ -401,11 +482,11 @@ mod tests {
         let d = power_on(&mut s);
         assert_eq!(
             (d.slot, d.version.as_str(), d.outcome),
-            (Slot::B, "2.0.0", BootOutcome::Trial { attempt: 1 })
+            (Some(Slot::B), "2.0.0", BootOutcome::Trial { attempt: 1 })
         );
         confirm_boot(&mut s).unwrap();
         let d = power_on(&mut s);
-        assert_eq!((d.slot, d.outcome), (Slot::B, BootOutcome::Normal));
+        assert_eq!((d.slot, d.outcome), (Some(Slot::B), BootOutcome::Normal));
         // the next download goes to slot A
         assert_eq!(begin_download(&mut s).unwrap(), Slot::A);
     }
@@ -420,7 +501,7 @@ mod tests {
             assert_eq!(begin_download(&mut s), Err(StoreError::TrialRunning));
         }
         let d = power_on(&mut s);
-        assert_eq!(d.slot, Slot::A);
+        assert_eq!(d.slot, Some(Slot::A));
         assert_eq!(d.version.as_str(), "1.0.0");
         assert_eq!(
             d.outcome,
@@ -436,10 +517,10 @@ mod tests {
         let mut s = provisioned();
         download(&mut s, &efw("2.0.0", &[0x22; 100]), 64).unwrap();
         commit_pending(&mut s).unwrap();
-        assert_eq!(power_on(&mut s).slot, Slot::B);
+        assert_eq!(power_on(&mut s).slot, Some(Slot::B));
         assert_eq!(reject_boot(&mut s), Ok(Slot::A));
         let d = power_on(&mut s);
-        assert_eq!((d.slot, d.version.as_str()), (Slot::A, "1.0.0"));
+        assert_eq!((d.slot, d.version.as_str()), (Some(Slot::A), "1.0.0"));
     }
 
     #[test]
@@ -452,7 +533,7 @@ mod tests {
         assert_eq!(
             (d.slot, d.outcome),
             (
-                Slot::A,
+                Some(Slot::A),
                 BootOutcome::RolledBack {
                     reason: RollbackReason::VerifyFailed
                 }
@@ -489,7 +570,7 @@ mod tests {
             let d = power_on(&mut s);
             assert_eq!(
                 (d.slot, d.version.as_str()),
-                (Slot::A, "1.0.0"),
+                (Some(Slot::A), "1.0.0"),
                 "cut {cut}"
             );
             assert_eq!(d.outcome, BootOutcome::Normal, "cut {cut}");

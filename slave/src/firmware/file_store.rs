@@ -100,12 +100,27 @@ impl FileStore {
         })
     }
 
-    fn read_copy(&self, copy: usize) -> [u8; STATE_RECORD_LEN] {
+    /// Boot-state copy `copy`: a missing file reads as blank (no record),
+    /// a file that cannot be opened or read is [`StoreError::Io`], not a
+    /// blank record (see [`power_on`](super::power_on)).
+    fn read_copy(&self, copy: usize) -> Result<[u8; STATE_RECORD_LEN], StoreError> {
         let mut buf = [0u8; STATE_RECORD_LEN];
-        if let Ok(mut f) = File::open(self.state_path(copy)) {
-            let _ = f.read(&mut buf);
+        let mut f = match File::open(self.state_path(copy)) {
+            Ok(f) => f,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(buf),
+            Err(_) => return Err(StoreError::Io),
+        };
+        // A short file is a torn record (it fails its CRC).
+        let mut filled = 0;
+        while let Some(rest) = buf.get_mut(filled..).filter(|r| !r.is_empty()) {
+            match f.read(rest) {
+                Ok(0) => break,
+                Ok(n) => filled += n,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(_) => return Err(StoreError::Io),
+            }
         }
-        buf
+        Ok(buf)
     }
 
     fn check(&self, offset: usize, len: usize) -> Result<(), StoreError> {
@@ -178,7 +193,7 @@ impl ImageStore for FileStore {
     }
 
     fn read_state(&self) -> Result<BootState, StoreError> {
-        let (a, b) = (self.read_copy(0), self.read_copy(1));
+        let (a, b) = (self.read_copy(0)?, self.read_copy(1)?);
         BootState::read_bank([&a, &b])
             .map(|(_, s)| s)
             .ok_or(StoreError::NoState)
@@ -187,7 +202,7 @@ impl ImageStore for FileStore {
     fn write_state(&mut self, state: &BootState) -> Result<(), StoreError> {
         // The image data a record may point at is durable first.
         self.sync_dirty()?;
-        let (a, b) = (self.read_copy(0), self.read_copy(1));
+        let (a, b) = (self.read_copy(0)?, self.read_copy(1)?);
         let (copy, record) = BootState::bank_write([&a, &b], state);
         let created = !self.state_path(copy).exists();
         let mut f = io(OpenOptions::new()
@@ -283,7 +298,7 @@ mod tests {
         let mut s = FileStore::open(&dir, 4096).unwrap();
         let d = power_on(&mut s);
         assert_eq!(d.outcome, BootOutcome::Trial { attempt: 1 });
-        assert_eq!((d.slot, d.version.as_str()), (Slot::B, "2.0"));
+        assert_eq!((d.slot, d.version.as_str()), (Some(Slot::B), "2.0"));
         confirm_boot(&mut s).unwrap();
         let s = FileStore::open(&dir, 4096).unwrap();
         assert_eq!(s.read_state().unwrap().active, Slot::B);
@@ -305,6 +320,21 @@ mod tests {
         f.write_all(&[0u8; 20]).unwrap();
         drop(f);
         assert_eq!(s.read_state().unwrap().active_image.version.as_str(), "1.0");
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_boot_record_that_cannot_be_read_is_an_io_error_and_starts_nothing() {
+        let dir = temp_dir("unreadable");
+        let mut s = FileStore::open(&dir, 64).unwrap();
+        provision(&mut s, FirmwareVersion::new("1.0").unwrap(), &[1; 10]).unwrap();
+        provision(&mut s, FirmwareVersion::new("1.1").unwrap(), &[2; 10]).unwrap();
+        // The newer copy cannot be read (a directory: open works, read
+        // fails, also for root); it is not a blank store.
+        fs::remove_file(s.state_path(1)).unwrap();
+        fs::create_dir(s.state_path(1)).unwrap();
+        assert_eq!(s.read_state(), Err(StoreError::Io));
+        assert_eq!(power_on(&mut s).slot, None);
         fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -23,7 +23,9 @@
 //!    attempts; the new firmware calls [`confirm_boot`] once it runs, or
 //!    [`reject_boot`] if its start check fails. An image that fails
 //!    verification, or is not confirmed within [`MAX_BOOT_ATTEMPTS`]
-//!    boots, is rolled back to the previous slot.
+//!    boots, is rolled back to the previous slot. Boot records that
+//!    cannot be read start no image at all: the device stays in the
+//!    bootloader (AL status 0x0014 "no valid firmware").
 //!
 //! The boot state lives in two copies with sequence numbers and CRCs
 //! ([`BootState`]); a power cut at any moment leaves either the old or the

@@ -75,6 +75,9 @@ pub trait LineSlave: Send {
     fn set_port1_link(&mut self, link: bool);
     /// Sets 0x100A to the version that runs.
     fn set_firmware_version(&mut self, version: &str);
+    /// The bootloader started no image: only INIT and BOOT are accepted
+    /// ([`Slave::set_no_valid_firmware`](crate::device::Slave::set_no_valid_firmware)).
+    fn set_no_valid_firmware(&mut self, none: bool);
     /// The version in 0x100A.
     fn firmware_version(&self) -> String;
     /// RUN and ERR LED patterns.
@@ -139,6 +142,9 @@ impl<A: Application + Send + 'static, P: SoftPdi + Send + 'static> LineSlave for
     }
     fn set_firmware_version(&mut self, version: &str) {
         self.slave_mut().set_firmware_version(version);
+    }
+    fn set_no_valid_firmware(&mut self, none: bool) {
+        self.slave_mut().set_no_valid_firmware(none);
     }
     fn firmware_version(&self) -> String {
         self.slave().firmware_version().as_str().to_string()
@@ -323,6 +329,7 @@ impl Chain {
             let decision = firmware::power_on(img.as_mut());
             let _ = firmware::confirm_boot(img.as_mut());
             s.set_firmware_version(decision.version.as_str());
+            s.set_no_valid_firmware(decision.slot.is_none());
         }
         let last = slaves.len().saturating_sub(1);
         for (i, s) in slaves.iter_mut().enumerate() {
@@ -814,6 +821,7 @@ impl Chain {
         let _ = firmware::confirm_boot(store.as_mut());
         let version = decision.version.as_str().to_string();
         slave.set_firmware_version(&version);
+        slave.set_no_valid_firmware(decision.slot.is_none());
         self.reindex();
         self.windows_stale = true;
         Some(version)
@@ -1064,6 +1072,67 @@ mod tests {
         line.process(&mut f, 0);
         assert_eq!(line.firmware_runs(), 9);
         assert!((0..8).all(|i| al_status(&line, i) == 0x0001));
+    }
+
+    /// A flash whose boot records (and everything else) cannot be read.
+    struct BrokenFlash;
+
+    impl ImageStore for BrokenFlash {
+        fn slot_capacity(&self) -> usize {
+            IMAGE_SLOT_CAPACITY
+        }
+        fn erase(&mut self, _: crate::firmware::Slot) -> Result<(), StoreError> {
+            Err(StoreError::Io)
+        }
+        fn write(
+            &mut self,
+            _: crate::firmware::Slot,
+            _: usize,
+            _: &[u8],
+        ) -> Result<(), StoreError> {
+            Err(StoreError::Io)
+        }
+        fn read(
+            &self,
+            _: crate::firmware::Slot,
+            _: usize,
+            _: &mut [u8],
+        ) -> Result<usize, StoreError> {
+            Err(StoreError::Io)
+        }
+        fn read_state(&self) -> Result<crate::firmware::BootState, StoreError> {
+            Err(StoreError::Io)
+        }
+        fn write_state(&mut self, _: &crate::firmware::BootState) -> Result<(), StoreError> {
+            Err(StoreError::Io)
+        }
+    }
+
+    #[test]
+    fn a_slave_whose_boot_records_cannot_be_read_refuses_preop_with_0x0014() {
+        let slaves: Vec<Box<dyn LineSlave>> = vec![
+            Box::new(crate::testing::slave()),
+            Box::new(crate::testing::slave()),
+        ];
+        let mut line = Chain::with_stores(slaves, vec![Box::new(BrokenFlash)]);
+        let at = |pos: u16| u32::from(0u16.wrapping_sub(pos)) | (0x0120 << 16);
+        for pos in 0..2 {
+            let mut f = one_datagram(Command::Apwr, at(pos), &[0x02, 0]);
+            line.process(&mut f, 0);
+        }
+        let code = |line: &Chain, i: usize| line.slaves()[i].al_status().code;
+        assert_eq!(al_status(&line, 0), 0x0011, "INIT + error");
+        assert_eq!(code(&line, 0), crate::al::AlStatusCode::NoValidFirmware);
+        assert_eq!(
+            code(&line, 1),
+            crate::al::AlStatusCode::InvalidMailboxPreOp,
+            "a slave with readable records runs its firmware"
+        );
+        // Still so after a power cycle.
+        line.power_cycle(0);
+        let mut f = one_datagram(Command::Apwr, at(0), &[0x02, 0]);
+        line.process(&mut f, 0);
+        assert_eq!(code(&line, 0), crate::al::AlStatusCode::NoValidFirmware);
     }
 
     #[test]

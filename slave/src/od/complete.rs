@@ -9,7 +9,7 @@
 //! carry as many elements as subindex 0 says (upload), or as the data holds
 //! (download, which then sets subindex 0).
 
-use super::store::{Od, byte_len};
+use super::store::{Od, byte_len, from_raw};
 use super::types::{Access, DataType, Entry, Object, ObjectCode};
 use crate::al::AlState;
 use crate::pdo::{read_bits, write_bits};
@@ -147,7 +147,9 @@ pub fn check_download(
         }
         let current = store.value(flat);
         if e.access == Access::Ro {
-            if raw as i64 != current {
+            // The store holds signed values sign-extended; the raw bits
+            // are zero-extended.
+            if from_raw(e, raw) != current {
                 return Err(SdoAbortCode::ReadOnly);
             }
             continue;
@@ -195,6 +197,39 @@ mod tests {
         assert_eq!(
             check_download(&s, 0x8001, 0, &img[..9], AlState::Op),
             Err(SdoAbortCode::LengthTooLow)
+        );
+    }
+
+    mod signed {
+        use crate::od::build::{constant, ranged, sub0};
+        use crate::od::{DataType, Object, ObjectCode};
+
+        /// A record with a read-only signed member holding a negative value.
+        #[rustfmt::skip]
+        pub const OBJECTS: &[Object] = &[
+            Object { index: 0x8000, name: "Calibration", code: ObjectCode::Record, entries: &[
+                sub0(2),
+                constant(1, "Factory offset", DataType::Int16, -300),
+                ranged(2, "Gain", DataType::Int32, -7, -1000, 1000, ""),
+            ] },
+        ];
+
+        crate::dictionary!(pub DICT, pub ENTRIES = OBJECTS, &[]);
+    }
+
+    #[test]
+    fn a_record_with_a_negative_read_only_member_downloads_back_what_it_uploaded() {
+        let s = crate::od::ObjectStore::<[i64; signed::ENTRIES]>::new(&signed::DICT);
+        let mut out = [0u8; 16];
+        let n = upload(&s, 0x8000, 0, &mut out).unwrap();
+        assert_eq!(&out[..n], &[2, 0, 0xD4, 0xFE, 0xF9, 0xFF, 0xFF, 0xFF]);
+        let c = check_download(&s, 0x8000, 0, &out[..n], AlState::PreOp).unwrap();
+        assert_eq!(c.as_slice(), &[(2, -7)], "only the RW member is written");
+        out[2] ^= 1;
+        assert_eq!(
+            check_download(&s, 0x8000, 0, &out[..n], AlState::PreOp),
+            Err(SdoAbortCode::ReadOnly),
+            "a changed RO member"
         );
     }
 

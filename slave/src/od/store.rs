@@ -107,6 +107,19 @@ pub fn byte_len(entry: &Entry) -> usize {
     usize::from(entry.bit_len).div_ceil(8)
 }
 
+/// The value of `raw` (the entry's bits, zero-extended to 64) in the
+/// entry's signedness: signed types are sign-extended from their bit size,
+/// as the store holds them.
+pub fn from_raw(entry: &Entry, raw: u64) -> i64 {
+    let bits = u32::from(entry.bit_len).min(64);
+    if entry.data_type.is_signed() && bits > 0 && bits < 64 {
+        let shift = 64 - bits;
+        ((raw << shift) as i64) >> shift
+    } else {
+        raw as i64
+    }
+}
+
 impl Od {
     /// The dictionary this store holds the values of.
     pub fn dictionary(&self) -> &'static Dictionary {
@@ -265,18 +278,17 @@ impl Od {
         }
         let unsigned = u64::from_le_bytes(raw);
         let bits = u32::from(entry.bit_len).min(64);
-        let value = if entry.data_type.is_signed() && bits < 64 {
-            let shift = 64 - bits;
-            ((unsigned << shift) as i64) >> shift
-        } else {
-            unsigned as i64
-        };
+        let value = from_raw(entry, unsigned);
         // Enumerations and booleans accept their members only (0x06090030),
         // whatever the bit pattern; other unsigned types must have no bits
         // set above their bit size.
         match entry.data_type {
             DataType::Bool if unsigned > 1 => return Err(SdoAbortCode::ValueRange),
-            DataType::Enum(e) if !e.contains(value) || unsigned >> bits != 0 => {
+            // A 64-bit enumeration has no bits above its size (a shift by
+            // 64 would overflow).
+            DataType::Enum(e)
+                if !e.contains(value) || unsigned.checked_shr(bits).unwrap_or(0) != 0 =>
+            {
                 return Err(SdoAbortCode::ValueRange);
             }
             _ => {}
@@ -392,6 +404,25 @@ mod tests {
         );
         assert_eq!(w(&mut s, 3, &(-100i16).to_le_bytes()), Ok(-100));
         assert_eq!(s.get(0x8000, 3), Some(-100), "sign extended");
+    }
+
+    /// A 64-bit enumeration (`DT0801EN64`), with a member above 32 bits.
+    const WIDE: crate::od::EnumDesc = crate::od::EnumDesc {
+        index: 0x0801,
+        name: "DT0801EN64",
+        bit_len: 64,
+        values: &[(1, "ONE"), (0x1_0000_0000, "HIGH")],
+    };
+
+    #[test]
+    fn a_64_bit_enumeration_accepts_its_members_and_refuses_others_with_0609_0030() {
+        let e = crate::od::build::setting(1, "Wide", DataType::Enum(&WIDE), 1, "");
+        assert_eq!(e.bit_len, 64);
+        let w = |v: u64| Od::check(&e, &v.to_le_bytes(), AlState::PreOp);
+        assert_eq!(w(1), Ok(1));
+        assert_eq!(w(0x1_0000_0000), Ok(0x1_0000_0000));
+        assert_eq!(w(2), Err(SdoAbortCode::ValueRange));
+        assert_eq!(w(u64::MAX), Err(SdoAbortCode::ValueRange));
     }
 
     #[test]

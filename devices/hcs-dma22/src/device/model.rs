@@ -345,6 +345,13 @@ impl Module {
     /// takes the cyclic outputs (when `outputs_valid`), runs the signal
     /// path and writes the cyclic inputs and `d` values. Returns the error
     /// number when a new error was raised.
+    ///
+    /// `outputs_valid` means OP with valid cyclic outputs (the node passes
+    /// the AL state in): only then does the power stage drive the
+    /// solenoids (ETG.1000.6: outside OP the outputs stay in their safe
+    /// state). Otherwise the set values, also those written acyclically,
+    /// stay and run through the set-value path (`d` values), but the
+    /// controller output and the solenoid currents are 0 (`NOTES.md` 31).
     pub fn tick(
         &mut self,
         od: &mut Od,
@@ -408,10 +415,10 @@ impl Module {
             }
             new
         } else {
-            // E23 = 0: the cyclic set values go when the cyclic data stop
-            // (the EtherCAT safe state); set values written acyclically
-            // (SDO, CMD 6) outside OP stay, as A1.01 "when written, always
-            // active" (chapter 7).
+            // E23 = 0: the cyclic set values go when the cyclic data stop;
+            // set values written acyclically (SDO, CMD 6) outside OP stay
+            // written, as A1.01 "when written, always active" (chapter 7),
+            // but drive nothing before OP (`driving` below).
             self.was_valid && !outputs_valid && timeout_ms == 0
         };
         self.was_valid = outputs_valid;
@@ -427,14 +434,16 @@ impl Module {
             set(od, n, id::A2_02, 0);
         }
         let enabled = self.enabled();
-        let b1 = self.branch(od, n, 0, &BRANCH1, dt, enabled, mode);
+        // The power stage drives only in OP with valid cyclic outputs.
+        let driving = enabled && outputs_valid;
+        let b1 = self.branch(od, n, 0, &BRANCH1, dt, (enabled, driving), mode);
         let b2 = if two_branches(mode) {
-            self.branch(od, n, 1, &BRANCH2, dt, enabled, mode)
+            self.branch(od, n, 1, &BRANCH2, dt, (enabled, driving), mode)
         } else {
             self.branches[1] = Branch::default();
             BranchOut::default()
         };
-        self.solenoids(od, n, mode, b1, b2, enabled);
+        self.solenoids(od, n, mode, b1, b2, driving);
         // E Int (read part) and the status word.
         let mut low = 0u16;
         if closed_loop(mode) {
@@ -489,7 +498,9 @@ impl Module {
         raised
     }
 
-    /// Runs branch `b` (0 or 1) of module `n`.
+    /// Runs branch `b` (0 or 1) of module `n`; `(enabled, driving)`: the
+    /// output stage is enabled (the set-value path runs), the power stage
+    /// drives (the controller and the drive signal run).
     #[allow(clippy::too_many_arguments)]
     fn branch(
         &mut self,
@@ -498,7 +509,7 @@ impl Module {
         b: usize,
         ids: &BranchIds,
         dt: u64,
-        enabled: bool,
+        (enabled, driving): (bool, bool),
         mode: u8,
     ) -> BranchOut {
         let din = self.control
@@ -533,7 +544,7 @@ impl Module {
             p(ids.comparator2),
             p(ids.comparator2 + 1),
         );
-        let limit = p(ids.i_limit).abs() * 1000;
+        let limit = p(ids.i_limit).saturating_abs().saturating_mul(1000);
         // Ramps r.01 0 -> -, r.02 - -> 0, r.03 0 -> +, r.04 + -> 0:
         // 1 == 10 ms for 10 V, i.e. (1 / r) µV per ns.
         let target = sum * 1000;
@@ -549,14 +560,16 @@ impl Module {
         } else {
             ramps[1]
         };
+        // A gap of any length (u64 ns) moves at most to the target.
+        let dt_ns = i64::try_from(dt).unwrap_or(i64::MAX);
         st.ramped_uv = if ramp <= 0 || !enabled {
             target
         } else {
-            let step = (dt as i64 / ramp).max(1);
+            let step = (dt_ns / ramp).max(1);
             if target > cur {
-                (cur + step).min(target)
+                cur.saturating_add(step).min(target)
             } else {
-                (cur - step).max(target)
+                cur.saturating_sub(step).max(target)
             }
         };
         let d02 = clamp_mv(st.ramped_uv / 1000);
@@ -569,7 +582,7 @@ impl Module {
         if !closed_loop(mode) {
             set(od, n, ids.d10, d04);
             return BranchOut {
-                drive: d04,
+                drive: if driving { d04 } else { 0 },
                 ..BranchOut::default()
             };
         }
@@ -583,10 +596,14 @@ impl Module {
         };
         let e = clamp_mv(w - x);
         let kp = if e.abs() < threshold { kp1 } else { kp2 };
-        if enabled {
-            // I part C.17: 1000 == 1.000 1/s.
-            st.integral_uv =
-                (st.integral_uv + e * ki * dt as i64 / 1_000_000_000).clamp(-limit, limit);
+        if driving {
+            // I part C.17: 1000 == 1.000 1/s, limited to C.33 (anti-windup).
+            // In i128: e * ki * dt overflows i64 after minutes without a
+            // tick; any gap saturates at the limit.
+            let delta = i128::from(e) * i128::from(ki) * i128::from(dt) / 1_000_000_000;
+            let sum =
+                (i128::from(st.integral_uv) + delta).clamp(-i128::from(limit), i128::from(limit));
+            st.integral_uv = i64::try_from(sum).unwrap_or(0);
         } else {
             st.integral_uv = 0;
         }
@@ -597,7 +614,7 @@ impl Module {
         set(od, n, ids.d10, w);
         set(od, n, ids.d11, x);
         set(od, n, ids.d12, e);
-        set(od, n, ids.d13, if enabled { y } else { 0 });
+        set(od, n, ids.d13, if driving { y } else { 0 });
         // Comparators Comp_x (C.21..C.25) and Comp_xx (C.28..C.32).
         let pick = |sel: i64| match sel {
             1 => Some(w),
@@ -611,7 +628,7 @@ impl Module {
         let remote = matches!(controller, 2 | 4);
         st.dout = remote && din && (st.dout || !comp);
         BranchOut {
-            drive: if enabled { y } else { 0 },
+            drive: if driving { y } else { 0 },
             comp,
             comp2,
             dout: st.dout,
@@ -619,8 +636,8 @@ impl Module {
     }
 
     /// Solenoid signals and currents (d1.05-d1.09) from the branches'
-    /// drive signals.
-    fn solenoids(&self, od: &mut Od, n: u8, mode: u8, b1: BranchOut, b2: BranchOut, enabled: bool) {
+    /// drive signals; all 0 unless the power stage is `driving`.
+    fn solenoids(&self, od: &mut Od, n: u8, mode: u8, b1: BranchOut, b2: BranchOut, driving: bool) {
         let e03 = get(od, n, id::E03);
         let e10 = get(od, n, id::E10);
         let c = |k: u16| get(od, n, id::C1_00 + k);
@@ -634,7 +651,7 @@ impl Module {
         };
         // Gain C1.03/C1.04 and dead band C1.07/C1.08 per solenoid.
         let signal = |v: i64, gain: i64, dead: i64| {
-            if v == 0 || !enabled {
+            if v == 0 || !driving {
                 0
             } else {
                 (dead + v * gain / 100 * (9999 - dead) / 9999).clamp(0, 9999)

@@ -1,5 +1,8 @@
 use ecat_slave::device::SoftSlave;
 
+use ecat_slave::al::AlState;
+use ecat_slave::device::Tick;
+
 use super::model::{id, status};
 use super::*;
 
@@ -178,7 +181,116 @@ fn without_hw_enable_the_control_byte_is_reset_and_nothing_drives() {
     assert_eq!(model::get(od, 0, id::D1_07), 0);
 }
 
-/// Serves one telegram through the channel of a fresh node with `N`
+#[test]
+fn a_gap_of_hours_saturates_the_ramp_and_the_integral_instead_of_overflowing() {
+    // Closed loop (mode 3, PI controller C1.00 = 1) at the I part's limits.
+    let setup = |od: &mut Od, ramp: i64| {
+        model::set(od, 0, id::C1_00 + 17, 4000); // C1.17 I portion, maximum
+        model::set(od, 0, id::C1_33, 9999); // C1.33 limit 9.999 V
+        for k in 0..4 {
+            model::set(od, 0, id::R1_01 + k, ramp);
+        }
+        outputs(od, 0, 0, 5000, 0);
+    };
+    // A ramp of 1 (10 ms for 10 V) over half of u64's nanoseconds.
+    let mut s = node3();
+    let od = s.slave_mut().od_mut();
+    let mut m = model::Module::new();
+    setup(od, 1);
+    m.tick(od, 0, 3, 0, true);
+    m.tick(od, 0, 3, u64::MAX / 2, true);
+    assert_eq!(
+        model::get(od, 0, id::D1_10),
+        5000,
+        "ramp reached, not wrapped"
+    );
+    assert_eq!(model::get(od, 0, id::D1_13), 9999, "I part at its limit");
+    m.tick(od, 0, 3, u64::MAX, true);
+    assert_eq!(model::get(od, 0, id::D1_13), 9999);
+    // No ramp, two hours between cycles, both signs.
+    for (sv, y) in [(5000i16, 9999), (-5000, -9999)] {
+        let mut s = node3();
+        let od = s.slave_mut().od_mut();
+        let mut m = model::Module::new();
+        setup(od, 0);
+        outputs(od, 0, 0, sv, 0);
+        run(&mut m, od, 0, 3, 0, true);
+        run(&mut m, od, 0, 3, 2 * 3600 * 1000, true);
+        assert_eq!(model::get(od, 0, id::D1_13), y, "set value {sv}");
+    }
+}
+
+/// One tick of `node`'s application in AL state `state` (outputs valid in
+/// OP), as the core runs it.
+fn node_tick<const N: usize>(node: &mut Dma22Node<N>, od: &mut Od, state: AlState, t_ms: u64) {
+    let mut em = ecat_slave::coe::emergency::Emergencies::default();
+    node.tick(&mut Tick::new(
+        od,
+        t_ms * 1_000_000,
+        state == AlState::Op,
+        state,
+        &mut em,
+    ));
+}
+
+/// Solenoid currents A and B of module 1 (d1.07, d1.08).
+fn currents(od: &Od) -> (i64, i64) {
+    (model::get(od, 0, id::D1_07), model::get(od, 0, id::D1_08))
+}
+
+#[test]
+fn set_values_written_outside_op_leave_the_solenoid_currents_at_0() {
+    // Mode 1: the set values are the solenoid currents' (50 % of the
+    // 2.7 A solenoid = 1350 mA).
+    let mut s = SoftSlave::new(Dma22Node::<1>::new([1]));
+    let (node, od) = s.slave_mut().app_and_od();
+    // An SDO download of A1.01 = 5.000 V in PRE-OP: stored, not driven.
+    let (index, sub) = od::parameter(0, id::A1_01).unwrap();
+    assert_eq!(
+        od.download(index, sub, &5000i16.to_le_bytes(), AlState::PreOp),
+        Ok(5000)
+    );
+    for t in 0..3 {
+        node_tick(node, od, AlState::PreOp, t);
+        assert_eq!(currents(od), (0, 0), "PRE-OP, tick {t}");
+    }
+    assert_eq!(
+        model::get(od, 0, id::A1_01),
+        5000,
+        "the value stays written"
+    );
+    assert_eq!(model::get(od, 0, id::D1_09), 0);
+    // A CMD 15 telegram through the channel (set value 2.5 V), then
+    // SAFE-OP: still nothing.
+    let mut out = [0u8; channel::MAX_TELEGRAM];
+    let req = [0x40, 0x01, 0x0F, 0x00, 0x09, 0xC4, 0x00, 0x00];
+    node.channel.serve(
+        od,
+        &req,
+        channel::Modules {
+            modules: &mut node.modules,
+            modes: &node.modes,
+        },
+        &mut out,
+    );
+    assert_eq!(model::get(od, 0, id::A1_01), 2500);
+    node_tick(node, od, AlState::PreOp, 3);
+    assert_eq!(currents(od), (0, 0), "telegram in PRE-OP");
+    node_tick(node, od, AlState::SafeOp, 4);
+    assert_eq!(currents(od), (0, 0), "SAFE-OP");
+    // OP with valid cyclic outputs acts as before.
+    outputs(od, 0, 0x00, 5000, 0);
+    node_tick(node, od, AlState::Op, 5);
+    assert_eq!(currents(od), (1350, 0), "OP");
+    outputs(od, 0, 0x00, -5000, 0);
+    node_tick(node, od, AlState::Op, 6);
+    assert_eq!(currents(od), (0, 1350), "OP, solenoid B");
+    // Back to SAFE-OP: the power stage goes off at once.
+    node_tick(node, od, AlState::SafeOp, 7);
+    assert_eq!(currents(od), (0, 0), "left OP");
+}
+
+/// Serves one telegram through the channel of a fresh node with `N`/// Serves one telegram through the channel of a fresh node with `N`
 /// modules (after one tick, so the modules' inputs are current).
 struct Bench<const N: usize> {
     slave: SoftSlave<Dma22Node<N>>,
