@@ -23,7 +23,7 @@
 use crate::firmware::Crc32;
 use crate::hal::{NvError, NvStorage};
 use crate::od::Dictionary;
-use crate::od::store::{Od, byte_len};
+use crate::od::store::{Od, byte_len, from_raw};
 use crate::od::types::{DataType, DefaultValue, Entry};
 
 /// Size of one slot.
@@ -181,26 +181,44 @@ pub fn load<N: NvStorage>(store: &mut Od, nv: &N) -> Result<u32, ParamError> {
     let mut at = HEADER;
     for (flat, e) in stored_entries(dict) {
         let n = byte_len(e);
-        let mut raw = [0u8; 8];
-        if let (Some(dst), Some(src)) = (raw.get_mut(..n), buf.get(at..at + n)) {
-            dst.copy_from_slice(src);
-        }
-        let u = u64::from_le_bytes(raw);
-        let bits = u32::from(e.bit_len).min(64);
-        let v = if e.data_type.is_signed() && bits < 64 && bits > 0 {
-            let shift = 64 - bits;
-            ((u << shift) as i64) >> shift
-        } else {
-            u as i64
-        };
-        store.set_value(flat, v);
+        store.set_value(flat, decode(e, buf.get(at..at + n).unwrap_or(&[])));
         at += n;
     }
     debug_assert_eq!(at, HEADER + len);
     Ok(seq)
 }
 
-/// DEFAULT: every backup entry back to its default value.
+/// The value of `index:sub` in the newest valid set of `nv` (what a
+/// LOADBACK would restore), without loading the rest; `None` when the
+/// entry is not stored (not `backup`) or nothing valid is stored.
+pub fn stored_value<N: NvStorage>(nv: &N, dict: &Dictionary, index: u16, sub: u8) -> Option<i64> {
+    let (flat, _) = dict.find_entry(index, sub)?;
+    let (slot, _) = newest(nv, dict)?;
+    let mut buf = [0u8; SLOT_SIZE];
+    read_slot(nv, dict, slot, &mut buf)?;
+    let mut at = HEADER;
+    for (f, e) in stored_entries(dict) {
+        let n = byte_len(e);
+        if f == flat {
+            return Some(decode(e, buf.get(at..at + n)?));
+        }
+        at += n;
+    }
+    None
+}
+
+/// A stored value of `e` from its little-endian bytes, sign-extended for a
+/// signed type.
+fn decode(e: &Entry, bytes: &[u8]) -> i64 {
+    let mut raw = [0u8; 8];
+    let n = bytes.len().min(8);
+    if let (Some(dst), Some(src)) = (raw.get_mut(..n), bytes.get(..n)) {
+        dst.copy_from_slice(src);
+    }
+    from_raw(e, u64::from_le_bytes(raw))
+}
+
+/// DEFAULT: every backup entry of `store` back to its default.
 pub fn restore_defaults(store: &mut Od) {
     for (flat, e) in stored_entries(store.dictionary()) {
         if let DefaultValue::Int(v) = e.default {

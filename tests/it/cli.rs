@@ -490,7 +490,7 @@ fn master_test_iface_drives_the_raw_runner_over_veth() {
         .spawn()
         .expect("start pam-slave in the namespace");
     guard.runner = Some(child);
-    std::thread::sleep(Duration::from_millis(300));
+    crate::common::wait_for_runner(&host_if);
     let on = |args: &[&str], code: i32| {
         let mut all = vec!["--iface", host_if.as_str()];
         all.extend_from_slice(args);

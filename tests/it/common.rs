@@ -3,6 +3,7 @@
 use ethercrab::error::{Error, MailboxError};
 use std::path::PathBuf;
 use std::process::{Child, Command};
+use std::time::Duration;
 
 /// The CoE abort code inside an ethercrab SDO error, if it is one.
 pub fn abort_code(e: &Error) -> Option<u32> {
@@ -141,4 +142,58 @@ pub async fn request(md: &Md, station: u16, control: u16) -> (u16, u16) {
         .expect("AL control");
     settle(md).await;
     status(md, station).await
+}
+
+/// Waits until a runner on the far end of `host_if` answers EtherCAT
+/// frames (a BRD of register 0x0000 comes back processed), instead of
+/// guessing how long it takes to start on a busy machine. Panics after
+/// 60 s.
+pub fn wait_for_runner(host_if: &str) {
+    wait_for_line(host_if, None);
+}
+
+/// [`wait_for_runner`] until `slaves` slaves answer (the BRD's working
+/// counter), e.g. after a cable between chained runners was pulled or
+/// plugged back; `None`: any answer.
+pub fn wait_for_line(host_if: &str, slaves: Option<u16>) {
+    let ifaces = pnet_datalink::interfaces();
+    let nic = ifaces
+        .iter()
+        .find(|i| i.name == host_if)
+        .unwrap_or_else(|| panic!("no interface {host_if}"));
+    let cfg = pnet_datalink::Config {
+        read_timeout: Some(Duration::from_millis(20)),
+        ..pnet_datalink::Config::default()
+    };
+    let Ok(pnet_datalink::Channel::Ethernet(mut tx, mut rx)) = pnet_datalink::channel(nic, cfg)
+    else {
+        panic!("raw socket on {host_if}");
+    };
+    // Ethernet (broadcast, from a master), EtherCAT header (one datagram
+    // of 10 + 2 + 2 bytes, type 1), BRD 0x0000 of 2 bytes, working counter.
+    let mut frame = vec![0xFFu8; 6];
+    frame.extend_from_slice(&[0x10, 0, 0, 0, 0, 1, 0x88, 0xA4]);
+    frame.extend_from_slice(&[14, 0x10]);
+    frame.extend_from_slice(&[0x07, 0x5A, 0, 0, 0, 0, 2, 0, 0, 0]);
+    frame.extend_from_slice(&[0, 0, 0, 0]);
+    frame.resize(60, 0);
+    let start = std::time::Instant::now();
+    let mut last = None;
+    while start.elapsed() < Duration::from_secs(60) {
+        let _ = tx.send_to(&frame, None);
+        let sent = std::time::Instant::now();
+        while sent.elapsed() < Duration::from_millis(50) {
+            if let Ok(f) = rx.next()
+                && ecat_slave::host::raw::is_processed(f)
+            {
+                let wkc = f.get(28..30).map(|b| u16::from_le_bytes([b[0], b[1]]));
+                if slaves.is_none() || wkc == slaves {
+                    return;
+                }
+                last = wkc;
+            }
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    panic!("no line of {slaves:?} slaves answered on {host_if} within 60 s (last: {last:?})");
 }

@@ -24,7 +24,6 @@ use master_test::link::Clock;
 use std::any::Any;
 use std::collections::BTreeSet;
 use std::process::{Command, Stdio};
-use std::time::Duration;
 
 /// One defect of a broken slave.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -388,7 +387,7 @@ fn master_test_conformance_passes_against_the_raw_runner_over_veth() {
         .spawn()
         .expect("start pam-slave in the namespace");
     guard.runner = Some(child);
-    std::thread::sleep(Duration::from_millis(300));
+    crate::common::wait_for_runner(&host_if);
     let dir = std::env::temp_dir().join(format!("pam-conformance-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
     let fw = dir.join("fw.efw");

@@ -104,7 +104,7 @@ fn three_runners_chained_by_forward_are_one_line_for_ethercrab_and_soem() {
             &ifs[1],
         ],
     );
-    std::thread::sleep(Duration::from_millis(500));
+    crate::common::wait_for_line(&host, Some(4));
 
     {
         let bus = Bus::raw(&host).expect("raw socket on the host end");
@@ -194,7 +194,7 @@ fn three_runners_chained_by_forward_are_one_line_for_ethercrab_and_soem() {
     // closed.
     let b_ns = guards[1].name.clone();
     ip(&["-n", &b_ns, "link", "set", &ifs[2], "down"]).expect("pull B's cable");
-    std::thread::sleep(Duration::from_millis(400));
+    crate::common::wait_for_line(&host, Some(2));
     let bus = Bus::raw(&host).expect("raw socket on the host end");
     let md = bus.maindevice();
     smol::block_on(async {
@@ -210,7 +210,7 @@ fn three_runners_chained_by_forward_are_one_line_for_ethercrab_and_soem() {
     drop(bus);
     // The cable back in: the whole line again.
     ip(&["-n", &b_ns, "link", "set", &ifs[2], "up"]).expect("plug B's cable back");
-    std::thread::sleep(Duration::from_millis(400));
+    crate::common::wait_for_line(&host, Some(4));
     let bus = Bus::raw(&host).expect("raw socket on the host end");
     let md = bus.maindevice();
     smol::block_on(async {

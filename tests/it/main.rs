@@ -20,6 +20,7 @@ mod generic_core;
 mod long_line;
 mod mixed_line;
 mod power_cut;
+mod safety;
 mod sdo;
 mod shared;
 mod sii;

@@ -219,7 +219,7 @@ fn power_cuts_on(fs: &str, base: &Path, outer: &Path, master: &Path, runner: &Pa
         .spawn()
         .expect("start pam-slave in the namespace");
     guard.runner = Some(child);
-    std::thread::sleep(Duration::from_millis(300));
+    crate::common::wait_for_runner(&host_if);
     let spawn = |args: &[&str]| {
         Command::new(master)
             .args(["--iface", &host_if])

@@ -45,7 +45,7 @@ fn start_runner_with(
     extra: &[&str],
 ) -> Child {
     let stderr = std::fs::File::create(log).expect("runner log file");
-    let child = Command::new("ip")
+    Command::new("ip")
         .args(["netns", "exec", ns])
         .arg(bin)
         .args(extra)
@@ -62,9 +62,7 @@ fn start_runner_with(
         .stdout(Stdio::null())
         .stderr(stderr)
         .spawn()
-        .expect("start pam-slave in the namespace");
-    std::thread::sleep(Duration::from_millis(400));
-    child
+        .expect("start pam-slave in the namespace")
 }
 
 /// Starts the runner; its stderr goes to `log`.
@@ -222,6 +220,7 @@ fn soem_phases(tag: &str, line: &str, log: &str) -> Option<TempDir> {
         &file("runner1.log"),
     );
     guard.runner = Some(runner);
+    crate::common::wait_for_runner(&host_if);
     let (ok, out) = run_python(
         &py,
         &[
@@ -250,6 +249,7 @@ fn soem_phases(tag: &str, line: &str, log: &str) -> Option<TempDir> {
         &file("runner2.log"),
     );
     guard.runner = Some(runner);
+    crate::common::wait_for_runner(&host_if);
     let (ok, out) = run_python(&py, &["phase2", &host_if, "11"]);
     keep_log(log, &format!("--- SOEM phase 2 ---\n{out}"));
     eprintln!("--- SOEM phase 2 ({line}) ---\n{out}");
@@ -379,6 +379,7 @@ fn soem_phase(tag: &str, name: &str, line: &str, runner_args: &[&str], phase: &[
         runner_args,
     );
     guard.runner = Some(runner);
+    crate::common::wait_for_runner(&host_if);
     let log = format!("soem-{name}.log");
     let _ = std::fs::remove_file(
         std::path::Path::new(concat!(

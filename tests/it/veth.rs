@@ -37,8 +37,7 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
         .spawn()
         .expect("start pam-slave in the namespace");
     guard.runner = Some(child);
-    // Give the runner time to open its socket.
-    std::thread::sleep(Duration::from_millis(300));
+    crate::common::wait_for_runner(&host_if);
 
     let md = new_master(&host_if);
     smol::block_on(async {
@@ -145,7 +144,7 @@ fn raw_runner_behind_a_faulty_wire_stays_in_op_and_counts_the_corruption() {
         .expect("start pam-slave in the namespace");
     let start = std::time::Instant::now();
     guard.runner = Some(child);
-    std::thread::sleep(Duration::from_millis(300));
+    crate::common::wait_for_runner(&host_if);
     let (timeouts, retry) = master_test::fault_timeouts();
     // ethercrab's own raw-socket task ends for good at the first reply
     // it no longer waits for (a late or duplicated frame), so this master

@@ -177,8 +177,59 @@ impl<P: PowerStage, N: NvStorage> Pam<P, N> {
         self.stored_at_power_on
     }
 
-    /// Runs SAVE / DEFAULT / LOADBACK (0xF801:02..04 written with 1).
-    fn command(&mut self, od: &mut Od, sub: u8, now_ns: u64) -> Result<(), SdoAbortCode> {
+    /// Runs SAVE / DEFAULT / LOADBACK (0xF801:02..04 written with 1) in
+    /// AL state `state`.
+    ///
+    /// DEFAULT and LOADBACK restore the parameters but keep two rules
+    /// (docs/SAFETY.md): F800:02 FUNCTION selects the process image, so a
+    /// command that would change it is refused outside PRE-OP (0x08000022,
+    /// as a write of F800:02 is) and in PRE-OP selects the matching PDO
+    /// assignment; the manufacturer settings 0xF80F change only while the
+    /// vendor password is given.
+    fn command(
+        &mut self,
+        od: &mut Od,
+        sub: u8,
+        state: AlState,
+        now_ns: u64,
+    ) -> Result<(), SdoAbortCode> {
+        if matches!(sub, 3 | 4) {
+            let function = od.get(0xF800, 2);
+            let next = if sub == 3 {
+                od.dictionary()
+                    .find_entry(0xF800, 2)
+                    .and_then(|(_, e)| match e.default {
+                        ecat_slave::od::types::DefaultValue::Int(v) => Some(v),
+                        _ => None,
+                    })
+            } else {
+                params::stored_value(&self.nv, od.dictionary(), 0xF800, 2)
+            };
+            let changes_function = next.is_some() && next != function;
+            if changes_function && state != AlState::PreOp {
+                return Err(SdoAbortCode::InvalidState);
+            }
+            let manufacturer = [od.get(0xF80F, 1), od.get(0xF80F, 2)];
+            match sub {
+                3 => params::restore_defaults(od),
+                _ => {
+                    params::load(od, &self.nv).map_err(|_| SdoAbortCode::TransferFailed)?;
+                }
+            }
+            if !self.unlocked {
+                for (s, v) in (1u8..).zip(manufacturer) {
+                    if let Some(v) = v {
+                        od.set(0xF80F, s, v);
+                    }
+                }
+            }
+            if changes_function {
+                ecat_slave::pdo::assign_set(od, &DEVICE.process_data, function_set(od));
+            }
+            od.set(0xF801, sub, COMMAND_ACK);
+            self.ack = Some((0xF801, sub, now_ns.saturating_add(COMMAND_ACK_NS)));
+            return Ok(());
+        }
         match sub {
             2 => {
                 if let Some(last) = self.last_save_ns
@@ -190,10 +241,6 @@ impl<P: PowerStage, N: NvStorage> Pam<P, N> {
                 self.last_save_ns = Some(now_ns);
                 // Saving valid parameters clears an EEPROM data error.
                 self.amplifier.eeprom_error = false;
-            }
-            3 => params::restore_defaults(od),
-            4 => {
-                params::load(od, &self.nv).map_err(|_| SdoAbortCode::TransferFailed)?;
             }
             _ => return Err(SdoAbortCode::SubindexNotFound),
         }
@@ -216,6 +263,8 @@ impl<P: PowerStage + Send + 'static, N: NvStorage + Send + 'static> Application 
                 if params::load(od, &self.nv).is_err() {
                     self.amplifier.eeprom_error = true;
                 }
+                // A saved FUNCTION comes back with its PDO set.
+                ecat_slave::pdo::assign_set(od, &DEVICE.process_data, function_set(od));
             }
             Stored::Blank => {}
             Stored::Corrupt => self.amplifier.eeprom_error = true,
@@ -262,7 +311,7 @@ impl<P: PowerStage + Send + 'static, N: NvStorage + Send + 'static> Application 
             if value != 1 {
                 return Err(SdoAbortCode::ValueRange);
             }
-            self.command(od, d.sub, d.now_ns)?;
+            self.command(od, d.sub, d.state, d.now_ns)?;
             return Ok(Write::Done);
         }
         // 0xF80F manufacturer settings need the vendor password first.
@@ -307,6 +356,11 @@ impl<P: PowerStage + Send + 'static, N: NvStorage + Send + 'static> Application 
     }
 
     fn tick(&mut self, t: &mut Tick<'_>) {
+        // The vendor unlock ends with the master session: INIT (ETG.1000.6:
+        // the state every master starts from) locks 0xF80F again.
+        if t.state == AlState::Init {
+            self.unlocked = false;
+        }
         crate::app::entries::TIMESTAMP.set(t.od, t.now_ns as i64);
         if let Some((index, sub, until)) = self.ack
             && t.now_ns >= until
@@ -314,8 +368,11 @@ impl<P: PowerStage + Send + 'static, N: NvStorage + Send + 'static> Application 
             t.od.set(index, sub, 0);
             self.ack = None;
         }
+        // The solenoids are driven only from cyclic outputs in OP under an
+        // armed SM watchdog (docs/SAFETY.md, PAM rule 1).
+        let drive = t.outputs_valid && t.sm_watchdog_armed;
         self.amplifier
-            .run_until(t.od, &mut self.stage, t.now_ns, t.outputs_valid);
+            .run_until(t.od, &mut self.stage, t.now_ns, drive);
         let faults = FaultState::from_od(t.od);
         faults.report(&self.faults, t);
         self.faults = faults;

@@ -92,9 +92,16 @@ pub struct Tick<'a> {
     pub od: &'a mut Od,
     /// Time now, ns (monotonic, injected).
     pub now_ns: u64,
-    /// The outputs are valid: OP with a running SM watchdog. Otherwise the
-    /// application must drive its outputs to their safe state.
+    /// The outputs are valid: OP, and the master's cyclic outputs (SM2)
+    /// have been applied to the dictionary since OP was entered; an
+    /// expired SM watchdog has already left OP. Otherwise the application
+    /// must drive its outputs to their safe state, whatever an SDO wrote
+    /// into the output objects.
     pub outputs_valid: bool,
+    /// OP with the SM watchdog armed (0x0420 not 0): the outputs stop on
+    /// their own when the master does. A device whose safe state matters
+    /// (a valve amplifier) drives nothing without it.
+    pub sm_watchdog_armed: bool,
     /// The AL state.
     pub state: AlState,
     pub(crate) emergencies: &'a mut Emergencies,
@@ -114,6 +121,7 @@ impl<'a> Tick<'a> {
             od,
             now_ns,
             outputs_valid,
+            sm_watchdog_armed: outputs_valid,
             state,
             emergencies,
         }

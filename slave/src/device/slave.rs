@@ -93,6 +93,11 @@ pub struct Slave<E: Esc, A: Application> {
     dc_outputs: Option<(usize, [u8; MAX_IMAGE])>,
     /// The bootloader started no image ([`Slave::set_no_valid_firmware`]).
     no_valid_firmware: bool,
+    /// Outputs from SM2 were applied to the dictionary since OP was
+    /// entered: the master is exchanging cyclic outputs.
+    outputs_applied: bool,
+    /// The SM watchdog's time 0x0420 was not 0 at the last full pass in OP.
+    sm_watchdog_armed: bool,
 }
 
 impl<E: Esc, A: Application> core::fmt::Debug for Slave<E, A> {
@@ -365,6 +370,8 @@ impl<E: Esc, A: Application> Slave<E, A> {
             outputs_since_sync0: false,
             dc_outputs: None,
             no_valid_firmware: false,
+            outputs_applied: false,
+            sm_watchdog_armed: false,
         }
     }
 
@@ -393,6 +400,8 @@ impl<E: Esc, A: Application> Slave<E, A> {
         self.sm_event_missed = 0;
         self.outputs_since_sync0 = false;
         self.dc_outputs = None;
+        self.outputs_applied = false;
+        self.sm_watchdog_armed = false;
     }
 
     /// Uses another memory layout (standard mailbox size); it must match
@@ -645,10 +654,12 @@ impl<E: Esc, A: Application> Slave<E, A> {
     fn run_app(&mut self) {
         let state = self.al.state;
         {
+            let op = state == AlState::Op;
             let mut tick = Tick {
                 od: A::Values::view_mut(&mut self.store),
                 now_ns: self.now_ns,
-                outputs_valid: state == AlState::Op,
+                outputs_valid: op && self.outputs_applied,
+                sm_watchdog_armed: op && self.sm_watchdog_armed,
                 state,
                 emergencies: &mut self.emergencies,
             };
@@ -691,6 +702,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
         if self.al.state == AlState::Op {
             let time = self.esc.read_u16(reg::WATCHDOG_TIME_PD)?;
             let status = self.esc.read_u16(reg::WATCHDOG_STATUS_PD)?;
+            self.sm_watchdog_armed = time != 0;
             if time != 0 && status & 1 == 0 {
                 return self.local_error(AlState::SafeOp, AlStatusCode::SmWatchdog);
             }
@@ -827,6 +839,11 @@ impl<E: Esc, A: Application> Slave<E, A> {
         if after.state != AlState::Op && before.state == AlState::Op {
             self.safe_outputs();
         }
+        if after.state == AlState::Op && before.state != AlState::Op {
+            // Outputs count from the first SM2 write in OP on (what the
+            // master sent in SAFE-OP was never applied).
+            self.outputs_applied = false;
+        }
         if matches!(after.state, AlState::Init | AlState::Boot) && before.state != after.state {
             self.pending = None;
             self.last_sent = None;
@@ -843,6 +860,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
     fn safe_outputs(&mut self) {
         // Outputs held for the next SYNC0 are as stale as the rest.
         self.dc_outputs = None;
+        self.outputs_applied = false;
         let od = A::Values::view_mut(&mut self.store);
         let dict = od.dictionary();
         for (flat, _, e) in dict.entries() {
@@ -1015,6 +1033,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
         {
             let od = A::Values::view_mut(&mut self.store);
             self.outputs.unpack(od, b);
+            self.outputs_applied = true;
         }
         if self.sync_mode == SyncMode::DcSync0 && self.al.state == AlState::Op {
             // `read_outputs` ran first in this pass: outputs that came
@@ -1096,6 +1115,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
             {
                 let od = A::Values::view_mut(&mut self.store);
                 self.outputs.unpack(od, b);
+                self.outputs_applied = true;
             }
         }
         Ok(())
