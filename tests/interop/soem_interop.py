@@ -14,6 +14,8 @@ exits 1 on the first disagreement.
     soem_interop.py dc IFACE COUNT
     soem_interop.py twins IFACE SPEC ENI.xml
     soem_interop.py esi_twin IFACE ESI.xml
+    soem_interop.py safety IFACE
+    soem_interop.py safety_after_power_cycle IFACE
 
 phase1: discovery, SDO, SDO Information, complete access, SII, state
 machine, SM watchdog, 1000 cycles, an ended session followed by a second
@@ -46,6 +48,12 @@ identity and type name, SDO Information lists exactly the ESI's objects
 with the ESI's names, SDO reads of 0x1018 give the identity, the process
 image has the ESI's PDO sizes, the twin reaches OP and its inputs loop its
 outputs back.
+safety (one PAM): with no RxPDO assigned, ENABLE and a command value
+written over SDO in OP drive no current; with FUNCTION = IND in OP,
+DEFAULT and LOADBACK that would change FUNCTION are refused with
+0x08000022 and FUNCTION stays; SAVE with FUNCTION = IND.
+safety_after_power_cycle: FUNCTION = IND came back with its PDO set
+(0x1601/0x1A01) and OP is reached without rewriting the assignment.
 """
 
 import struct
@@ -590,6 +598,85 @@ def esi_twin(iface, esi):
     m.close()
 
 
+def safety(iface):
+    """The PAM's safety rules (docs/SAFETY.md) as SOEM can try to break
+    them: finding 1 to 3 of issue 29."""
+    u8 = lambda v: struct.pack("<B", v)
+    u32 = lambda v: struct.pack("<I", v)
+    # Finding 1: no RxPDO, ENABLE and a command value over SDO in OP.
+    m, n = open_master(iface)
+    check(n == 1, f"SOEM finds {n} slave")
+    s = m.slaves[0]
+    # The refused SAFE-OP below sends an Emergency; SOEM hands it over here
+    # instead of raising it from the next SDO transfer.
+    s.add_emergency_callback(lambda e: log(f"      emergency: {e}"))
+    set_sm_watchdog(m, LONG_WATCHDOG_MS)
+    s.sdo_write(0x1C12, 0, u8(0))
+    m.config_map()
+    check(len(s.output) == 0, f"no RxPDO assigned: output image {len(s.output)} bytes")
+    # SOEM 1.4's config_map keeps the SII's SM2 length (5) with the empty
+    # assignment and requests SAFE-OP, which the slave refuses with 0x001D
+    # (as SOES does: SM2 length must be the image's, 0). The master then
+    # disables SM2, as the finding's reproduction did, and acknowledges.
+    st, code = al_status(s), al_status_code(s)
+    log(f"      after config_map: AL status {st:#06x} code {code:#06x}")
+    s._fpwr(0x0816, b"\x00", 20000)
+    st, code = request_state(m, s, pysoem.PREOP_STATE | 0x10)
+    log(f"      SM2 disabled, error acknowledged: AL status {st:#06x}")
+    ok = check(to_op(m), "OP without outputs")
+    if not ok:
+        log(f"      AL status {al_status(s):#06x} code {al_status_code(s):#06x}")
+    s.sdo_write(0x7000, 1, u8(1))
+    s.sdo_write(0x7000, 3, struct.pack("<i", 5000))
+    cycles(m, 500)
+    ia = struct.unpack("<H", s.sdo_read(0x6000, 6))[0]
+    st = al_status(s)
+    log(f"      after 1 s: IA {ia} mA, AL status {st:#06x}")
+    check(ia == 0, f"ENABLE and COMMAND written by SDO without cyclic outputs drive no current: IA {ia} mA")
+    check(st == 0x08, f"and the slave is still in OP: {st:#06x}")
+    m.close()
+    # Finding 2: FUNCTION = IND in PRE-OP, OP, then DEFAULT / LOADBACK.
+    m, n = open_master(iface)
+    s = m.slaves[0]
+    set_sm_watchdog(m, LONG_WATCHDOG_MS)
+    s.sdo_write(0xF800, 2, u8(1))
+    s.sdo_write(0xF801, 2, u32(1))  # SAVE with FUNCTION = DIR
+    s.sdo_write(0xF800, 2, u8(2))
+    a = struct.unpack("<H", s.sdo_read(0x1C12, 1))[0]
+    check(a == 0x1601, f"FUNCTION = IND selects 0x1601: 0x1C12:01 = {a:#06x}")
+    m.config_map()
+    check(to_op(m), "OP with the independent set")
+    for sub, what in ((3, "DEFAULT"), (4, "LOADBACK")):
+        code = abort_of(lambda: s.sdo_write(0xF801, sub, u32(1)))
+        check(code == 0x08000022, f"{what} in OP that would change FUNCTION: abort {code and hex(code)}")
+        f = s.sdo_read(0xF800, 2)[0]
+        check(f == 2, f"FUNCTION still IND after {what}: {f}")
+    cycles(m, 10)
+    st = al_status(s)
+    check(st == 0x08, f"OP, no error: {st:#06x}")
+    # Finding 3: SAVE with FUNCTION = IND (1 s after the first SAVE).
+    time.sleep(1.1)
+    s.sdo_write(0xF801, 2, u32(1))
+    log("      SAVE with FUNCTION = IND; the runner restarts (power cycle)")
+    m.close()
+
+
+def safety_after_power_cycle(iface):
+    """After the power cycle: FUNCTION = IND came back with its PDO set."""
+    m, n = open_master(iface)
+    check(n == 1, f"SOEM finds {n} slave after the power cycle")
+    s = m.slaves[0]
+    set_sm_watchdog(m, LONG_WATCHDOG_MS)
+    f = s.sdo_read(0xF800, 2)[0]
+    rx = struct.unpack("<H", s.sdo_read(0x1C12, 1))[0]
+    tx = struct.unpack("<H", s.sdo_read(0x1C13, 1))[0]
+    check((f, rx, tx) == (2, 0x1601, 0x1A01),
+          f"FUNCTION {f} with 0x1C12:01 {rx:#06x}, 0x1C13:01 {tx:#06x} (IND, 0x1601, 0x1A01)")
+    m.config_map()
+    check(to_op(m), "OP without rewriting the assignment")
+    m.close()
+
+
 def main():
     if len(sys.argv) < 3:
         print(__doc__)
@@ -609,6 +696,10 @@ def main():
         twins(*sys.argv[2:5])
     elif sys.argv[1] == "esi_twin":
         esi_twin(*sys.argv[2:4])
+    elif sys.argv[1] == "safety":
+        safety(*sys.argv[2:3])
+    elif sys.argv[1] == "safety_after_power_cycle":
+        safety_after_power_cycle(*sys.argv[2:3])
     else:
         print(__doc__)
         return 2

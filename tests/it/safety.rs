@@ -219,3 +219,34 @@ fn the_vendor_unlock_ends_at_init() {
         assert_eq!(abort_code(&e), Some(0x0601_0000));
     });
 }
+
+/// With no RxPDO assigned SM2 is unused: disabled, or enabled with length
+/// 0 as SOEM's config_map leaves an SM whose image is empty (an ESC does not
+/// activate a SyncManager of length 0; SOES accepts it). Enabled with the
+/// SII's length 5 it contradicts the empty image: 0x001D.
+#[test]
+fn an_unused_sm2_may_be_enabled_with_length_0_but_not_with_a_length() {
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md: &Md = &bus.maindevice;
+        let group = bus.init().await.expect("PRE-OP");
+        let sd = group.subdevice(md, 0).expect("slave");
+        let s = sd.configured_address();
+        sd.sdo_write(0x1C12, 0, 0u8).await.expect("no RxPDO");
+        // SM3 for the 14 input bytes, as any master sets it.
+        ethercrab::Command::fpwr(s, 0x0818)
+            .send(md, [0x80u8, 0x11, 14, 0, 0x20, 0x00, 0x01, 0x00])
+            .await
+            .expect("SM3");
+        for (len, want) in [(0u16, (0x04, 0)), (5, (0x12, 0x001D))] {
+            let l = len.to_le_bytes();
+            let sm2 = [0x00, 0x11, l[0], l[1], 0x64, 0x00, 0x01, 0x00];
+            ethercrab::Command::fpwr(s, 0x0810)
+                .send(md, sm2)
+                .await
+                .expect("SM2");
+            assert_eq!(request(md, s, 0x04).await, want, "SM2 length {len}");
+            assert_eq!(request(md, s, 0x12).await.0, 0x02, "back to PRE-OP");
+        }
+    });
+}

@@ -346,6 +346,19 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
 /// interface, keeps its output as `target/interop-logs/soem-{name}.log`
 /// and asserts that every check passed.
 fn soem_phase(tag: &str, name: &str, line: &str, runner_args: &[&str], phase: &[&str]) {
+    soem_power_cycled_phases(tag, name, line, runner_args, &[phase]);
+}
+
+/// [`soem_phase`] for several phases, the runner restarted on the same
+/// state directory before each one after the first (a power cycle: saved
+/// parameters and firmware survive, everything else starts afresh).
+fn soem_power_cycled_phases(
+    tag: &str,
+    name: &str,
+    line: &str,
+    runner_args: &[&str],
+    phases: &[&[&str]],
+) {
     let Some(py) = pysoem_python() else {
         return skip(
             "no Python with pysoem (pip install pysoem, or set PAM_PYSOEM_PYTHON); .ci/run installs it",
@@ -368,18 +381,6 @@ fn soem_phase(tag: &str, name: &str, line: &str, runner_args: &[&str], phase: &[
     let dir = TempDir(std::env::temp_dir().join(format!("pam-soem-{name}-{}", std::process::id())));
     std::fs::create_dir_all(&dir.0).expect("temp dir");
     let file = |n: &str| dir.0.join(n);
-    let runner = start_runner_with(
-        &guard.name,
-        &bin,
-        line,
-        &slave_if,
-        &file("state"),
-        &file(&format!("{name}.pcap")),
-        &file("runner.log"),
-        runner_args,
-    );
-    guard.runner = Some(runner);
-    crate::common::wait_for_runner(&host_if);
     let log = format!("soem-{name}.log");
     let _ = std::fs::remove_file(
         std::path::Path::new(concat!(
@@ -388,13 +389,44 @@ fn soem_phase(tag: &str, name: &str, line: &str, runner_args: &[&str], phase: &[
         ))
         .join(&log),
     );
-    let mut args = vec![phase[0], host_if.as_str()];
-    args.extend_from_slice(&phase[1..]);
-    let (ok, out) = run_python(&py, &args);
-    keep_log(&log, &format!("--- SOEM {name} ---\n{out}"));
-    eprintln!("--- SOEM {name} ---\n{out}");
-    stop_runner(guard.runner.take().expect("runner"));
-    assert!(ok, "SOEM {name} phase failed (log above)");
+    for (k, phase) in phases.iter().enumerate() {
+        let runner = start_runner_with(
+            &guard.name,
+            &bin,
+            line,
+            &slave_if,
+            &file("state"),
+            &file(&format!("{name}-{k}.pcap")),
+            &file(&format!("runner-{k}.log")),
+            runner_args,
+        );
+        guard.runner = Some(runner);
+        crate::common::wait_for_runner(&host_if);
+        let mut args = vec![phase[0], host_if.as_str()];
+        args.extend_from_slice(&phase[1..]);
+        let (ok, out) = run_python(&py, &args);
+        keep_log(&log, &format!("--- SOEM {name} {} ---\n{out}", phase[0]));
+        eprintln!("--- SOEM {name} {} ---\n{out}", phase[0]);
+        stop_runner(guard.runner.take().expect("runner"));
+        assert!(ok, "SOEM {name} phase {} failed (log above)", phase[0]);
+    }
+}
+
+/// The PAM's safety rules through SOEM (docs/SAFETY.md; issue 29 findings
+/// 1-3): ENABLE and a command value written over SDO with no RxPDO drive
+/// no current; DEFAULT and LOADBACK in OP that would change FUNCTION are
+/// refused with 0x08000022 and FUNCTION stays; after SAVE and a power
+/// cycle FUNCTION = IND comes back with its PDO set and SOEM reaches OP
+/// without rewriting the assignment.
+#[test]
+fn soem_finds_the_pam_safe_when_it_drives_it_by_sdo_and_changes_function_behind_the_master() {
+    soem_power_cycled_phases(
+        "y",
+        "safety",
+        "pam",
+        &[],
+        &[&["safety"], &["safety_after_power_cycle"]],
+    );
 }
 
 /// SOEM's Distributed Clocks against the runner: `config_dc`, `dcsync0`

@@ -262,8 +262,11 @@ impl<E: Esc, A: Application> TransitionChecks for Checks<'_, E, A> {
         }
         let sm2 = read_sm(self.esc, 2).map_err(|e| self.pdi_failed(e))?;
         let sm3 = read_sm(self.esc, 3).map_err(|e| self.pdi_failed(e))?;
+        // With no PDO in a direction its SM is unused: disabled, or
+        // enabled with length 0 as SOEM leaves it (an ESC does not activate
+        // a SyncManager of length 0; SOES accepts it too).
         let out_ok = if outputs.byte_len() == 0 {
-            !sm2.3
+            !sm2.3 || sm2.1 == 0
         } else {
             sm2.3
                 && sm2.0 == self.layout.pd_out
@@ -274,7 +277,7 @@ impl<E: Esc, A: Application> TransitionChecks for Checks<'_, E, A> {
             return Err(AlStatusCode::InvalidOutputConfig);
         }
         let in_ok = if inputs.byte_len() == 0 {
-            !sm3.3
+            !sm3.3 || sm3.1 == 0
         } else {
             sm3.3
                 && sm3.0 == self.layout.pd_in
