@@ -6,7 +6,7 @@
 #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
 
 use crate::device::{
-    Application, CoeServices, DeviceDescription, DeviceNames, EscConfig, Identity, MailboxConfig,
+    Application, CoeServices, DeviceDescription, DeviceNames, EscConfig, Identity, MailboxConfig, FoeSecurity,
     PdoSet, ProcessData, SoftSlave,
 };
 use crate::hal::{MemNv, NvStorage};
@@ -161,6 +161,7 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
             complete_access: true,
         },
         foe: true,
+        foe_security: FoeSecurity::OPEN,
     },
     esc: EscConfig::DEFAULT,
     modules: None,

@@ -3,7 +3,7 @@
 //! all read it.
 
 use ecat_slave::device::{
-    CoeServices, DeviceDescription, DeviceNames, EscConfig, Identity, MailboxConfig, PdoSet,
+    CoeServices, DeviceDescription, DeviceNames, EscConfig, Identity, MailboxConfig, FoeSecurity, PdoSet,
     ProcessData,
 };
 use ecat_slave::od::build::{
@@ -170,6 +170,7 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
             complete_access: true,
         },
         foe: true,
+        foe_security: FoeSecurity::OPEN,
     },
     esc: EscConfig::DEFAULT,
     modules: None,

@@ -311,6 +311,27 @@ pub fn power_on<S: ImageStore + ?Sized>(store: &mut S) -> BootDecision {
     }
 }
 
+/// The FoE password a write request must carry: the one the owner set
+/// ([`set_password`]), else `factory` (the device description's
+/// [`FoeSecurity::factory_password`](crate::device::FoeSecurity)). A blank
+/// store has the factory password; records that cannot be read are an
+/// error (the caller refuses: no password can be checked).
+pub fn foe_password<S: ImageStore + ?Sized>(store: &S, factory: u32) -> Result<u32, StoreError> {
+    Ok(load(store)?.password.unwrap_or(factory))
+}
+
+/// The owner sets a new FoE password: stored in the boot records, power-cut
+/// safe like every state change (a cut keeps the old or the new password,
+/// never neither), so it survives a power cycle. Everything else in the
+/// record is kept. The caller checks the old password first.
+pub fn set_password<S: ImageStore + ?Sized>(store: &mut S, password: u32) -> Result<(), StoreError> {
+    let state = load(store)?;
+    store.write_state(&BootState {
+        password: Some(password),
+        ..state
+    })
+}
+
 /// Called by the new firmware once it runs well: the trial image becomes
 /// the active one. Without a trial image this does nothing.
 pub fn confirm_boot<S: ImageStore + ?Sized>(store: &mut S) -> Result<(), StoreError> {

@@ -64,16 +64,16 @@ mod store;
 
 pub use boot::{
     BootDecision, BootOutcome, MAX_BOOT_ATTEMPTS, RollbackReason, begin_download, cancel_download,
-    commit_pending, confirm_boot, finish_download, power_on, provision, reject_boot, verify_slot,
-    write_chunk,
+    commit_pending, confirm_boot, finish_download, foe_password, power_on, provision, reject_boot,
+    set_password, verify_slot, write_chunk,
 };
 pub use efw::{
     EFW_FORMAT_VERSION, EFW_HEADER_LEN, EFW_MAGIC, EFW_MAX_HEADER_LEN, EfwError, EfwHeader,
     EfwHeaderRepr, EfwValidator, ValidatedImage, pack,
 };
 pub use store::{
-    BootState, Candidate, CandidateStage, ImageInfo, ImageStore, MemStore, STATE_RECORD_LEN, Slot,
-    StoreError,
+    BootState, Candidate, CandidateStage, ImageInfo, ImageStore, MemStore, STATE_RECORD_LEN,
+    STATE_RECORD_V1_LEN, Slot, StoreError,
 };
 
 /// Identity of the running device, which an image must match (object

@@ -35,6 +35,18 @@ pub enum FoeCmd {
         #[arg(long)]
         allow_downgrade: bool,
     },
+    /// Set the slave's FoE password (the owner's; factory 00000000 for
+    /// the catalog devices): in BOOT, a download of `foe-password.txt`
+    /// with the current password; the slave keeps the new one across
+    /// power cycles and asks for it from then on. Then INIT.
+    Password {
+        /// The new password: 1 to 8 hex digits, 0x optional.
+        #[arg(value_parser = parse_password)]
+        new: u32,
+        /// The current FoE password.
+        #[arg(long, default_value = "00000000", value_parser = parse_password)]
+        password: u32,
+    },
     /// Read a file the slave offers (e.g. `info.txt`) in PRE-OP.
     Read {
         /// File name.
@@ -129,7 +141,32 @@ pub async fn foe(w: &Where, op: FoeCmd) -> Result<(), Failure> {
             output,
             password,
         } => foe_read(w, &name, output.as_deref(), password).await,
+        FoeCmd::Password { new, password } => foe_password(w, password, new).await,
     }
+}
+
+async fn foe_password(w: &Where, current: u32, new: u32) -> Result<(), Failure> {
+    let s = Session::open(w).await?;
+    let sel = s.select(w).await?;
+    let boot = sel.bootstrap()?;
+    let md = s.md();
+    master_test::foe::enter_boot_geometry(md, sel.station, boot).await?;
+    let mut client = MailboxClient::new(md, sel.station, boot);
+    let set = master_test::foe::set_password(&mut client, current, new).await;
+    // Leave BOOT whatever happened.
+    let back = master_test::foe::request_state(md, sel.station, 0x11).await;
+    set.map_err(|e| {
+        Failure::from(e).context(format!(
+            "setting the FoE password of {} failed (the old one stays)",
+            sel.label()
+        ))
+    })?;
+    back?;
+    outln!(
+        "{}: FoE password set to {new:08X} (kept across power cycles); BOOT -> INIT",
+        sel.label()
+    );
+    Ok(())
 }
 
 fn read_file(p: &Path) -> Result<Vec<u8>, Failure> {
