@@ -17,6 +17,13 @@
 //!   description's [`FoeSecurity::factory_password`]; `0x00000000` for
 //!   the catalog devices) and a file name ending in `.efw` (ASCII case
 //!   ignored); answered with ACK 0 after the inactive slot is erased.
+//! * Anti-rollback: an image whose version is older than the store's
+//!   floor (the version last provisioned or confirmed, see
+//!   [`BootState::min_version`](crate::firmware::BootState::min_version))
+//!   is refused with `0x8002` as soon as its header is complete, before
+//!   any payload byte is written, unless the file name ends in
+//!   [`DOWNGRADE_SUFFIX`] (`.downgrade.efw`): the owner's consent, which
+//!   needs the password like every write.
 //! * WRQ of [`PASSWORD_FILE_NAME`] with the current password: the file
 //!   (one short DATA packet, at most [`PASSWORD_FILE_CAPACITY`] bytes)
 //!   holds the new password as 1 to 8 hex digits; it is stored power-cut
@@ -47,20 +54,25 @@
 //! | RRQ of an unknown name                 | `0x8001` NotFound             | "file not found" |
 //! | wrong DATA/ACK packet number           | `0x8005` PacketNumberWrong    | "packet number wrong" |
 //! | DATA/ACK/unknown opcode out of context | `0x8004` Illegal              | "no transfer in progress" … |
+//! | image older than the floor             | `0x8002` AccessDenied         | "version 9 is older than the minimum 10: downgrade refused" |
 //! | image refused                          | [`EfwError::foe_code`]        | the [`EfwError`] text |
 //! | flash failure                          | [`StoreError::foe_code`]      | the [`StoreError`] text |
 //!
 //! ETG.1000.6 names `0x8008` "Bootstrap only" and `0x8009` "Not bootstrap";
 //! the ETG Slave Stack Code documents them as "FoE only supported in
 //! Bootstrap" and "downloaded file name is not valid in Bootstrap state",
-//! which is how they are used here.
+//! which is how they are used here. For a downgrade the slave will not
+//! do, `0x8002` "access denied" was chosen among the ETG.1000.6 codes
+//! `0x8000..=0x800F`: the request is understood and the image is valid,
+//! the device's policy refuses it (`0x800A` "no rights" would say the
+//! password is wrong, `0x800D` that the image does not fit the device).
 
 use core::fmt::Write as _;
 
 use crate::device::FoeSecurity;
 use crate::firmware::{
     DeviceIdentity, EfwError, EfwValidator, ImageStore, Slot, StoreError, begin_download,
-    cancel_download, finish_download, foe_password, set_password, write_chunk,
+    cancel_download, finish_download, foe_password, rollback_floor, set_password, write_chunk,
 };
 use crate::wire::foe::{FoeErrorCode, FoeRepr, HEADER_LEN};
 
@@ -69,6 +81,12 @@ use crate::wire::foe::{FoeErrorCode, FoeRepr, HEADER_LEN};
 /// [`FoeSecurity::factory_password`] until the owner sets another (see
 /// [`PASSWORD_FILE_NAME`]).
 pub const FOE_PASSWORD: u32 = FoeSecurity::OPEN.factory_password;
+
+/// Suffix (ASCII case ignored) of a firmware file name that asks to
+/// install an image older than the anti-rollback floor: the owner's
+/// explicit consent, given with the FoE password (e.g.
+/// `app.downgrade.efw`; `master-test foe write --allow-downgrade`).
+pub const DOWNGRADE_SUFFIX: &[u8] = b".downgrade.efw";
 
 /// Name of the file (ASCII case ignored) whose FoE download in BOOT sets a
 /// new FoE password: the write request carries the current password, the
@@ -265,6 +283,14 @@ impl FoeServer {
         if ctx.busy {
             return emit(out, FoeRepr::Busy { done: 0, entire: 0 });
         }
+        let floor = if ends_with_ignore_case(name, DOWNGRADE_SUFFIX) {
+            crate::firmware::FirmwareVersion::EMPTY
+        } else {
+            match rollback_floor(ctx.store) {
+                Ok(floor) => floor,
+                Err(e) => return self.fail_store(out, e),
+            }
+        };
         let slot = match begin_download(ctx.store) {
             Ok(slot) => slot,
             Err(e) => return self.fail_store(out, e),
@@ -273,7 +299,8 @@ impl FoeServer {
             slot,
             next_packet: 1,
             segment: out.len().saturating_sub(HEADER_LEN),
-            validator: EfwValidator::new(ctx.identity, ctx.store.slot_capacity()),
+            validator: EfwValidator::new(ctx.identity, ctx.store.slot_capacity())
+                .with_rollback_floor(floor),
         };
         emit(out, FoeRepr::Ack { packet: 0 })
     }
@@ -931,6 +958,118 @@ mod tests {
         drop(b);
         assert!(commit_pending(&mut store).unwrap().is_some());
         assert_eq!(crate::firmware::foe_password(&store, 0), Ok(7));
+    }
+
+    /// Downloads `file` under `name`, commits it and power-cycles with a
+    /// confirmed boot, as the runner does; returns the last reply.
+    fn install(store: &mut Small, name: &str, file: &[u8]) -> Reply {
+        let mut b = Bench::new(store);
+        let mut reply = b.wrq(name, 0);
+        if reply == Reply::Ack(0) {
+            for (i, c) in file.chunks(SEG).enumerate() {
+                reply = b.data(i as u32 + 1, c);
+                if reply != Reply::Ack(i as u32 + 1) {
+                    break;
+                }
+            }
+            if file.len() % SEG == 0 && reply == Reply::Ack((file.len() / SEG) as u32) {
+                reply = b.data((file.len() / SEG) as u32 + 1, &[]);
+            }
+        }
+        drop(b);
+        let _ = commit_pending(store);
+        let _ = power_on(store);
+        let _ = crate::firmware::confirm_boot(store);
+        reply
+    }
+
+    #[test]
+    fn an_older_image_is_refused_with_access_denied_before_anything_is_written() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        // upgrade 1.0.0 -> 2.0.0: accepted, and 2.0.0 becomes the floor
+        let up = efw(&header("2.0.0"), &payload(3000));
+        assert!(matches!(install(&mut store, "fw.efw", &up), Reply::Ack(_)));
+        assert_eq!(running_version(&mut store), "2.0.0");
+        assert_eq!(
+            crate::firmware::rollback_floor(&store).unwrap().as_str(),
+            "2.0.0"
+        );
+        // back to 1.5: refused at its header, nothing of it written
+        let down = efw(&header("1.5"), &payload(3000));
+        let mut b = Bench::new(&mut store);
+        assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
+        let records = b.store.read_state().unwrap();
+        assert_eq!(
+            b.data(1, &down[..SEG]),
+            Reply::Err(
+                FoeErrorCode::AccessDenied,
+                "version 1.5 is older than the minimum 2.0.0: downgrade refused".into()
+            )
+        );
+        assert_eq!(b.store.read_state().unwrap(), records, "no record written");
+        let mut slot = [0u8; 3000];
+        b.store.read(Slot::A, 0, &mut slot).unwrap();
+        assert!(slot.iter().all(|&x| x == 0xFF), "no payload byte written");
+        drop(b);
+        assert_eq!(commit_pending(&mut store), Ok(None));
+        assert_eq!(running_version(&mut store), "2.0.0");
+        // the same version again is no downgrade
+        let same = efw(&header("2.0"), &payload(2000));
+        assert!(matches!(install(&mut store, "fw.efw", &same), Reply::Ack(_)));
+        assert_eq!(running_version(&mut store), "2.0");
+    }
+
+    #[test]
+    fn the_owner_allows_a_downgrade_with_the_downgrade_file_name_and_the_password() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let up = efw(&header("2.0.0"), &payload(3000));
+        assert!(matches!(install(&mut store, "fw.efw", &up), Reply::Ack(_)));
+        // the owner's password guards the override like every write
+        let mut b = Bench::new(&mut store);
+        assert_eq!(set_password_file(&mut b, 0, b"5EC2E7"), Reply::Ack(1));
+        assert_eq!(
+            b.wrq("fw.downgrade.efw", 0),
+            Reply::Err(FoeErrorCode::NoRights, "wrong password".into())
+        );
+        drop(b);
+        let down = efw(&header("1.5"), &payload(2900));
+        let mut b = Bench::new(&mut store);
+        assert_eq!(b.wrq("FW.DOWNGRADE.EFW", 0x5E_C2E7), Reply::Ack(0));
+        assert_eq!(b.data(1, &down[..SEG]), Reply::Ack(1));
+        assert_eq!(b.data(2, &down[SEG..2 * SEG]), Reply::Ack(2));
+        assert_eq!(b.data(3, &down[2 * SEG..]), Reply::Ack(3));
+        drop(b);
+        commit_pending(&mut store).unwrap();
+        let _ = power_on(&mut store);
+        crate::firmware::confirm_boot(&mut store).unwrap();
+        assert_eq!(running_version(&mut store), "1.5");
+        // the confirmed downgrade is the new floor: 1.6 is an upgrade again
+        assert_eq!(
+            crate::firmware::rollback_floor(&store).unwrap().as_str(),
+            "1.5"
+        );
+    }
+
+    #[test]
+    fn a_pending_upgrade_does_not_raise_the_floor_until_it_is_confirmed() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let up = efw(&header("3"), &payload(3000));
+        let mut b = Bench::new(&mut store);
+        assert!(matches!(b.download(&up), Reply::Ack(_)));
+        drop(b);
+        commit_pending(&mut store).unwrap();
+        assert_eq!(
+            crate::firmware::rollback_floor(&store).unwrap().as_str(),
+            "1.0.0"
+        );
+        // a trial that is rejected leaves the floor at the running image
+        let _ = power_on(&mut store);
+        crate::firmware::reject_boot(&mut store).unwrap();
+        assert_eq!(running_version(&mut store), "1.0.0");
+        assert_eq!(
+            crate::firmware::rollback_floor(&store).unwrap().as_str(),
+            "1.0.0"
+        );
     }
 
     #[test]

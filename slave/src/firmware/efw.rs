@@ -154,6 +154,16 @@ pub enum EfwError {
     /// would replace working firmware with nothing.
     #[error("image has an empty payload")]
     EmptyPayload,
+    /// Anti-rollback: the image's version is older than the device's floor
+    /// (or cannot be compared with it), and the owner did not allow a
+    /// downgrade.
+    #[error("version {version} is older than the minimum {floor}: downgrade refused")]
+    Rollback {
+        /// The image's version.
+        version: FirmwareVersion,
+        /// The device's floor.
+        floor: FirmwareVersion,
+    },
 }
 
 impl EfwError {
@@ -165,6 +175,7 @@ impl EfwError {
     /// | bad magic / format / header length / header CRC  | `0x8010` NoFileHeader       |
     /// | wrong vendor / product / revision, empty payload | `0x800D` InvalidFirmware    |
     /// | payload larger than a slot                       | `0x8003` DiskFull           |
+    /// | older than the anti-rollback floor               | `0x8002` AccessDenied       |
     /// | truncated / oversized / payload CRC              | `0x800C` InvalidChecksum    |
     /// | buffer too small (tools only)                    | `0x800B` ProgramError       |
     pub const fn foe_code(&self) -> FoeErrorCode {
@@ -178,6 +189,7 @@ impl EfwError {
             | Self::RevisionOutOfRange { .. }
             | Self::EmptyPayload => FoeErrorCode::InvalidFirmware,
             Self::TooLarge { .. } => FoeErrorCode::DiskFull,
+            Self::Rollback { .. } => FoeErrorCode::AccessDenied,
             Self::Truncated { .. } | Self::Oversized { .. } | Self::PayloadCrc { .. } => {
                 FoeErrorCode::InvalidChecksum
             }
@@ -512,6 +524,8 @@ impl ValidatedImage {
 pub struct EfwValidator {
     device: DeviceIdentity,
     capacity: usize,
+    /// Anti-rollback floor ([`FirmwareVersion::EMPTY`]: none).
+    floor: FirmwareVersion,
     /// Bytes accepted so far.
     received: usize,
     /// The header bytes (only the first `header_len` are used).
@@ -530,6 +544,7 @@ impl EfwValidator {
         Self {
             device,
             capacity,
+            floor: FirmwareVersion::EMPTY,
             received: 0,
             head: [0; EFW_HEADER_LEN],
             header_crc: Crc32::new(),
@@ -537,6 +552,16 @@ impl EfwValidator {
             payload_crc: Crc32::new(),
             error: None,
         }
+    }
+
+    /// Refuses, as soon as the header is complete (before any payload
+    /// byte is handed out), an image whose version is older than `floor`
+    /// or cannot be compared with it ([`EfwError::Rollback`]);
+    /// [`FirmwareVersion::EMPTY`] (the default) checks nothing.
+    #[must_use]
+    pub const fn with_rollback_floor(mut self, floor: FirmwareVersion) -> Self {
+        self.floor = floor;
+        self
     }
 
     /// Bytes accepted so far.
@@ -646,6 +671,17 @@ impl EfwValidator {
                 payload_crc: view.payload_crc(),
             };
             repr.check_device(&self.device, self.capacity)?;
+            if self.floor != FirmwareVersion::EMPTY
+                && !matches!(
+                    repr.version.compare(&self.floor),
+                    Some(core::cmp::Ordering::Greater | core::cmp::Ordering::Equal)
+                )
+            {
+                return Err(EfwError::Rollback {
+                    version: repr.version,
+                    floor: self.floor,
+                });
+            }
             self.header = Some(repr);
         }
         Ok(())
@@ -960,6 +996,40 @@ mod tests {
             validate(&img, 64, 1000),
             Err(EfwError::PayloadCrc { .. })
         ));
+    }
+
+    #[test]
+    fn an_image_below_the_rollback_floor_is_refused_at_its_header() {
+        let v = |s: &str| FirmwareVersion::new(s).unwrap();
+        let old = image(&header("1.9"), &[7u8; 100]);
+        let mut val = EfwValidator::new(DEVICE, 1000).with_rollback_floor(v("1.10"));
+        assert_eq!(val.feed(&old[..EFW_HEADER_LEN - 1]), Ok(&[][..]));
+        let refused = EfwError::Rollback {
+            version: v("1.9"),
+            floor: v("1.10"),
+        };
+        assert_eq!(val.feed(&old[EFW_HEADER_LEN - 1..]), Err(refused));
+        assert_eq!(val.payload_received(), 0, "no payload byte handed out");
+        assert_eq!(val.finish(), Err(refused));
+        assert_eq!(
+            refused.to_string(),
+            "version 1.9 is older than the minimum 1.10: downgrade refused"
+        );
+        assert_eq!(refused.foe_code(), FoeErrorCode::AccessDenied);
+        // the same version and newer ones pass; no floor checks nothing
+        for ok in ["1.10", "1.10.0", "2"] {
+            let img = image(&header(ok), &[7u8; 100]);
+            let mut val = EfwValidator::new(DEVICE, 1000).with_rollback_floor(v("1.10"));
+            val.feed(&img).unwrap();
+            assert!(val.finish().is_ok(), "{ok}");
+        }
+        let mut val = EfwValidator::new(DEVICE, 1000);
+        val.feed(&old).unwrap();
+        assert!(val.finish().is_ok());
+        // a version without numbers cannot be shown to be newer
+        let beta = image(&header("beta"), &[7u8; 100]);
+        let mut val = EfwValidator::new(DEVICE, 1000).with_rollback_floor(v("1"));
+        assert!(matches!(val.feed(&beta), Err(EfwError::Rollback { .. })));
     }
 
     #[test]

@@ -65,7 +65,7 @@ mod store;
 pub use boot::{
     BootDecision, BootOutcome, MAX_BOOT_ATTEMPTS, RollbackReason, begin_download, cancel_download,
     commit_pending, confirm_boot, finish_download, foe_password, power_on, provision, reject_boot,
-    set_password, verify_slot, write_chunk,
+    rollback_floor, set_password, verify_slot, write_chunk,
 };
 pub use efw::{
     EFW_FORMAT_VERSION, EFW_HEADER_LEN, EFW_MAGIC, EFW_MAX_HEADER_LEN, EfwError, EfwHeader,
@@ -128,6 +128,12 @@ impl FirmwareVersion {
         self.0.get(..end).unwrap_or(&[])
     }
 
+    /// Compares two versions by their numbers ([`compare_versions`]):
+    /// `None` when either has no digit (e.g. [`FirmwareVersion::EMPTY`]).
+    pub fn compare(&self, other: &Self) -> Option<core::cmp::Ordering> {
+        compare_versions(self.as_bytes(), other.as_bytes())
+    }
+
     /// The version as text; `"?"` if the stored bytes are not UTF-8.
     pub fn as_str(&self) -> &str {
         core::str::from_utf8(self.as_bytes()).unwrap_or("?")
@@ -137,6 +143,35 @@ impl FirmwareVersion {
 impl core::fmt::Display for FirmwareVersion {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(self.as_str())
+    }
+}
+
+/// Compares version texts by their numbers: the runs of ASCII digits, in
+/// order, missing ones counting as 0 (`1.10` > `1.9`, `1.0` = `1.0.0`,
+/// `v2` > `1.9.9`, `2.0-rc1` = `2.0.1`); everything else separates.
+/// `None` when either text has no digit. Numbers beyond `u64` saturate.
+pub fn compare_versions(a: &[u8], b: &[u8]) -> Option<core::cmp::Ordering> {
+    fn numbers(s: &[u8]) -> impl Iterator<Item = u64> + '_ {
+        s.split(|c| !c.is_ascii_digit())
+            .filter(|p| !p.is_empty())
+            .map(|p| {
+                p.iter().fold(0u64, |n, d| {
+                    n.saturating_mul(10).saturating_add(u64::from(d - b'0'))
+                })
+            })
+    }
+    if numbers(a).next().is_none() || numbers(b).next().is_none() {
+        return None;
+    }
+    let (mut x, mut y) = (numbers(a), numbers(b));
+    loop {
+        match (x.next(), y.next()) {
+            (None, None) => return Some(core::cmp::Ordering::Equal),
+            (p, q) => match p.unwrap_or(0).cmp(&q.unwrap_or(0)) {
+                core::cmp::Ordering::Equal => {}
+                other => return Some(other),
+            },
+        }
     }
 }
 
@@ -254,6 +289,23 @@ mod tests {
             c.update(part);
         }
         assert_eq!(c.finish(), crc32(&data));
+    }
+
+    #[test]
+    fn versions_compare_by_their_numbers() {
+        use core::cmp::Ordering::*;
+        let c = |a: &str, b: &str| compare_versions(a.as_bytes(), b.as_bytes());
+        assert_eq!(c("1.10", "1.9"), Some(Greater));
+        assert_eq!(c("1.0", "1.0.0"), Some(Equal));
+        assert_eq!(c("v2", "1.9.9"), Some(Greater));
+        assert_eq!(c("10", "11"), Some(Less));
+        assert_eq!(c("9", "10"), Some(Less));
+        assert_eq!(c("99999999999999999999", "1"), Some(Greater));
+        assert_eq!(c("beta", "1.0"), None);
+        assert_eq!(c("1.0", ""), None);
+        let v = |s: &str| FirmwareVersion::new(s).unwrap();
+        assert_eq!(v("2.0.0").compare(&v("10")), Some(Less));
+        assert_eq!(FirmwareVersion::EMPTY.compare(&v("1")), None);
     }
 
     #[test]

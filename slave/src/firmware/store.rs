@@ -178,6 +178,8 @@ mod rec {
     pub const PASSWORD_SET: usize = 60;
     /// Format 2: the owner's FoE password.
     pub const PASSWORD: Field = 64..68;
+    /// Format 2: the anti-rollback floor (a version, `[u8; 16]`).
+    pub const MIN_VERSION: Field = 68..84;
     pub const CRC: Field = 92..96;
 }
 
@@ -207,6 +209,11 @@ pub struct BootState {
     ///
     /// [`set_password`]: super::set_password
     pub password: Option<u32>,
+    /// The anti-rollback floor: an image older than this is refused unless
+    /// the owner allows the downgrade ([`FirmwareVersion::compare`]). The
+    /// version of the image last provisioned or confirmed;
+    /// [`FirmwareVersion::EMPTY`]: no floor.
+    pub min_version: FirmwareVersion,
 }
 
 fn put(buf: &mut [u8; STATE_RECORD_LEN], at: usize, bytes: &[u8]) {
@@ -258,6 +265,7 @@ impl BootState {
             candidate: None,
             boot_attempts: 0,
             password: None,
+            min_version: FirmwareVersion::EMPTY,
         }
     }
 
@@ -277,12 +285,13 @@ impl BootState {
     /// | 60     | 1    | 1: the owner set a FoE password, 0: factory password    |
     /// | 61     | 3    | reserved, 0                                             |
     /// | 64     | 4    | the owner's FoE password (0 when not set)               |
-    /// | 68     | 24   | reserved, 0                                             |
+    /// | 68     | 16   | anti-rollback floor: a version, NUL padded (0: none)    |
+    /// | 84     | 8    | reserved, 0                                             |
     /// | 92     | 4    | CRC-32 of bytes 0..92                                   |
     ///
     /// Format 1 (magic `b"PBST"`, 64 bytes: the same up to offset 60, then
     /// the CRC-32 of bytes 0..60) is still decoded, as a record without a
-    /// password: a store written before passwords existed keeps working
+    /// password whose floor is the active image's version: a store written before passwords existed keeps working
     /// and is rewritten in format 2 at its next state change.
     pub fn encode(&self) -> [u8; STATE_RECORD_LEN] {
         let mut buf = [0u8; STATE_RECORD_LEN];
@@ -308,6 +317,7 @@ impl BootState {
             rec::PASSWORD.start,
             &self.password.unwrap_or(0).to_le_bytes(),
         );
+        put(&mut buf, rec::MIN_VERSION.start, self.min_version.raw());
         let crc = buf.get(..rec::CRC.start).map_or(0, crc32);
         put(&mut buf, rec::CRC.start, &crc.to_le_bytes());
         buf
@@ -331,15 +341,20 @@ impl BootState {
             return None;
         }
         let byte = |at: usize| buf.get(at).copied();
+        let active_image = get_image(buf, rec::ACTIVE_IMAGE);
         // Reserved bytes are written 0 and ignored (room for later fields).
-        let password = if len == STATE_RECORD_LEN {
-            match byte(rec::PASSWORD_SET)? {
+        let (password, min_version) = if len == STATE_RECORD_LEN {
+            let password = match byte(rec::PASSWORD_SET)? {
                 0 => None,
                 1 => Some(get_u32(buf, rec::PASSWORD.start)),
                 _ => return None,
-            }
+            };
+            let floor = buf
+                .get(rec::MIN_VERSION)
+                .and_then(|b| <[u8; VERSION_LEN]>::try_from(b).ok())?;
+            (password, FirmwareVersion::from_raw(floor))
         } else {
-            None
+            (None, active_image.version)
         };
         let active = Slot::from_raw(byte(rec::ACTIVE)?)?;
         let slot = Slot::from_raw(byte(rec::CANDIDATE_SLOT)?)?;
@@ -356,7 +371,7 @@ impl BootState {
         Some(Self {
             sequence: get_u32(buf, rec::SEQUENCE.start),
             active,
-            active_image: get_image(buf, rec::ACTIVE_IMAGE),
+            active_image,
             candidate: stage.map(|stage| Candidate {
                 slot,
                 image: get_image(buf, rec::CANDIDATE_IMAGE),
@@ -364,6 +379,7 @@ impl BootState {
             }),
             boot_attempts: byte(rec::ATTEMPTS)?,
             password,
+            min_version,
         })
     }
 
@@ -591,6 +607,7 @@ mod tests {
             }),
             boot_attempts: 2,
             password: Some(0x1234_ABCD),
+            min_version: FirmwareVersion::new("0.9").unwrap(),
         }
     }
 
@@ -601,6 +618,7 @@ mod tests {
         assert_eq!(&rec[..4], b"PBS2");
         assert_eq!(rec.len(), 96);
         assert_eq!(&rec[60..68], &[1, 0, 0, 0, 0xCD, 0xAB, 0x34, 0x12]);
+        assert_eq!(&rec[68..72], b"0.9\0");
         assert_eq!(BootState::decode(&rec), Some(s));
         let plain = BootState::initial();
         assert_eq!(BootState::decode(&plain.encode()), Some(plain));
@@ -641,6 +659,8 @@ mod tests {
     fn a_format_1_record_still_decodes_as_one_without_a_password() {
         let old = BootState {
             password: None,
+            // a format-1 store's floor: the version that runs
+            min_version: sample().active_image.version,
             ..sample()
         };
         let v1 = v1_record(&old);

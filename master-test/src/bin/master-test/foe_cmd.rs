@@ -19,7 +19,9 @@ pub enum FoeCmd {
     /// The image is checked first (header, CRC, vendor, product, revision
     /// range of the live slave): a bad image is refused before anything
     /// is sent. An image older than the running firmware is refused
-    /// unless --allow-downgrade confirms it. Ctrl-C aborts the transfer
+    /// unless --allow-downgrade confirms it; the slave refuses it too
+    /// (anti-rollback, FoE error 0x8002) unless the file name sent ends
+    /// in `.downgrade.efw`, which --allow-downgrade does. Ctrl-C aborts the transfer
     /// with a FoE error: the slave keeps its old firmware.
     Write {
         /// The `.efw` file (see `firmware pack`).
@@ -106,25 +108,26 @@ fn parse_u32(s: &str) -> Result<u32, String> {
 }
 
 /// Compares firmware versions by their numbers (`1.10` > `1.9`, `v2` >
-/// `1.9.9`); `None` when either has no number.
+/// `1.9.9`); `None` when either has no number. The slave's own rule
+/// ([`ecat_slave::firmware::compare_versions`]), so the client refuses
+/// exactly what the slave's anti-rollback check would.
 pub fn compare_versions(a: &str, b: &str) -> Option<Ordering> {
-    let numbers = |s: &str| -> Vec<u64> {
-        s.split(|c: char| !c.is_ascii_digit())
-            .filter(|p| !p.is_empty())
-            .map(|p| p.parse().unwrap_or(u64::MAX))
-            .collect()
-    };
-    let (x, y) = (numbers(a), numbers(b));
-    if x.is_empty() || y.is_empty() {
-        return None;
+    ecat_slave::firmware::compare_versions(a.as_bytes(), b.as_bytes())
+}
+
+/// The file name that asks the slave to accept a downgrade: `name` with
+/// `.efw` replaced by `.downgrade.efw` (kept if it has it already).
+pub fn downgrade_name(name: &str) -> String {
+    let lower = name.to_ascii_lowercase();
+    if lower.ends_with(".downgrade.efw") {
+        return name.to_string();
     }
-    let n = x.len().max(y.len());
-    let pad = |v: Vec<u64>| {
-        let mut v = v;
-        v.resize(n, 0);
-        v
+    let stem = if lower.ends_with(".efw") {
+        &name[..name.len() - 4]
+    } else {
+        name
     };
-    Some(pad(x).cmp(&pad(y)))
+    format!("{stem}.downgrade.efw")
 }
 
 /// Runs a `foe` command.
@@ -262,9 +265,14 @@ async fn foe_write(
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let start = std::time::Instant::now();
+    let name = if allow_downgrade {
+        downgrade_name(name)
+    } else {
+        name.to_string()
+    };
     let sent = master_test::foe::write_cancellable(
         &mut client,
-        name,
+        &name,
         password,
         &image,
         &mut |done, _| bar.set_position(done as u64),
@@ -273,6 +281,14 @@ async fn foe_write(
     .await;
     bar.finish_and_clear();
     let completed = match sent {
+        Err(e) if e.foe_code() == Some(0x8002) && !allow_downgrade => {
+            let _ = master_test::foe::request_state(md, sel.station, 0x11).await;
+            return Err(Failure::from(e).context(format!(
+                "{} refused the image (anti-rollback: older than the last firmware it \
+                 confirmed); confirm the downgrade with --allow-downgrade",
+                sel.label()
+            )));
+        }
         Ok(c) => c,
         Err(e) => {
             // Leave BOOT whatever happened; the old firmware stays.
@@ -428,6 +444,14 @@ mod tests {
         assert_eq!(compare_versions("v2", "1.9.9"), Some(Ordering::Greater));
         assert_eq!(compare_versions("10", "11"), Some(Ordering::Less));
         assert_eq!(compare_versions("beta", "1.0"), None);
+    }
+
+    #[test]
+    fn the_downgrade_consent_is_the_efw_suffix_downgrade_efw() {
+        assert_eq!(downgrade_name("firmware.efw"), "firmware.downgrade.efw");
+        assert_eq!(downgrade_name("APP.EFW"), "APP.downgrade.efw");
+        assert_eq!(downgrade_name("a.Downgrade.efw"), "a.Downgrade.efw");
+        assert_eq!(downgrade_name("image"), "image.downgrade.efw");
     }
 
     #[test]
