@@ -842,7 +842,10 @@ mod tests {
             set_password_file(&mut b, 0, b"  0xC0FFEE42\r\n"),
             Reply::Ack(1)
         );
-        assert!(matches!(b.server.state(), FoeState::PasswordSet { packet: 1 }));
+        assert!(matches!(
+            b.server.state(),
+            FoeState::PasswordSet { packet: 1 }
+        ));
         // a repeat of the last packet is acknowledged again
         assert_eq!(b.data(1, b"C0FFEE42"), Reply::Ack(1));
         // the old password no longer opens anything, the new one does
@@ -855,20 +858,14 @@ mod tests {
         // power cycle: the bootloader runs, the records keep the password
         let d = power_on(&mut store);
         assert_eq!(d.outcome, BootOutcome::Normal);
-        assert_eq!(
-            crate::firmware::foe_password(&store, 0),
-            Ok(0xC0FF_EE42)
-        );
+        assert_eq!(crate::firmware::foe_password(&store, 0), Ok(0xC0FF_EE42));
         let mut b = Bench::new(&mut store);
         assert_eq!(
             b.wrq("fw.efw", 0),
             Reply::Err(FoeErrorCode::NoRights, "wrong password".into())
         );
         // and it can be changed again, with the current one
-        assert_eq!(
-            set_password_file(&mut b, 0xC0FF_EE42, b"0"),
-            Reply::Ack(1)
-        );
+        assert_eq!(set_password_file(&mut b, 0xC0FF_EE42, b"0"), Reply::Ack(1));
         assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
     }
 
@@ -894,7 +891,15 @@ mod tests {
         let mut store = provisioned::<{ 64 * 1024 }>();
         let records = store.state_copies().clone();
         let mut b = Bench::new(&mut store);
-        for bad in [&b""[..], b"0x", b"123456789", b"12G4", b"-1", b"12 34", b"\xff"] {
+        for bad in [
+            &b""[..],
+            b"0x",
+            b"123456789",
+            b"12G4",
+            b"-1",
+            b"12 34",
+            b"\xff",
+        ] {
             let reply = set_password_file(&mut b, 0, bad);
             assert_eq!(
                 reply,
@@ -1015,7 +1020,10 @@ mod tests {
         assert_eq!(running_version(&mut store), "2.0.0");
         // the same version again is no downgrade
         let same = efw(&header("2.0"), &payload(2000));
-        assert!(matches!(install(&mut store, "fw.efw", &same), Reply::Ack(_)));
+        assert!(matches!(
+            install(&mut store, "fw.efw", &same),
+            Reply::Ack(_)
+        ));
         assert_eq!(running_version(&mut store), "2.0");
     }
 

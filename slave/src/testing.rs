@@ -6,8 +6,8 @@
 #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
 
 use crate::device::{
-    Application, CoeServices, DeviceDescription, DeviceNames, EscConfig, Identity, MailboxConfig, FoeSecurity,
-    PdoSet, ProcessData, SoftSlave,
+    Application, CoeServices, DeviceDescription, DeviceNames, EscConfig, FoeSecurity, Identity,
+    MailboxConfig, PdoSet, ProcessData, SoftSlave,
 };
 use crate::hal::{MemNv, NvStorage};
 use crate::od::build::{

@@ -673,3 +673,150 @@ fn master_test_scans_and_reads_an_eni_line_of_twins() {
     let (_, e) = expect(&mt, &["--eni", eni, "--esi-dir", dir, "demo"], 2);
     assert!(e.contains("use scan, state, sdo"), "{e}");
 }
+
+#[test]
+fn pam_slave_refuses_at_start_when_the_firmware_stores_could_exceed_the_memory_cap() {
+    let runner = runner_binary().expect("pam-slave builds");
+    // 4 slaves x 2 slots x 1 MiB = 8 MiB > 4 MiB: refused before the
+    // interface is opened (no root needed), both numbers named.
+    let (o, e) = expect(
+        &runner,
+        &[
+            "--iface",
+            "lo",
+            "--count",
+            "4",
+            "--image-store-size",
+            "1M",
+            "--memory-cap",
+            "4M",
+        ],
+        2,
+    );
+    assert!(e.contains("8388608 bytes"), "{e}");
+    assert!(e.contains("--memory-cap 4194304 bytes"), "{e}");
+    assert!(e.contains("--image-store-size 1048576"), "{e}");
+    assert!(o.is_empty() && !e.contains("Ctrl-C stops"), "{o}{e}");
+    // Within the cap the line is built (dry run: nothing served).
+    let (o, _) = expect(
+        &runner,
+        &[
+            "--iface",
+            "lo",
+            "--count",
+            "4",
+            "--image-store-size",
+            "1048576",
+            "--memory-cap",
+            "8M",
+            "--dry-run",
+        ],
+        0,
+    );
+    assert!(o.contains("PAM-199-P-ETC"), "{o}");
+    // The default store (2 MiB slots) of 4096 slaves against a 1 GiB cap.
+    let (_, e) = expect(
+        &runner,
+        &["--iface", "lo", "--count", "4096", "--memory-cap", "1G"],
+        2,
+    );
+    assert!(e.contains("17179869184 bytes"), "{e}");
+    for bad in ["100", "2T", "x", "2G"] {
+        let (_, e) = expect(&runner, &["--iface", "lo", "--image-store-size", bad], 2);
+        assert!(e.contains("--image-store-size"), "{bad}: {e}");
+    }
+}
+
+#[test]
+fn a_failed_forward_relay_stops_pam_slave_with_status_3() {
+    let Some(runner) = runner_binary() else {
+        return skip("pam-slave binary not built");
+    };
+    let _serial = crate::common::NET_TESTS
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
+    let pid = std::process::id();
+    let ns = format!("pamr{pid}");
+    let (m, a0, a1, b0) = (
+        format!("pr{pid}m"),
+        format!("pr{pid}a0"),
+        format!("pr{pid}a1"),
+        format!("pr{pid}b0"),
+    );
+    let made = (|| -> Result<crate::common::Netns, String> {
+        crate::common::ip(&["netns", "add", &ns])?;
+        let guard = crate::common::Netns {
+            name: ns.clone(),
+            runner: None,
+        };
+        for (x, y) in [(&m, &a0), (&a1, &b0)] {
+            crate::common::ip(&[
+                "-n", &ns, "link", "add", x, "type", "veth", "peer", "name", y,
+            ])?;
+        }
+        for i in [&m, &a0, &a1, &b0] {
+            crate::common::ip(&["-n", &ns, "link", "set", i, "up"])?;
+        }
+        Ok(guard)
+    })();
+    let mut guard = match made {
+        Ok(g) => g,
+        Err(e) => {
+            return skip(&format!(
+                "cannot create a network namespace and veth pairs here ({e}); needs root and iproute2"
+            ));
+        }
+    };
+    let child = std::process::Command::new("ip")
+        .args(["netns", "exec", &ns])
+        .arg(&runner)
+        .args(["--iface", &a0, "--forward", &a1])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start pam-slave in the namespace");
+    guard.runner = Some(child);
+    std::thread::sleep(Duration::from_millis(500));
+    // Port 0 loses its link, then a processed frame comes back on port 1:
+    // the relay cannot pass it on to the master and ends with an error.
+    crate::common::ip(&["-n", &ns, "link", "set", &a0, "down"]).expect("a0 down");
+    let inject = format!(
+        "import socket,time\n\
+         s=socket.socket(socket.AF_PACKET,socket.SOCK_RAW)\n\
+         s.bind(('{b0}',0))\n\
+         f=b'\\xff'*6+b'\\x02\\x00\\x00\\x00\\x00\\x01'+b'\\x88\\xa4'+b'\\x0e\\x10'+bytes(46)\n\
+         for _ in range(30):\n s.send(f); time.sleep(0.1)\n"
+    );
+    let start = Instant::now();
+    let status = loop {
+        let _ = std::process::Command::new("ip")
+            .args(["netns", "exec", &ns, "python3", "-c", &inject])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .and_then(|mut c| c.wait());
+        let c = guard.runner.as_mut().expect("runner");
+        if let Some(st) = c.try_wait().expect("wait") {
+            break Some(st);
+        }
+        if start.elapsed() > Duration::from_secs(10) {
+            break None;
+        }
+    };
+    let mut c = guard.runner.take().expect("runner");
+    let mut err = String::new();
+    if status.is_none() {
+        let _ = c.kill();
+    }
+    let _ = c.wait();
+    let _ = c.stderr.take().map(|mut e| e.read_to_string(&mut err));
+    let status = status
+        .unwrap_or_else(|| panic!("pam-slave kept running without its relay for 10 s:\n{err}"));
+    assert_eq!(status.code(), Some(3), "{err}");
+    assert!(
+        err.contains(&format!("the relay of frames coming back on {a1} failed")),
+        "{err}"
+    );
+    assert!(err.contains("Network is down"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}

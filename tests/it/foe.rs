@@ -205,9 +205,15 @@ fn a_downgrade_is_refused_by_the_slave_with_0x8002_unless_the_owner_allows_it() 
         assert_eq!(version_after_power_cycle(&bus).await, "9");
         // 9 is now the floor: 9.1 is an upgrade without any consent.
         let (mut c, station) = boot_client(&bus).await;
-        foe::write(&mut c, "pam-199-p-etc.efw", 0, &image(4000, "9.1", PRODUCT_CODE), |_, _| {})
-            .await
-            .expect("upgrade from the downgraded version");
+        foe::write(
+            &mut c,
+            "pam-199-p-etc.efw",
+            0,
+            &image(4000, "9.1", PRODUCT_CODE),
+            |_, _| {},
+        )
+        .await
+        .expect("upgrade from the downgraded version");
         request_state(&bus.maindevice, station, 0x01)
             .await
             .expect("INIT");

@@ -333,7 +333,10 @@ pub fn rollback_floor<S: ImageStore + ?Sized>(store: &S) -> Result<FirmwareVersi
 /// safe like every state change (a cut keeps the old or the new password,
 /// never neither), so it survives a power cycle. Everything else in the
 /// record is kept. The caller checks the old password first.
-pub fn set_password<S: ImageStore + ?Sized>(store: &mut S, password: u32) -> Result<(), StoreError> {
+pub fn set_password<S: ImageStore + ?Sized>(
+    store: &mut S,
+    password: u32,
+) -> Result<(), StoreError> {
     let state = load(store)?;
     store.write_state(&BootState {
         password: Some(password),
