@@ -291,6 +291,8 @@ impl FoeServer {
                 Err(e) => return self.fail_store(out, e),
             }
         };
+        let validator =
+            EfwValidator::new(ctx.identity, ctx.store.slot_capacity()).with_rollback_floor(floor);
         let slot = match begin_download(ctx.store) {
             Ok(slot) => slot,
             Err(e) => return self.fail_store(out, e),
@@ -299,8 +301,10 @@ impl FoeServer {
             slot,
             next_packet: 1,
             segment: out.len().saturating_sub(HEADER_LEN),
-            validator: EfwValidator::new(ctx.identity, ctx.store.slot_capacity())
-                .with_rollback_floor(floor),
+            validator: match ctx.security.public_key {
+                Some(key) => validator.with_public_key(key),
+                None => validator,
+            },
         };
         emit(out, FoeRepr::Ack { packet: 0 })
     }
@@ -1078,6 +1082,66 @@ mod tests {
             crate::firmware::rollback_floor(&store).unwrap().as_str(),
             "1.0.0"
         );
+    }
+
+    #[cfg(feature = "signed-images")]
+    #[test]
+    fn a_device_with_a_key_installs_only_images_signed_with_it() {
+        use crate::firmware::{
+            EFW_FLAG_SIGNED, EFW_SIGNED_HEADER_LEN, set_signature, signed_message,
+        };
+        use ed25519_compact::{KeyPair, Seed};
+        let owner = KeyPair::from_seed(Seed::new([3; 32]));
+        let sign = |kp: &KeyPair, version: &str, len: usize| {
+            let h = EfwHeaderRepr {
+                flags: EFW_FLAG_SIGNED,
+                header_len: EFW_SIGNED_HEADER_LEN as u16,
+                ..header(version)
+            };
+            let mut img = efw(&h, &payload(len));
+            let msg = signed_message(&img).unwrap().concat();
+            set_signature(&mut img, &kp.sk.sign(&msg, None)).unwrap();
+            img
+        };
+        let security = FoeSecurity {
+            factory_password: 0,
+            public_key: Some(*owner.pk),
+        };
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        // unsigned: refused at its header, before any payload is written
+        let mut b = Bench::new(&mut store);
+        b.security = security;
+        let before = b.store.read_state().unwrap();
+        assert_eq!(
+            b.download(&efw(&header("2.0.0"), &payload(3000))),
+            Reply::Err(
+                FoeErrorCode::InvalidFirmware,
+                "image not signed; this device accepts only signed images".into()
+            )
+        );
+        assert_eq!(b.store.read_state().unwrap(), before, "nothing recorded");
+        // signed by someone else: the whole file arrives, nothing is committed
+        let stranger = KeyPair::from_seed(Seed::new([4; 32]));
+        assert_eq!(
+            b.download(&sign(&stranger, "2.0.0", 3000)),
+            Reply::Err(
+                FoeErrorCode::InvalidFirmware,
+                "image signature does not verify with the device's key".into()
+            )
+        );
+        drop(b);
+        assert_eq!(commit_pending(&mut store), Ok(None));
+        assert_eq!(running_version(&mut store), "1.0.0");
+        // signed by the owner: installed
+        let mut b = Bench::new(&mut store);
+        b.security = security;
+        assert!(matches!(
+            b.download(&sign(&owner, "2.0.0", 3000)),
+            Reply::Ack(_)
+        ));
+        drop(b);
+        commit_pending(&mut store).unwrap();
+        assert_eq!(running_version(&mut store), "2.0.0");
     }
 
     #[test]

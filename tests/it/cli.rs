@@ -820,3 +820,129 @@ fn a_failed_forward_relay_stops_pam_slave_with_status_3() {
     assert!(err.contains("Network is down"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
 }
+
+#[test]
+fn firmware_keygen_and_pack_sign_make_images_a_keyed_device_accepts() {
+    use ecat_slave::firmware::{DeviceIdentity, EfwError, EfwValidator};
+    let mt = master_test();
+    let dir = std::env::temp_dir().join(format!("mt-sign-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let p = |n: &str| dir.join(n).to_string_lossy().into_owned();
+    std::fs::write(p("app.bin"), vec![0x5Au8; 3000]).expect("write");
+    let (o, _) = expect(&mt, &["firmware", "keygen", "-o", &p("owner.pem")], 0);
+    let pem = std::fs::read_to_string(p("owner.pem")).expect("key file");
+    assert!(pem.starts_with("-----BEGIN PRIVATE KEY-----"), "{pem}");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt as _;
+        let mode = std::fs::metadata(p("owner.pem"))
+            .expect("meta")
+            .permissions()
+            .mode();
+        assert_eq!(mode & 0o777, 0o600);
+    }
+    let hex = o
+        .lines()
+        .find_map(|l| l.strip_prefix("public key "))
+        .expect("public key printed")
+        .trim()
+        .to_string();
+    let key: [u8; 32] = (0..32)
+        .map(|i| u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).expect("hex"))
+        .collect::<Vec<u8>>()
+        .try_into()
+        .expect("32 bytes");
+    // never overwritten
+    let (_, e) = expect(&mt, &["firmware", "keygen", "-o", &p("owner.pem")], 2);
+    assert!(e.contains("never overwritten"), "{e}");
+    let (o, _) = expect(
+        &mt,
+        &[
+            "firmware",
+            "pack",
+            &p("app.bin"),
+            "--version",
+            "12",
+            "-o",
+            &p("signed.efw"),
+            "--sign",
+            &p("owner.pem"),
+        ],
+        0,
+    );
+    assert!(o.contains(&format!("signed by key {hex}")), "{o}");
+    expect(
+        &mt,
+        &[
+            "firmware",
+            "pack",
+            &p("app.bin"),
+            "--version",
+            "12",
+            "-o",
+            &p("plain.efw"),
+        ],
+        0,
+    );
+    let id = DeviceIdentity {
+        vendor_id: pam_199_p_etc::VENDOR_ID,
+        product_code: pam_199_p_etc::PRODUCT_CODE,
+        revision: pam_199_p_etc::REVISION,
+    };
+    let check = |file: &str, key: [u8; 32]| {
+        let img = std::fs::read(p(file)).expect("image");
+        let mut v = EfwValidator::new(id, 1 << 20).with_public_key(key);
+        v.feed(&img).and_then(|_| v.finish()).map(|_| ())
+    };
+    assert_eq!(check("signed.efw", key), Ok(()));
+    assert_eq!(check("plain.efw", key), Err(EfwError::Unsigned));
+    let mut other = key;
+    other[0] ^= 1;
+    assert!(check("signed.efw", other).is_err());
+    // A key from OpenSSL works the same (when openssl is installed).
+    let made = std::process::Command::new("openssl")
+        .args(["genpkey", "-algorithm", "ed25519", "-out", &p("ossl.pem")])
+        .status();
+    if made.is_ok_and(|s| s.success()) {
+        expect(
+            &mt,
+            &[
+                "firmware",
+                "pack",
+                &p("app.bin"),
+                "--version",
+                "12",
+                "-o",
+                &p("ossl.efw"),
+                "--sign",
+                &p("ossl.pem"),
+            ],
+            0,
+        );
+        let der = std::process::Command::new("openssl")
+            .args(["pkey", "-in", &p("ossl.pem"), "-pubout", "-outform", "DER"])
+            .output()
+            .expect("openssl pkey");
+        let pk: [u8; 32] = der.stdout[der.stdout.len() - 32..].try_into().expect("key");
+        assert_eq!(check("ossl.efw", pk), Ok(()));
+    }
+    // Not a key: refused with a message naming the format.
+    let (_, e) = expect(
+        &mt,
+        &[
+            "firmware",
+            "pack",
+            &p("app.bin"),
+            "--version",
+            "12",
+            "-o",
+            &p("x.efw"),
+            "--sign",
+            &p("app.bin"),
+        ],
+        2,
+    );
+    assert!(e.contains("PKCS#8"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -41,7 +41,7 @@
 //! |-------:|-----:|-----------------|-----------------------------------------------------------|
 //! | 0      | 8    | `magic`         | `b"ECATFW\0"` + format version byte `0x01`                 |
 //! | 8      | 2    | `header_len`    | header length incl. `header_crc32`; 56 for v1, ≤ 512       |
-//! | 10     | 2    | `flags`         | reserved, written 0, ignored                              |
+//! | 10     | 2    | `flags`         | bit 0 `SIGNED` (below); other bits reserved, written 0, ignored |
 //! | 12     | 4    | `vendor_id`     | must equal the device's vendor ID (0x1018:01)             |
 //! | 16     | 4    | `product_code`  | must equal the device's product code (0x1018:02)          |
 //! | 20     | 4    | `revision_min`  | lowest device revision (0x1018:03) the image supports     |
@@ -52,6 +52,21 @@
 //! | 52     | …    | (extension)     | only if `header_len` > 56: ignored, covered by the CRC     |
 //! | hl − 4 | 4    | `header_crc32`  | CRC-32 of header bytes `0 .. header_len − 4`               |
 //! | hl     | pl   | payload         | `payload_len` bytes; the file ends exactly here           |
+//!
+//! **Signed images** (header revision with [`EFW_FLAG_SIGNED`], still
+//! format 1): `flags` bit 0 set, `header_len` ≥ 120, and the first 64
+//! extension bytes (offset 52..116, [`EFW_SIGNATURE`]) hold an Ed25519
+//! signature (RFC 8032, pure Ed25519) over the whole file except the
+//! signature field and the header CRC: bytes `0..52`, then `116 .. hl − 4`,
+//! then the payload ([`signed_message`]). The header CRC covers the
+//! signature and is computed after it ([`set_signature`]). The format
+//! version stays 1 because a format-1 parser already skips extension bytes
+//! and ignores flags: an older slave installs a signed image as before, a
+//! slave without a key ignores the signature, a slave whose description
+//! has a public key ([`FoeSecurity::public_key`](crate::device::FoeSecurity))
+//! and the `signed-images` feature refuses unsigned images at their
+//! header and badly signed ones before anything is committed (FoE error
+//! `0x800D`). Unsigned images are byte for byte what they were.
 //!
 //! CRC-32 is CRC-32/ISO-HDLC (the zlib/Ethernet `crc32`: polynomial
 //! `0x04C11DB7` reflected, init and xor-out `0xFFFFFFFF`), see [`crc32`].
@@ -68,8 +83,9 @@ pub use boot::{
     rollback_floor, set_password, verify_slot, write_chunk,
 };
 pub use efw::{
-    EFW_FORMAT_VERSION, EFW_HEADER_LEN, EFW_MAGIC, EFW_MAX_HEADER_LEN, EfwError, EfwHeader,
-    EfwHeaderRepr, EfwValidator, ValidatedImage, pack,
+    EFW_FLAG_SIGNED, EFW_FORMAT_VERSION, EFW_HEADER_LEN, EFW_MAGIC, EFW_MAX_HEADER_LEN,
+    EFW_SIGNATURE, EFW_SIGNED_HEADER_LEN, EfwError, EfwHeader, EfwHeaderRepr, EfwValidator,
+    ValidatedImage, pack, set_signature, signed_message,
 };
 pub use store::{
     BootState, Candidate, CandidateStage, ImageInfo, ImageStore, MemStore, STATE_RECORD_LEN,
