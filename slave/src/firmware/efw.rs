@@ -836,20 +836,21 @@ impl EfwValidator {
         }
         if self.received == field::FLAGS.end {
             check_signed_len(view.flags(), view.header_len())?;
-            if let Some(_key) = self.key {
-                if view.flags() & EFW_FLAG_SIGNED == 0 {
-                    return Err(EfwError::Unsigned);
-                }
-                #[cfg(not(feature = "signed-images"))]
+            if self.key.is_some() && view.flags() & EFW_FLAG_SIGNED == 0 {
+                return Err(EfwError::Unsigned);
+            }
+            #[cfg(not(feature = "signed-images"))]
+            if self.key.is_some() {
                 return Err(EfwError::SignatureUnsupported);
             }
         }
         #[cfg(feature = "signed-images")]
-        if self.received == EFW_SIGNATURE.end && view.flags() & EFW_FLAG_SIGNED != 0 {
-            if let Some(key) = self.key {
-                let head = self.head.get(..EFW_SIGNATURE.start).unwrap_or(&[]);
-                self.check.start(&key, &self.signature, head)?;
-            }
+        if let Some(key) = self
+            .key
+            .filter(|_| self.received == EFW_SIGNATURE.end && view.flags() & EFW_FLAG_SIGNED != 0)
+        {
+            let head = self.head.get(..EFW_SIGNATURE.start).unwrap_or(&[]);
+            self.check.start(&key, &self.signature, head)?;
         }
         if self.received >= EFW_HEADER_LEN && self.received == header_len {
             let expected = get_u32(&self.head, field::FIXED_END..EFW_HEADER_LEN);
