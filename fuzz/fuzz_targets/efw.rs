@@ -14,12 +14,16 @@
 //! payload CRC) and hands out exactly the payload; an accepted image
 //! without extension re-packs to the same bytes, downloads into a store
 //! and is what the bootloader tries next; a decoded boot state record
-//! encodes to a record that decodes to the same state.
+//! encodes to a record that decodes to the same state. With a public key
+//! (the key of seed `[7; 32]`, which signed the `pam-signed*` seeds) the
+//! validator accepts exactly the images it accepts without one that are
+//! flagged signed and whose signature verifies over `signed_message`.
 #![no_main]
 
 use ecat_slave::firmware::{
-    self, BootOutcome, BootState, DeviceIdentity, EFW_HEADER_LEN, EfwError, EfwHeader,
-    EfwHeaderRepr, EfwValidator, STATE_RECORD_LEN, ValidatedImage, crc32,
+    self, BootOutcome, BootState, DeviceIdentity, EFW_FLAG_SIGNED, EFW_HEADER_LEN, EFW_SIGNATURE,
+    EfwError, EfwHeader, EfwHeaderRepr, EfwValidator, STATE_RECORD_LEN, ValidatedImage, crc32,
+    signed_message,
 };
 use ecat_slave::host::chain::{IMAGE_SLOT_CAPACITY, provision_factory};
 use ecat_slave::host::image_store::VecStore;
@@ -31,10 +35,22 @@ const PAM: DeviceIdentity = DeviceIdentity {
     revision: pam_199_p_etc::REVISION,
 };
 
+/// The key that signed the `pam-signed*` seeds.
+fn fuzz_key() -> ed25519_compact::PublicKey {
+    ed25519_compact::KeyPair::from_seed(ed25519_compact::Seed::new([7; 32])).pk
+}
+
 /// Feeds `img` in chunks of `chunk` bytes (0: one chunk); the result and
 /// the payload bytes handed out.
 fn validate(img: &[u8], chunk: usize) -> (Result<ValidatedImage, EfwError>, Vec<u8>) {
-    let mut v = EfwValidator::new(PAM, IMAGE_SLOT_CAPACITY);
+    validate_with(EfwValidator::new(PAM, IMAGE_SLOT_CAPACITY), img, chunk)
+}
+
+fn validate_with(
+    mut v: EfwValidator,
+    img: &[u8],
+    chunk: usize,
+) -> (Result<ValidatedImage, EfwError>, Vec<u8>) {
     let mut payload = Vec::new();
     let chunks: Box<dyn Iterator<Item = &[u8]>> = if chunk == 0 {
         Box::new(std::iter::once(img))
@@ -137,6 +153,23 @@ fuzz_target!(|data: &[u8]| {
         result.is_ok(),
         expected_ok,
         "validator {result:?} vs header {parsed:?}"
+    );
+    // With a key: only images signed with it, whatever the chunking.
+    let key = fuzz_key();
+    let keyed = EfwValidator::new(PAM, IMAGE_SLOT_CAPACITY).with_public_key(*key);
+    let (keyed, _) = validate_with(keyed, img, chunk);
+    let signature_ok = parsed.as_ref().is_ok_and(|h| h.flags & EFW_FLAG_SIGNED != 0)
+        && signed_message(img).is_ok_and(|parts| {
+            let sig = img.get(EFW_SIGNATURE).and_then(|s| <[u8; 64]>::try_from(s).ok());
+            sig.is_some_and(|s| {
+                key.verify(parts.concat(), &ed25519_compact::Signature::new(s))
+                    .is_ok()
+            })
+        });
+    assert_eq!(
+        keyed.is_ok(),
+        expected_ok && signature_ok,
+        "keyed validator {keyed:?}"
     );
     let Ok(validated) = result else {
         return;

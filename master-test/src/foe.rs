@@ -63,6 +63,20 @@ pub async fn write(
     }
 }
 
+/// The owner sets a new FoE password (the slave in BOOT): a download of
+/// the password file ([`ecat_slave::foe::PASSWORD_FILE_NAME`]) with the
+/// `current` password in the write request, holding `new` as 8 hex
+/// digits. A wrong `current` password is refused with 0x800A.
+pub async fn set_password(
+    client: &mut MailboxClient<'_>,
+    current: u32,
+    new: u32,
+) -> Result<(), ClientError> {
+    let name = String::from_utf8_lossy(ecat_slave::foe::PASSWORD_FILE_NAME).into_owned();
+    let file = format!("{new:08X}\n");
+    write(client, &name, current, file.as_bytes(), |_, _| {}).await
+}
+
 /// Sends a FoE error request "aborted by the master" (no reply expected).
 pub async fn send_abort(client: &mut MailboxClient<'_>) -> Result<(), ClientError> {
     let abort = FoeRepr::Error {

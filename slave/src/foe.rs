@@ -12,10 +12,23 @@
 //!
 //! # Rules
 //!
-//! * Write request (WRQ): accepted only in BOOT, with password
-//!   [`FOE_PASSWORD`] (`0x00000000`) and a file name ending in `.efw`
-//!   (ASCII case ignored); answered with ACK 0 after the inactive slot is
-//!   erased. DATA packets are numbered from 1; a repeat of the previous
+//! * Write request (WRQ): accepted only in BOOT, with the device's FoE
+//!   password (the owner's, stored in the boot records, else the
+//!   description's [`FoeSecurity::factory_password`]; `0x00000000` for
+//!   the catalog devices) and a file name ending in `.efw` (ASCII case
+//!   ignored); answered with ACK 0 after the inactive slot is erased.
+//! * Anti-rollback: an image whose version is older than the store's
+//!   floor (the version last provisioned or confirmed, see
+//!   [`BootState::min_version`](crate::firmware::BootState::min_version))
+//!   is refused with `0x8002` as soon as its header is complete, before
+//!   any payload byte is written, unless the file name ends in
+//!   [`DOWNGRADE_SUFFIX`] (`.downgrade.efw`): the owner's consent, which
+//!   needs the password like every write.
+//! * WRQ of [`PASSWORD_FILE_NAME`] with the current password: the file
+//!   (one short DATA packet, at most [`PASSWORD_FILE_CAPACITY`] bytes)
+//!   holds the new password as 1 to 8 hex digits; it is stored power-cut
+//!   safely in the boot records before the last ACK (see [`FoeSecurity`]
+//!   for why FoE and not CoE). DATA packets are numbered from 1; a repeat of the previous
 //!   packet is acknowledged again without being written twice; any other
 //!   number aborts with PacketNumberWrong. A DATA packet shorter than the
 //!   maximum (mailbox data size − 6) ends the file, so a file whose length
@@ -34,29 +47,54 @@
 //! | situation                              | code                          | text |
 //! |----------------------------------------|-------------------------------|------|
 //! | WRQ outside BOOT                       | `0x8008` BootstrapOnly        | "firmware download only in BOOT" |
-//! | WRQ with password ≠ 0                  | `0x800A` NoRights             | "wrong password" |
+//! | WRQ with a wrong password              | `0x800A` NoRights             | "wrong password" |
+//! | password file not 1 to 8 hex digits    | `0x8000` NotDefined           | "password file must hold 1 to 8 hex digits" |
+//! | password file longer than 32 bytes     | `0x8003` DiskFull             | "password file longer than 32 bytes" |
 //! | WRQ name not `*.efw`                   | `0x8009` NotBootstrap         | "only .efw files can be downloaded in BOOT" |
 //! | RRQ of an unknown name                 | `0x8001` NotFound             | "file not found" |
 //! | wrong DATA/ACK packet number           | `0x8005` PacketNumberWrong    | "packet number wrong" |
 //! | DATA/ACK/unknown opcode out of context | `0x8004` Illegal              | "no transfer in progress" … |
+//! | image older than the floor             | `0x8002` AccessDenied         | "version 9 is older than the minimum 10: downgrade refused" |
 //! | image refused                          | [`EfwError::foe_code`]        | the [`EfwError`] text |
 //! | flash failure                          | [`StoreError::foe_code`]      | the [`StoreError`] text |
 //!
 //! ETG.1000.6 names `0x8008` "Bootstrap only" and `0x8009` "Not bootstrap";
 //! the ETG Slave Stack Code documents them as "FoE only supported in
 //! Bootstrap" and "downloaded file name is not valid in Bootstrap state",
-//! which is how they are used here.
+//! which is how they are used here. For a downgrade the slave will not
+//! do, `0x8002` "access denied" was chosen among the ETG.1000.6 codes
+//! `0x8000..=0x800F`: the request is understood and the image is valid,
+//! the device's policy refuses it (`0x800A` "no rights" would say the
+//! password is wrong, `0x800D` that the image does not fit the device).
 
 use core::fmt::Write as _;
 
+use crate::device::FoeSecurity;
 use crate::firmware::{
     DeviceIdentity, EfwError, EfwValidator, ImageStore, Slot, StoreError, begin_download,
-    cancel_download, finish_download, write_chunk,
+    cancel_download, finish_download, foe_password, rollback_floor, set_password, write_chunk,
 };
 use crate::wire::foe::{FoeErrorCode, FoeRepr, HEADER_LEN};
 
-/// The password a firmware download must carry (manual §5.10).
-pub const FOE_PASSWORD: u32 = 0x0000_0000;
+/// The factory FoE password of the catalog devices (manual §5.10):
+/// [`FoeSecurity::OPEN`]. A device's own is its description's
+/// [`FoeSecurity::factory_password`] until the owner sets another (see
+/// [`PASSWORD_FILE_NAME`]).
+pub const FOE_PASSWORD: u32 = FoeSecurity::OPEN.factory_password;
+
+/// Suffix (ASCII case ignored) of a firmware file name that asks to
+/// install an image older than the anti-rollback floor: the owner's
+/// explicit consent, given with the FoE password (e.g.
+/// `app.downgrade.efw`; `master-test foe write --allow-downgrade`).
+pub const DOWNGRADE_SUFFIX: &[u8] = b".downgrade.efw";
+
+/// Name of the file (ASCII case ignored) whose FoE download in BOOT sets a
+/// new FoE password: the write request carries the current password, the
+/// file the new one as 1 to 8 hex digits (see [`FoeSecurity`]).
+pub const PASSWORD_FILE_NAME: &[u8] = b"foe-password.txt";
+
+/// Longest password file accepted (hex digits, `0x`, whitespace).
+pub const PASSWORD_FILE_CAPACITY: usize = 32;
 
 /// Suffix of downloadable firmware files.
 pub const FIRMWARE_SUFFIX: &[u8] = b".efw";
@@ -78,6 +116,8 @@ pub struct FoeContext<'a> {
     pub identity: DeviceIdentity,
     /// The running firmware's version text.
     pub version: &'a str,
+    /// The factory password and the image key (the device description's).
+    pub security: FoeSecurity,
     /// The AL state is BOOT.
     pub in_boot: bool,
     /// The flash is busy (e.g. an erase is in progress): answer BUSY.
@@ -86,6 +126,10 @@ pub struct FoeContext<'a> {
 
 /// The state of the FoE server.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
+// `Receiving` carries the streaming image check (with `signed-images`, the
+// Ed25519 verifier state): the core has no heap to box it in, and the
+// server holds one state at a time.
+#[allow(clippy::large_enum_variant)]
 pub enum FoeState {
     /// No transfer.
     #[default]
@@ -104,6 +148,22 @@ pub enum FoeState {
     /// A download completed; only a repeat of its last packet is
     /// acknowledged again.
     Complete {
+        /// The last packet number.
+        packet: u32,
+    },
+    /// Receiving a new FoE password ([`PASSWORD_FILE_NAME`]).
+    ReceivingPassword {
+        /// The file so far.
+        text: heapless::Vec<u8, PASSWORD_FILE_CAPACITY>,
+        /// Number of the next DATA packet expected.
+        next_packet: u32,
+        /// Largest DATA size seen or expected; shorter packets end the file.
+        segment: usize,
+    },
+    /// A new password was stored; only a repeat of the last packet is
+    /// acknowledged again. (A master error now changes nothing: the
+    /// password stays set.)
+    PasswordSet {
         /// The last packet number.
         packet: u32,
     },
@@ -199,8 +259,23 @@ impl FoeServer {
                 "firmware download only in BOOT",
             );
         }
-        if password != FOE_PASSWORD {
+        let expected = match foe_password(ctx.store, ctx.security.factory_password) {
+            Ok(p) => p,
+            Err(e) => return self.fail_store(out, e),
+        };
+        if password != expected {
             return self.fail(out, FoeErrorCode::NoRights, "wrong password");
+        }
+        if name.eq_ignore_ascii_case(PASSWORD_FILE_NAME) {
+            if ctx.busy {
+                return emit(out, FoeRepr::Busy { done: 0, entire: 0 });
+            }
+            self.state = FoeState::ReceivingPassword {
+                text: heapless::Vec::new(),
+                next_packet: 1,
+                segment: out.len().saturating_sub(HEADER_LEN),
+            };
+            return emit(out, FoeRepr::Ack { packet: 0 });
         }
         if !ends_with_ignore_case(name, FIRMWARE_SUFFIX) {
             return self.fail(
@@ -212,6 +287,16 @@ impl FoeServer {
         if ctx.busy {
             return emit(out, FoeRepr::Busy { done: 0, entire: 0 });
         }
+        let floor = if ends_with_ignore_case(name, DOWNGRADE_SUFFIX) {
+            crate::firmware::FirmwareVersion::EMPTY
+        } else {
+            match rollback_floor(ctx.store) {
+                Ok(floor) => floor,
+                Err(e) => return self.fail_store(out, e),
+            }
+        };
+        let validator =
+            EfwValidator::new(ctx.identity, ctx.store.slot_capacity()).with_rollback_floor(floor);
         let slot = match begin_download(ctx.store) {
             Ok(slot) => slot,
             Err(e) => return self.fail_store(out, e),
@@ -220,7 +305,10 @@ impl FoeServer {
             slot,
             next_packet: 1,
             segment: out.len().saturating_sub(HEADER_LEN),
-            validator: EfwValidator::new(ctx.identity, ctx.store.slot_capacity()),
+            validator: match ctx.security.public_key {
+                Some(key) => validator.with_public_key(key),
+                None => validator,
+            },
         };
         emit(out, FoeRepr::Ack { packet: 0 })
     }
@@ -232,6 +320,9 @@ impl FoeServer {
         ctx: &mut FoeContext<'_>,
         out: &mut [u8],
     ) -> Option<usize> {
+        if matches!(self.state, FoeState::ReceivingPassword { .. }) {
+            return self.password_data(packet, data, ctx, out);
+        }
         let FoeState::Receiving {
             slot,
             next_packet,
@@ -240,7 +331,9 @@ impl FoeServer {
         } = &mut self.state
         else {
             return match self.state {
-                FoeState::Complete { packet: last } if packet == last => {
+                FoeState::Complete { packet: last } | FoeState::PasswordSet { packet: last }
+                    if packet == last =>
+                {
                     emit(out, FoeRepr::Ack { packet })
                 }
                 _ => self.fail(out, FoeErrorCode::Illegal, "no download in progress"),
@@ -288,6 +381,66 @@ impl FoeServer {
             return self.fail_store(out, e);
         }
         self.state = FoeState::Complete { packet };
+        emit(out, FoeRepr::Ack { packet })
+    }
+
+    /// A DATA packet of the password file; the last one stores the new
+    /// password.
+    fn password_data(
+        &mut self,
+        packet: u32,
+        data: &[u8],
+        ctx: &mut FoeContext<'_>,
+        out: &mut [u8],
+    ) -> Option<usize> {
+        let FoeState::ReceivingPassword {
+            text,
+            next_packet,
+            segment,
+        } = &mut self.state
+        else {
+            return None;
+        };
+        if packet != *next_packet {
+            if packet.wrapping_add(1) == *next_packet && packet != 0 {
+                return emit(out, FoeRepr::Ack { packet });
+            }
+            return self.fail(out, FoeErrorCode::PacketNumberWrong, "packet number wrong");
+        }
+        if !ctx.in_boot {
+            return self.fail(
+                out,
+                FoeErrorCode::BootstrapOnly,
+                "firmware download only in BOOT",
+            );
+        }
+        if ctx.busy {
+            return emit(out, FoeRepr::Busy { done: 0, entire: 0 });
+        }
+        *segment = (*segment).max(data.len());
+        let last = data.len() < *segment;
+        if text.extend_from_slice(data).is_err() {
+            return self.fail(
+                out,
+                FoeErrorCode::DiskFull,
+                "password file longer than 32 bytes",
+            );
+        }
+        *next_packet = next_packet.wrapping_add(1);
+        if !last {
+            return emit(out, FoeRepr::Ack { packet });
+        }
+        let Some(new) = parse_password(text) else {
+            return self.fail(
+                out,
+                FoeErrorCode::NotDefined,
+                "password file must hold 1 to 8 hex digits",
+            );
+        };
+        if let Err(e) = set_password(ctx.store, new) {
+            return self.fail_store(out, e);
+        }
+        self.state = FoeState::PasswordSet { packet };
         emit(out, FoeRepr::Ack { packet })
     }
 
@@ -412,6 +565,23 @@ fn ends_with_ignore_case(name: &[u8], suffix: &[u8]) -> bool {
             .is_some_and(|tail| tail.eq_ignore_ascii_case(suffix))
 }
 
+/// A password file: 1 to 8 hex digits, `0x` optional, ASCII whitespace
+/// around them ignored.
+fn parse_password(text: &[u8]) -> Option<u32> {
+    let text = text.trim_ascii();
+    let digits = match text {
+        [b'0', b'x' | b'X', rest @ ..] => rest,
+        _ => text,
+    };
+    if digits.is_empty() || digits.len() > 8 {
+        return None;
+    }
+    digits.iter().try_fold(0u32, |acc, &c| {
+        let d = char::from(c).to_digit(16)?;
+        Some(acc << 4 | d)
+    })
+}
+
 /// BUSY progress in percent once the image length is known.
 fn progress(validator: &EfwValidator) -> (u16, u16) {
     match validator.expected_len() {
@@ -490,6 +660,7 @@ mod tests {
     struct Bench<'s> {
         server: FoeServer,
         store: &'s mut dyn ImageStore,
+        security: FoeSecurity,
         in_boot: bool,
         busy: bool,
         out: Vec<u8>,
@@ -509,6 +680,7 @@ mod tests {
             Self {
                 server: FoeServer::new(),
                 store,
+                security: FoeSecurity::OPEN,
                 in_boot: true,
                 busy: false,
                 out: vec![0; MBX],
@@ -524,6 +696,7 @@ mod tests {
                 store: &mut *self.store,
                 identity: DEVICE,
                 version: "1.0.0",
+                security: self.security,
                 in_boot: self.in_boot,
                 busy: self.busy,
             };
@@ -633,6 +806,343 @@ mod tests {
             assert!(matches!(b.server.state(), FoeState::Receiving { .. }));
         }
         assert_eq!(b.data(4, &[]), Reply::Ack(4));
+        drop(b);
+        commit_pending(&mut store).unwrap();
+        assert_eq!(running_version(&mut store), "2.0.0");
+    }
+
+    /// Sets a new password through the password file, as a master does.
+    fn set_password_file(b: &mut Bench<'_>, current: u32, file: &[u8]) -> Reply {
+        let reply = b.wrq("FOE-PASSWORD.TXT", current);
+        if reply != Reply::Ack(0) {
+            return reply;
+        }
+        b.data(1, file)
+    }
+
+    #[test]
+    fn the_factory_password_of_the_description_is_asked_for() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let file = efw(&header("2.0.0"), &payload(3000));
+        let mut b = Bench::new(&mut store);
+        b.security = FoeSecurity {
+            factory_password: 0x5EC2_E701,
+            public_key: None,
+        };
+        assert_eq!(
+            b.wrq("fw.efw", 0),
+            Reply::Err(FoeErrorCode::NoRights, "wrong password".into())
+        );
+        assert_eq!(b.wrq("fw.efw", 0x5EC2_E701), Reply::Ack(0));
+        for (i, c) in file.chunks(SEG).enumerate() {
+            assert_eq!(b.data(i as u32 + 1, c), Reply::Ack(i as u32 + 1));
+        }
+        drop(b);
+        commit_pending(&mut store).unwrap();
+        assert_eq!(running_version(&mut store), "2.0.0");
+    }
+
+    #[test]
+    fn the_owner_changes_the_password_and_it_survives_a_power_cycle() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let mut b = Bench::new(&mut store);
+        assert_eq!(
+            set_password_file(&mut b, 0, b"  0xC0FFEE42\r\n"),
+            Reply::Ack(1)
+        );
+        assert!(matches!(
+            b.server.state(),
+            FoeState::PasswordSet { packet: 1 }
+        ));
+        // a repeat of the last packet is acknowledged again
+        assert_eq!(b.data(1, b"C0FFEE42"), Reply::Ack(1));
+        // the old password no longer opens anything, the new one does
+        assert_eq!(
+            b.wrq("fw.efw", 0),
+            Reply::Err(FoeErrorCode::NoRights, "wrong password".into())
+        );
+        assert_eq!(b.wrq("fw.efw", 0xC0FF_EE42), Reply::Ack(0));
+        drop(b);
+        // power cycle: the bootloader runs, the records keep the password
+        let d = power_on(&mut store);
+        assert_eq!(d.outcome, BootOutcome::Normal);
+        assert_eq!(crate::firmware::foe_password(&store, 0), Ok(0xC0FF_EE42));
+        let mut b = Bench::new(&mut store);
+        assert_eq!(
+            b.wrq("fw.efw", 0),
+            Reply::Err(FoeErrorCode::NoRights, "wrong password".into())
+        );
+        // and it can be changed again, with the current one
+        assert_eq!(set_password_file(&mut b, 0xC0FF_EE42, b"0"), Reply::Ack(1));
+        assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
+    }
+
+    #[test]
+    fn the_password_is_changed_only_with_the_current_one_in_boot() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let mut b = Bench::new(&mut store);
+        assert_eq!(
+            set_password_file(&mut b, 0x1111, b"2222"),
+            Reply::Err(FoeErrorCode::NoRights, "wrong password".into())
+        );
+        b.in_boot = false;
+        assert!(matches!(
+            set_password_file(&mut b, 0, b"2222"),
+            Reply::Err(FoeErrorCode::BootstrapOnly, _)
+        ));
+        drop(b);
+        assert_eq!(crate::firmware::foe_password(&store, 0), Ok(0));
+    }
+
+    #[test]
+    fn a_malformed_password_file_changes_nothing() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let records = *store.state_copies();
+        let mut b = Bench::new(&mut store);
+        for bad in [
+            &b""[..],
+            b"0x",
+            b"123456789",
+            b"12G4",
+            b"-1",
+            b"12 34",
+            b"\xff",
+        ] {
+            let reply = set_password_file(&mut b, 0, bad);
+            assert_eq!(
+                reply,
+                Reply::Err(
+                    FoeErrorCode::NotDefined,
+                    "password file must hold 1 to 8 hex digits".into()
+                ),
+                "{bad:?}"
+            );
+        }
+        b.out = vec![0; 16]; // 10 data bytes per packet: a long file
+        assert_eq!(b.wrq("foe-password.txt", 0), Reply::Ack(0));
+        for p in 1..=3 {
+            assert_eq!(b.data(p, b"0000000000"), Reply::Ack(p));
+        }
+        assert_eq!(
+            b.data(4, b"0000000000"),
+            // the text is cut to the small mailbox
+            Reply::Err(FoeErrorCode::DiskFull, "password f".into())
+        );
+        drop(b);
+        assert_eq!(store.state_copies(), &records, "no record written");
+    }
+
+    #[test]
+    fn a_power_cut_while_storing_the_password_keeps_the_old_or_the_new_one() {
+        let base = provisioned::<{ 64 * 1024 }>();
+        for cut in 0..=crate::firmware::STATE_RECORD_LEN {
+            let mut store = base.clone();
+            store.cut_power_after(cut);
+            let reply = set_password_file(&mut Bench::new(&mut store), 0, b"ABCD");
+            store.restore_power();
+            let now = crate::firmware::foe_password(&store, 0).unwrap();
+            if cut == crate::firmware::STATE_RECORD_LEN {
+                assert_eq!((reply, now), (Reply::Ack(1), 0xABCD));
+            } else {
+                assert!(
+                    matches!(reply, Reply::Err(FoeErrorCode::FlashError, _)),
+                    "cut {cut}: {reply:?}"
+                );
+                assert_eq!(now, 0, "cut {cut}");
+            }
+            assert_eq!(running_version(&mut store), "1.0.0", "cut {cut}");
+        }
+    }
+
+    #[test]
+    fn a_master_error_after_a_password_change_keeps_a_downloaded_image() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let file = efw(&header("2.0.0"), &payload(1000));
+        let mut b = Bench::new(&mut store);
+        assert!(matches!(b.download(&file), Reply::Ack(_)));
+        assert_eq!(set_password_file(&mut b, 0, b"7"), Reply::Ack(1));
+        assert_eq!(
+            b.send(FoeRepr::Error {
+                code: FoeErrorCode::NotDefined,
+                text: b"late"
+            }),
+            Reply::None
+        );
+        drop(b);
+        assert!(commit_pending(&mut store).unwrap().is_some());
+        assert_eq!(crate::firmware::foe_password(&store, 0), Ok(7));
+    }
+
+    /// Downloads `file` under `name`, commits it and power-cycles with a
+    /// confirmed boot, as the runner does; returns the last reply.
+    fn install(store: &mut Small, name: &str, file: &[u8]) -> Reply {
+        let mut b = Bench::new(store);
+        let mut reply = b.wrq(name, 0);
+        if reply == Reply::Ack(0) {
+            for (i, c) in file.chunks(SEG).enumerate() {
+                reply = b.data(i as u32 + 1, c);
+                if reply != Reply::Ack(i as u32 + 1) {
+                    break;
+                }
+            }
+            if file.len().is_multiple_of(SEG) && reply == Reply::Ack((file.len() / SEG) as u32) {
+                reply = b.data((file.len() / SEG) as u32 + 1, &[]);
+            }
+        }
+        drop(b);
+        let _ = commit_pending(store);
+        let _ = power_on(store);
+        let _ = crate::firmware::confirm_boot(store);
+        reply
+    }
+
+    #[test]
+    fn an_older_image_is_refused_with_access_denied_before_anything_is_written() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        // upgrade 1.0.0 -> 2.0.0: accepted, and 2.0.0 becomes the floor
+        let up = efw(&header("2.0.0"), &payload(3000));
+        assert!(matches!(install(&mut store, "fw.efw", &up), Reply::Ack(_)));
+        assert_eq!(running_version(&mut store), "2.0.0");
+        assert_eq!(
+            crate::firmware::rollback_floor(&store).unwrap().as_str(),
+            "2.0.0"
+        );
+        // back to 1.5: refused at its header, nothing of it written
+        let down = efw(&header("1.5"), &payload(3000));
+        let mut b = Bench::new(&mut store);
+        assert_eq!(b.wrq("fw.efw", 0), Reply::Ack(0));
+        let records = b.store.read_state().unwrap();
+        assert_eq!(
+            b.data(1, &down[..SEG]),
+            Reply::Err(
+                FoeErrorCode::AccessDenied,
+                "version 1.5 is older than the minimum 2.0.0: downgrade refused".into()
+            )
+        );
+        assert_eq!(b.store.read_state().unwrap(), records, "no record written");
+        let mut slot = [0u8; 3000];
+        b.store.read(Slot::A, 0, &mut slot).unwrap();
+        assert!(slot.iter().all(|&x| x == 0xFF), "no payload byte written");
+        drop(b);
+        assert_eq!(commit_pending(&mut store), Ok(None));
+        assert_eq!(running_version(&mut store), "2.0.0");
+        // the same version again is no downgrade
+        let same = efw(&header("2.0"), &payload(2000));
+        assert!(matches!(
+            install(&mut store, "fw.efw", &same),
+            Reply::Ack(_)
+        ));
+        assert_eq!(running_version(&mut store), "2.0");
+    }
+
+    #[test]
+    fn the_owner_allows_a_downgrade_with_the_downgrade_file_name_and_the_password() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let up = efw(&header("2.0.0"), &payload(3000));
+        assert!(matches!(install(&mut store, "fw.efw", &up), Reply::Ack(_)));
+        // the owner's password guards the override like every write
+        let mut b = Bench::new(&mut store);
+        assert_eq!(set_password_file(&mut b, 0, b"5EC2E7"), Reply::Ack(1));
+        assert_eq!(
+            b.wrq("fw.downgrade.efw", 0),
+            Reply::Err(FoeErrorCode::NoRights, "wrong password".into())
+        );
+        drop(b);
+        let down = efw(&header("1.5"), &payload(2900));
+        let mut b = Bench::new(&mut store);
+        assert_eq!(b.wrq("FW.DOWNGRADE.EFW", 0x5E_C2E7), Reply::Ack(0));
+        assert_eq!(b.data(1, &down[..SEG]), Reply::Ack(1));
+        assert_eq!(b.data(2, &down[SEG..2 * SEG]), Reply::Ack(2));
+        assert_eq!(b.data(3, &down[2 * SEG..]), Reply::Ack(3));
+        drop(b);
+        commit_pending(&mut store).unwrap();
+        let _ = power_on(&mut store);
+        crate::firmware::confirm_boot(&mut store).unwrap();
+        assert_eq!(running_version(&mut store), "1.5");
+        // the confirmed downgrade is the new floor: 1.6 is an upgrade again
+        assert_eq!(
+            crate::firmware::rollback_floor(&store).unwrap().as_str(),
+            "1.5"
+        );
+    }
+
+    #[test]
+    fn a_pending_upgrade_does_not_raise_the_floor_until_it_is_confirmed() {
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        let up = efw(&header("3"), &payload(3000));
+        let mut b = Bench::new(&mut store);
+        assert!(matches!(b.download(&up), Reply::Ack(_)));
+        drop(b);
+        commit_pending(&mut store).unwrap();
+        assert_eq!(
+            crate::firmware::rollback_floor(&store).unwrap().as_str(),
+            "1.0.0"
+        );
+        // a trial that is rejected leaves the floor at the running image
+        let _ = power_on(&mut store);
+        crate::firmware::reject_boot(&mut store).unwrap();
+        assert_eq!(running_version(&mut store), "1.0.0");
+        assert_eq!(
+            crate::firmware::rollback_floor(&store).unwrap().as_str(),
+            "1.0.0"
+        );
+    }
+
+    #[cfg(feature = "signed-images")]
+    #[test]
+    fn a_device_with_a_key_installs_only_images_signed_with_it() {
+        use crate::firmware::{
+            EFW_FLAG_SIGNED, EFW_SIGNED_HEADER_LEN, set_signature, signed_message,
+        };
+        use ed25519_compact::{KeyPair, Seed};
+        let owner = KeyPair::from_seed(Seed::new([3; 32]));
+        let sign = |kp: &KeyPair, version: &str, len: usize| {
+            let h = EfwHeaderRepr {
+                flags: EFW_FLAG_SIGNED,
+                header_len: EFW_SIGNED_HEADER_LEN as u16,
+                ..header(version)
+            };
+            let mut img = efw(&h, &payload(len));
+            let msg = signed_message(&img).unwrap().concat();
+            set_signature(&mut img, &kp.sk.sign(&msg, None)).unwrap();
+            img
+        };
+        let security = FoeSecurity {
+            factory_password: 0,
+            public_key: Some(*owner.pk),
+        };
+        let mut store = provisioned::<{ 64 * 1024 }>();
+        // unsigned: refused at its header, before any payload is written
+        let mut b = Bench::new(&mut store);
+        b.security = security;
+        let before = b.store.read_state().unwrap();
+        assert_eq!(
+            b.download(&efw(&header("2.0.0"), &payload(3000))),
+            Reply::Err(
+                FoeErrorCode::InvalidFirmware,
+                "image not signed; this device accepts only signed images".into()
+            )
+        );
+        assert_eq!(b.store.read_state().unwrap(), before, "nothing recorded");
+        // signed by someone else: the whole file arrives, nothing is committed
+        let stranger = KeyPair::from_seed(Seed::new([4; 32]));
+        assert_eq!(
+            b.download(&sign(&stranger, "2.0.0", 3000)),
+            Reply::Err(
+                FoeErrorCode::InvalidFirmware,
+                "image signature does not verify with the device's key".into()
+            )
+        );
+        drop(b);
+        assert_eq!(commit_pending(&mut store), Ok(None));
+        assert_eq!(running_version(&mut store), "1.0.0");
+        // signed by the owner: installed
+        let mut b = Bench::new(&mut store);
+        b.security = security;
+        assert!(matches!(
+            b.download(&sign(&owner, "2.0.0", 3000)),
+            Reply::Ack(_)
+        ));
         drop(b);
         commit_pending(&mut store).unwrap();
         assert_eq!(running_version(&mut store), "2.0.0");
@@ -1075,6 +1585,7 @@ mod tests {
                     store: &mut store,
                     identity: DEVICE,
                     version: "1.0.0",
+                    security: FoeSecurity::OPEN,
                     in_boot: true,
                     busy: false,
                 };
@@ -1095,6 +1606,7 @@ mod tests {
             store: &mut store,
             identity: DEVICE,
             version: "1.0.0",
+            security: FoeSecurity::OPEN,
             in_boot: false,
             busy: false,
         };

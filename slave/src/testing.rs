@@ -6,8 +6,8 @@
 #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
 
 use crate::device::{
-    Application, CoeServices, DeviceDescription, DeviceNames, EscConfig, Identity, MailboxConfig,
-    PdoSet, ProcessData, SoftSlave,
+    Application, CoeServices, DeviceDescription, DeviceNames, EscConfig, FoeSecurity, Identity,
+    MailboxConfig, PdoSet, ProcessData, SoftSlave,
 };
 use crate::hal::{MemNv, NvStorage};
 use crate::od::build::{
@@ -161,6 +161,7 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
             complete_access: true,
         },
         foe: true,
+        foe_security: FoeSecurity::OPEN,
     },
     esc: EscConfig::DEFAULT,
     modules: None,

@@ -8,7 +8,7 @@ namespace, runs the phases of this script and checks its exit status; this
 script prints what SOEM saw (names, abort codes, working counters) and
 exits 1 on the first disagreement.
 
-    soem_interop.py phase1 IFACE ESI.xml EEPROM.bin GOOD.efw BAD_CRC.efw VERSION
+    soem_interop.py phase1 IFACE ESI.xml EEPROM.bin GOOD.efw BAD_CRC.efw VERSION OLD.efw
     soem_interop.py phase2 IFACE VERSION
     soem_interop.py chain IFACE NAME,NAME,...
     soem_interop.py dc IFACE COUNT
@@ -19,7 +19,12 @@ exits 1 on the first disagreement.
 
 phase1: discovery, SDO, SDO Information, complete access, SII, state
 machine, SM watchdog, 1000 cycles, an ended session followed by a second
-one, FoE refusals and a good FoE download in BOOT, then BOOT -> INIT.
+one, FoE refusals (wrong password, corrupt image), the owner's new FoE
+password set with a plain foe_write of foe-password.txt (the factory
+password refused afterwards), the slave's anti-rollback (OLD.efw, older
+than the running firmware, refused; accepted under a file name ending in
+.downgrade.efw, the owner's consent) and a good FoE download in BOOT,
+then BOOT -> INIT.
 phase2 (after the runner restarted, i.e. a power cycle): the new firmware
 version in 0x100A on the updated slave, and OP again.
 chain: a line spread over several runners (`pam-slave --forward`): SOEM
@@ -191,7 +196,7 @@ def esi_object_indices(path):
     ]
 
 
-def phase1(iface, esi, sii_path, good_efw, bad_efw, version):
+def phase1(iface, esi, sii_path, good_efw, bad_efw, version, old_efw):
     m, n = open_master(iface)
     check(n == 8, f"SOEM config_init found {n} slaves (8 expected)")
     for i, s in enumerate(m.slaves):
@@ -327,8 +332,24 @@ def phase1(iface, esi, sii_path, good_efw, bad_efw, version):
     r = foe_write(s, "pam-199-p-etc.efw", 0, bad)
     log(f"      foe_write of a corrupt image returned {r}")
     check(r == -5, "corrupt image refused with an FoE error (SOEM -5)")
-    t = time.monotonic()
+    # The owner's password: a plain FoE download with the current one.
+    r = foe_write(s, "foe-password.txt", 0, b"C0FFEE42\n")
+    log(f"      foe_write of foe-password.txt returned {r}")
+    check(r > 0, "new FoE password set with foe_write")
     r = foe_write(s, "pam-199-p-etc.efw", 0, good)
+    log(f"      foe_write with the factory password returned {r}")
+    check(r == -5, "the factory password is refused once the owner set one (SOEM -5)")
+    password = 0xC0FFEE42
+    # Anti-rollback in the slave: 9 is older than the running 10.
+    old = open(old_efw, "rb").read()
+    r = foe_write(s, "pam-199-p-etc.efw", password, old)
+    log(f"      foe_write of an older image returned {r}")
+    check(r == -5, "older image refused by the slave (anti-rollback 0x8002, SOEM -5)")
+    r = foe_write(s, "pam-199-p-etc.downgrade.efw", password, old)
+    log(f"      foe_write of the older image as .downgrade.efw returned {r}")
+    check(r > 0, "the same older image accepted with the owner's consent (.downgrade.efw)")
+    t = time.monotonic()
+    r = foe_write(s, "pam-199-p-etc.efw", password, good)
     dt = time.monotonic() - t
     log(f"      foe_write of {len(good)} bytes returned {r} in {dt:.3f} s")
     check(r > 0, "good image written")
@@ -683,7 +704,7 @@ def main():
         return 2
     log(f"pysoem {getattr(pysoem, '__version__', '?')}")
     if sys.argv[1] == "phase1":
-        phase1(*sys.argv[2:8])
+        phase1(*sys.argv[2:9])
     elif sys.argv[1] == "phase2":
         phase2(*sys.argv[2:4])
     elif sys.argv[1] == "chain":

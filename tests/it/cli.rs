@@ -673,3 +673,276 @@ fn master_test_scans_and_reads_an_eni_line_of_twins() {
     let (_, e) = expect(&mt, &["--eni", eni, "--esi-dir", dir, "demo"], 2);
     assert!(e.contains("use scan, state, sdo"), "{e}");
 }
+
+#[test]
+fn pam_slave_refuses_at_start_when_the_firmware_stores_could_exceed_the_memory_cap() {
+    let runner = runner_binary().expect("pam-slave builds");
+    // 4 slaves x 2 slots x 1 MiB = 8 MiB > 4 MiB: refused before the
+    // interface is opened (no root needed), both numbers named.
+    let (o, e) = expect(
+        &runner,
+        &[
+            "--iface",
+            "lo",
+            "--count",
+            "4",
+            "--image-store-size",
+            "1M",
+            "--memory-cap",
+            "4M",
+        ],
+        2,
+    );
+    assert!(e.contains("8388608 bytes"), "{e}");
+    assert!(e.contains("--memory-cap 4194304 bytes"), "{e}");
+    assert!(e.contains("--image-store-size 1048576"), "{e}");
+    assert!(o.is_empty() && !e.contains("Ctrl-C stops"), "{o}{e}");
+    // Within the cap the line is built (dry run: nothing served).
+    let (o, _) = expect(
+        &runner,
+        &[
+            "--iface",
+            "lo",
+            "--count",
+            "4",
+            "--image-store-size",
+            "1048576",
+            "--memory-cap",
+            "8M",
+            "--dry-run",
+        ],
+        0,
+    );
+    assert!(o.contains("PAM-199-P-ETC"), "{o}");
+    // The default store (2 MiB slots) of 4096 slaves against a 1 GiB cap.
+    let (_, e) = expect(
+        &runner,
+        &["--iface", "lo", "--count", "4096", "--memory-cap", "1G"],
+        2,
+    );
+    assert!(e.contains("17179869184 bytes"), "{e}");
+    for bad in ["100", "2T", "x", "2G"] {
+        let (_, e) = expect(&runner, &["--iface", "lo", "--image-store-size", bad], 2);
+        assert!(e.contains("--image-store-size"), "{bad}: {e}");
+    }
+}
+
+#[test]
+fn a_failed_forward_relay_stops_pam_slave_with_status_3() {
+    let Some(runner) = runner_binary() else {
+        return skip("pam-slave binary not built");
+    };
+    let _serial = crate::common::NET_TESTS
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
+    let pid = std::process::id();
+    let ns = format!("pamr{pid}");
+    let (m, a0, a1, b0) = (
+        format!("pr{pid}m"),
+        format!("pr{pid}a0"),
+        format!("pr{pid}a1"),
+        format!("pr{pid}b0"),
+    );
+    let made = (|| -> Result<crate::common::Netns, String> {
+        crate::common::ip(&["netns", "add", &ns])?;
+        let guard = crate::common::Netns {
+            name: ns.clone(),
+            runner: None,
+        };
+        for (x, y) in [(&m, &a0), (&a1, &b0)] {
+            crate::common::ip(&[
+                "-n", &ns, "link", "add", x, "type", "veth", "peer", "name", y,
+            ])?;
+        }
+        for i in [&m, &a0, &a1, &b0] {
+            crate::common::ip(&["-n", &ns, "link", "set", i, "up"])?;
+        }
+        Ok(guard)
+    })();
+    let mut guard = match made {
+        Ok(g) => g,
+        Err(e) => {
+            return skip(&format!(
+                "cannot create a network namespace and veth pairs here ({e}); needs root and iproute2"
+            ));
+        }
+    };
+    let child = std::process::Command::new("ip")
+        .args(["netns", "exec", &ns])
+        .arg(&runner)
+        .args(["--iface", &a0, "--forward", &a1])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start pam-slave in the namespace");
+    guard.runner = Some(child);
+    std::thread::sleep(Duration::from_millis(500));
+    // Port 0 loses its link, then a processed frame comes back on port 1:
+    // the relay cannot pass it on to the master and ends with an error.
+    crate::common::ip(&["-n", &ns, "link", "set", &a0, "down"]).expect("a0 down");
+    let inject = format!(
+        "import socket,time\n\
+         s=socket.socket(socket.AF_PACKET,socket.SOCK_RAW)\n\
+         s.bind(('{b0}',0))\n\
+         f=b'\\xff'*6+b'\\x02\\x00\\x00\\x00\\x00\\x01'+b'\\x88\\xa4'+b'\\x0e\\x10'+bytes(46)\n\
+         for _ in range(30):\n s.send(f); time.sleep(0.1)\n"
+    );
+    let start = Instant::now();
+    let status = loop {
+        let _ = std::process::Command::new("ip")
+            .args(["netns", "exec", &ns, "python3", "-c", &inject])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .and_then(|mut c| c.wait());
+        let c = guard.runner.as_mut().expect("runner");
+        if let Some(st) = c.try_wait().expect("wait") {
+            break Some(st);
+        }
+        if start.elapsed() > Duration::from_secs(10) {
+            break None;
+        }
+    };
+    let mut c = guard.runner.take().expect("runner");
+    let mut err = String::new();
+    if status.is_none() {
+        let _ = c.kill();
+    }
+    let _ = c.wait();
+    let _ = c.stderr.take().map(|mut e| e.read_to_string(&mut err));
+    let status = status
+        .unwrap_or_else(|| panic!("pam-slave kept running without its relay for 10 s:\n{err}"));
+    assert_eq!(status.code(), Some(3), "{err}");
+    assert!(
+        err.contains(&format!("the relay of frames coming back on {a1} failed")),
+        "{err}"
+    );
+    assert!(err.contains("Network is down"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn firmware_keygen_and_pack_sign_make_images_a_keyed_device_accepts() {
+    use ecat_slave::firmware::{DeviceIdentity, EfwError, EfwValidator};
+    let mt = master_test();
+    let dir = std::env::temp_dir().join(format!("mt-sign-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let p = |n: &str| dir.join(n).to_string_lossy().into_owned();
+    std::fs::write(p("app.bin"), vec![0x5Au8; 3000]).expect("write");
+    let (o, _) = expect(&mt, &["firmware", "keygen", "-o", &p("owner.pem")], 0);
+    let pem = std::fs::read_to_string(p("owner.pem")).expect("key file");
+    assert!(pem.starts_with("-----BEGIN PRIVATE KEY-----"), "{pem}");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt as _;
+        let mode = std::fs::metadata(p("owner.pem"))
+            .expect("meta")
+            .permissions()
+            .mode();
+        assert_eq!(mode & 0o777, 0o600);
+    }
+    let hex = o
+        .lines()
+        .find_map(|l| l.strip_prefix("public key "))
+        .expect("public key printed")
+        .trim()
+        .to_string();
+    let key: [u8; 32] = (0..32)
+        .map(|i| u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).expect("hex"))
+        .collect::<Vec<u8>>()
+        .try_into()
+        .expect("32 bytes");
+    // never overwritten
+    let (_, e) = expect(&mt, &["firmware", "keygen", "-o", &p("owner.pem")], 2);
+    assert!(e.contains("never overwritten"), "{e}");
+    let (o, _) = expect(
+        &mt,
+        &[
+            "firmware",
+            "pack",
+            &p("app.bin"),
+            "--version",
+            "12",
+            "-o",
+            &p("signed.efw"),
+            "--sign",
+            &p("owner.pem"),
+        ],
+        0,
+    );
+    assert!(o.contains(&format!("signed by key {hex}")), "{o}");
+    expect(
+        &mt,
+        &[
+            "firmware",
+            "pack",
+            &p("app.bin"),
+            "--version",
+            "12",
+            "-o",
+            &p("plain.efw"),
+        ],
+        0,
+    );
+    let id = DeviceIdentity {
+        vendor_id: pam_199_p_etc::VENDOR_ID,
+        product_code: pam_199_p_etc::PRODUCT_CODE,
+        revision: pam_199_p_etc::REVISION,
+    };
+    let check = |file: &str, key: [u8; 32]| {
+        let img = std::fs::read(p(file)).expect("image");
+        let mut v = EfwValidator::new(id, 1 << 20).with_public_key(key);
+        v.feed(&img).and_then(|_| v.finish()).map(|_| ())
+    };
+    assert_eq!(check("signed.efw", key), Ok(()));
+    assert_eq!(check("plain.efw", key), Err(EfwError::Unsigned));
+    let mut other = key;
+    other[0] ^= 1;
+    assert!(check("signed.efw", other).is_err());
+    // A key from OpenSSL works the same (when openssl is installed).
+    let made = std::process::Command::new("openssl")
+        .args(["genpkey", "-algorithm", "ed25519", "-out", &p("ossl.pem")])
+        .status();
+    if made.is_ok_and(|s| s.success()) {
+        expect(
+            &mt,
+            &[
+                "firmware",
+                "pack",
+                &p("app.bin"),
+                "--version",
+                "12",
+                "-o",
+                &p("ossl.efw"),
+                "--sign",
+                &p("ossl.pem"),
+            ],
+            0,
+        );
+        let der = std::process::Command::new("openssl")
+            .args(["pkey", "-in", &p("ossl.pem"), "-pubout", "-outform", "DER"])
+            .output()
+            .expect("openssl pkey");
+        let pk: [u8; 32] = der.stdout[der.stdout.len() - 32..].try_into().expect("key");
+        assert_eq!(check("ossl.efw", pk), Ok(()));
+    }
+    // Not a key: refused with a message naming the format.
+    let (_, e) = expect(
+        &mt,
+        &[
+            "firmware",
+            "pack",
+            &p("app.bin"),
+            "--version",
+            "12",
+            "-o",
+            &p("x.efw"),
+            "--sign",
+            &p("app.bin"),
+        ],
+        2,
+    );
+    assert!(e.contains("PKCS#8"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

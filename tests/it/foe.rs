@@ -155,3 +155,68 @@ fn foe_write_in_preop_is_refused_with_bootstrap_only() {
         );
     });
 }
+
+#[test]
+fn the_owner_sets_a_foe_password_that_survives_a_power_cycle() {
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let (mut c, station) = boot_client(&bus).await;
+        let e = foe::set_password(&mut c, 0x1234, 0xBEEF)
+            .await
+            .expect_err("only with the current password");
+        assert_eq!(e.foe_code(), Some(0x800A), "{e}");
+        foe::set_password(&mut c, 0, 0xBEEF)
+            .await
+            .expect("set with the factory password");
+        request_state(&bus.maindevice, station, 0x01)
+            .await
+            .expect("INIT");
+        assert_eq!(version_after_power_cycle(&bus).await, "10");
+        let (mut c, station) = boot_client(&bus).await;
+        let img = image(3000, "11", PRODUCT_CODE);
+        let e = foe::write(&mut c, "pam-199-p-etc.efw", 0, &img, |_, _| {})
+            .await
+            .expect_err("the factory password no longer works");
+        assert_eq!(e.foe_code(), Some(0x800A), "{e}");
+        foe::write(&mut c, "pam-199-p-etc.efw", 0xBEEF, &img, |_, _| {})
+            .await
+            .expect("the owner's password works");
+        request_state(&bus.maindevice, station, 0x01)
+            .await
+            .expect("INIT");
+        assert_eq!(version_after_power_cycle(&bus).await, "11");
+    });
+}
+
+#[test]
+fn a_downgrade_is_refused_by_the_slave_with_0x8002_unless_the_owner_allows_it() {
+    smol::block_on(async {
+        // The slave runs 10 (factory); 9 is older.
+        refused(&image(4000, "9", PRODUCT_CODE), 0, 0x8002).await;
+        let bus = VirtualBus::new(1).expect("bus");
+        let (mut c, station) = boot_client(&bus).await;
+        let img = image(4000, "9", PRODUCT_CODE);
+        foe::write(&mut c, "pam-199-p-etc.downgrade.efw", 0, &img, |_, _| {})
+            .await
+            .expect("the owner's explicit downgrade");
+        request_state(&bus.maindevice, station, 0x01)
+            .await
+            .expect("INIT");
+        assert_eq!(version_after_power_cycle(&bus).await, "9");
+        // 9 is now the floor: 9.1 is an upgrade without any consent.
+        let (mut c, station) = boot_client(&bus).await;
+        foe::write(
+            &mut c,
+            "pam-199-p-etc.efw",
+            0,
+            &image(4000, "9.1", PRODUCT_CODE),
+            |_, _| {},
+        )
+        .await
+        .expect("upgrade from the downgraded version");
+        request_state(&bus.maindevice, station, 0x01)
+            .await
+            .expect("INIT");
+        assert_eq!(version_after_power_cycle(&bus).await, "9.1");
+    });
+}

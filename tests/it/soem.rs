@@ -198,6 +198,9 @@ fn soem_phases(tag: &str, line: &str, log: &str) -> Option<TempDir> {
     bad[last] ^= 0xFF;
     std::fs::write(file("good.efw"), &good).expect("image");
     std::fs::write(file("bad.efw"), &bad).expect("image");
+    // Older than the factory firmware 10: the slave's anti-rollback.
+    let old = master_test::foe::pam_image("9", 20_000);
+    std::fs::write(file("old.efw"), &old).expect("image");
     let state = file("state");
     let s = |p: PathBuf| p.to_string_lossy().into_owned();
     let _ = std::fs::remove_file(
@@ -231,6 +234,7 @@ fn soem_phases(tag: &str, line: &str, log: &str) -> Option<TempDir> {
             &s(file("good.efw")),
             &s(file("bad.efw")),
             "11",
+            &s(file("old.efw")),
         ],
     );
     keep_log(log, &format!("--- SOEM phase 1 ---\n{out}"));
@@ -338,6 +342,15 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
     assert!(
         foe_errors.contains(&0x800C),
         "corrupt image answered 0x800C: {foe_errors:#06x?}"
+    );
+    assert!(
+        foe_errors.contains(&0x8002),
+        "the older image SOEM sent answered 0x8002 (anti-rollback): {foe_errors:#06x?}"
+    );
+    assert_eq!(
+        foe_errors.iter().filter(|&&c| c == 0x800A).count(),
+        2,
+        "0x800A for the wrong password and for the factory one after the owner's: {foe_errors:#06x?}"
     );
 }
 

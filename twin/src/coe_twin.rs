@@ -737,6 +737,7 @@ fn build_description(
                 complete_access: coe & 0x20 != 0,
             },
             foe: dev.mailbox_protocols & protocols::FOE != 0 && boot.is_some(),
+            foe_security: ecat_slave::device::FoeSecurity::OPEN,
         },
         esc: EscConfig {
             pdi_control: u16::from_le_bytes([

@@ -12,7 +12,9 @@
 use std::any::Any;
 
 use ecat_slave::al::{AlState, AlStatus, AlStatusCode};
-use ecat_slave::device::{CoeServices, DeviceDescription, EscConfig, MailboxConfig, ProcessData};
+use ecat_slave::device::{
+    CoeServices, DeviceDescription, EscConfig, FoeSecurity, MailboxConfig, ProcessData,
+};
 use ecat_slave::esc::soft::{FrameOutcome, SoftEsc};
 use ecat_slave::esc::{Esc, EscError};
 use ecat_slave::firmware::ImageStore;
@@ -155,6 +157,7 @@ fn build_description(dev: &EsiDevice) -> &'static DeviceDescription {
                 complete_access: false,
             },
             foe: false,
+            foe_security: FoeSecurity::OPEN,
         },
         esc: EscConfig {
             pdi_control: u16::from_le_bytes([

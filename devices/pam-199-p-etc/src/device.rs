@@ -4,8 +4,8 @@
 
 use ecat_slave::al::{AlState, AlStatusCode};
 use ecat_slave::device::{
-    Application, CoeServices, DeviceDescription, DeviceNames, Download, EscConfig, Identity,
-    MailboxConfig, PdoSet, ProcessData, StateChange, Tick, Write,
+    Application, CoeServices, DeviceDescription, DeviceNames, Download, EscConfig, FoeSecurity,
+    Identity, MailboxConfig, PdoSet, ProcessData, StateChange, Tick, Write,
 };
 use ecat_slave::hal::{MemNv, NvStorage};
 use ecat_slave::od::Od;
@@ -72,6 +72,7 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
             complete_access: true,
         },
         foe: true,
+        foe_security: FoeSecurity::OPEN,
     },
     esc: EscConfig::DEFAULT,
     modules: None,

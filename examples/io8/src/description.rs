@@ -3,8 +3,8 @@
 //! all read it.
 
 use ecat_slave::device::{
-    CoeServices, DeviceDescription, DeviceNames, EscConfig, Identity, MailboxConfig, PdoSet,
-    ProcessData,
+    CoeServices, DeviceDescription, DeviceNames, EscConfig, FoeSecurity, Identity, MailboxConfig,
+    PdoSet, ProcessData,
 };
 use ecat_slave::od::build::{
     SYNC_PARAMETER_ENTRIES, assign, assign_count, constant, input, map, output, ranged, string,
@@ -170,6 +170,7 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
             complete_access: true,
         },
         foe: true,
+        foe_security: FoeSecurity::OPEN,
     },
     esc: EscConfig::DEFAULT,
     modules: None,

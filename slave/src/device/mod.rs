@@ -61,8 +61,8 @@ mod soft;
 
 pub use application::{Application, Download, StateChange, Tick, Write};
 pub use description::{
-    CoeServices, DeviceDescription, DeviceNames, EscConfig, Identity, MAX_MAILBOX, MailboxConfig,
-    MemoryLayout, PdoSet, ProcessData,
+    CoeServices, DeviceDescription, DeviceNames, EscConfig, FoeSecurity, Identity, MAX_MAILBOX,
+    MailboxConfig, MemoryLayout, PdoSet, ProcessData,
 };
 pub use schedule::PollSchedule;
 pub use sii_image::mapping_entries;

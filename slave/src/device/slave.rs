@@ -988,6 +988,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
                 revision: id.revision,
             },
             version: version.as_str(),
+            security: desc.mailbox.foe_security,
             in_boot: state == AlState::Boot,
             busy: false,
         });

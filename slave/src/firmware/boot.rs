@@ -73,7 +73,8 @@ fn load<S: ImageStore + ?Sized>(store: &S) -> Result<BootState, StoreError> {
 }
 
 /// Factory provisioning: writes `image` into slot A and makes it the active
-/// image with `version`, dropping any candidate.
+/// image with `version`, dropping any candidate; `version` becomes the
+/// anti-rollback floor, the factory password applies again.
 pub fn provision<S: ImageStore + ?Sized>(
     store: &mut S,
     version: FirmwareVersion,
@@ -93,6 +94,7 @@ pub fn provision<S: ImageStore + ?Sized>(
     store.write_state(&BootState {
         active: Slot::A,
         active_image: info,
+        min_version: version,
         ..BootState::initial()
     })
 }
@@ -311,8 +313,41 @@ pub fn power_on<S: ImageStore + ?Sized>(store: &mut S) -> BootDecision {
     }
 }
 
+/// The FoE password a write request must carry: the one the owner set
+/// ([`set_password`]), else `factory` (the device description's
+/// [`FoeSecurity::factory_password`](crate::device::FoeSecurity)). A blank
+/// store has the factory password; records that cannot be read are an
+/// error (the caller refuses: no password can be checked).
+pub fn foe_password<S: ImageStore + ?Sized>(store: &S, factory: u32) -> Result<u32, StoreError> {
+    Ok(load(store)?.password.unwrap_or(factory))
+}
+
+/// The anti-rollback floor ([`BootState::min_version`]): images older
+/// than this are refused unless the owner allows the downgrade. A blank
+/// store has none ([`FirmwareVersion::EMPTY`]).
+pub fn rollback_floor<S: ImageStore + ?Sized>(store: &S) -> Result<FirmwareVersion, StoreError> {
+    Ok(load(store)?.min_version)
+}
+
+/// The owner sets a new FoE password: stored in the boot records, power-cut
+/// safe like every state change (a cut keeps the old or the new password,
+/// never neither), so it survives a power cycle. Everything else in the
+/// record is kept. The caller checks the old password first.
+pub fn set_password<S: ImageStore + ?Sized>(
+    store: &mut S,
+    password: u32,
+) -> Result<(), StoreError> {
+    let state = load(store)?;
+    store.write_state(&BootState {
+        password: Some(password),
+        ..state
+    })
+}
+
 /// Called by the new firmware once it runs well: the trial image becomes
-/// the active one. Without a trial image this does nothing.
+/// the active one, and its version the anti-rollback floor (an older
+/// version got this far only with the owner's consent, which lowers the
+/// floor with it). Without a trial image this does nothing.
 pub fn confirm_boot<S: ImageStore + ?Sized>(store: &mut S) -> Result<(), StoreError> {
     let state = load(store)?;
     match state.candidate {
@@ -321,6 +356,7 @@ pub fn confirm_boot<S: ImageStore + ?Sized>(store: &mut S) -> Result<(), StoreEr
             active_image: c.image,
             candidate: None,
             boot_attempts: 0,
+            min_version: c.image.version,
             ..state
         }),
         _ => Ok(()),

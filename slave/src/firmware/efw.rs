@@ -17,6 +17,18 @@ pub const EFW_HEADER_LEN: usize = field::FIXED_END + 4;
 /// Largest accepted `header_len` (a header with extension bytes).
 pub const EFW_MAX_HEADER_LEN: usize = 512;
 
+/// `flags` bit 0: the header extension starts with an Ed25519 signature
+/// ([`EFW_SIGNATURE`]) over the image ([`signed_message`]).
+pub const EFW_FLAG_SIGNED: u16 = 0x0001;
+
+/// Where the 64-byte Ed25519 signature of a signed image sits: the first
+/// extension bytes of the header.
+pub const EFW_SIGNATURE: core::ops::Range<usize> = field::FIXED_END..field::FIXED_END + 64;
+
+/// Header length of a signed image without further extension bytes (the
+/// smallest `header_len` with [`EFW_FLAG_SIGNED`]).
+pub const EFW_SIGNED_HEADER_LEN: usize = EFW_SIGNATURE.end + 4;
+
 type Field = core::ops::Range<usize>;
 
 mod field {
@@ -154,6 +166,28 @@ pub enum EfwError {
     /// would replace working firmware with nothing.
     #[error("image has an empty payload")]
     EmptyPayload,
+    /// The device requires signed images (it has a public key) and the
+    /// image carries no signature.
+    #[error("image not signed; this device accepts only signed images")]
+    Unsigned,
+    /// The image's Ed25519 signature does not verify with the device's
+    /// public key (another key, or the image was changed after signing).
+    #[error("image signature does not verify with the device's key")]
+    BadSignature,
+    /// The device has a public key but was built without the
+    /// `signed-images` feature: no image can be verified, none is accepted.
+    #[error("this device requires signed images but cannot check signatures")]
+    SignatureUnsupported,
+    /// Anti-rollback: the image's version is older than the device's floor
+    /// (or cannot be compared with it), and the owner did not allow a
+    /// downgrade.
+    #[error("version {version} is older than the minimum {floor}: downgrade refused")]
+    Rollback {
+        /// The image's version.
+        version: FirmwareVersion,
+        /// The device's floor.
+        floor: FirmwareVersion,
+    },
 }
 
 impl EfwError {
@@ -165,6 +199,8 @@ impl EfwError {
     /// | bad magic / format / header length / header CRC  | `0x8010` NoFileHeader       |
     /// | wrong vendor / product / revision, empty payload | `0x800D` InvalidFirmware    |
     /// | payload larger than a slot                       | `0x8003` DiskFull           |
+    /// | older than the anti-rollback floor               | `0x8002` AccessDenied       |
+    /// | unsigned / bad signature / no verifier built in  | `0x800D` InvalidFirmware    |
     /// | truncated / oversized / payload CRC              | `0x800C` InvalidChecksum    |
     /// | buffer too small (tools only)                    | `0x800B` ProgramError       |
     pub const fn foe_code(&self) -> FoeErrorCode {
@@ -176,13 +212,135 @@ impl EfwError {
             Self::WrongVendor { .. }
             | Self::WrongProduct { .. }
             | Self::RevisionOutOfRange { .. }
-            | Self::EmptyPayload => FoeErrorCode::InvalidFirmware,
+            | Self::EmptyPayload
+            | Self::Unsigned
+            | Self::BadSignature
+            | Self::SignatureUnsupported => FoeErrorCode::InvalidFirmware,
             Self::TooLarge { .. } => FoeErrorCode::DiskFull,
+            Self::Rollback { .. } => FoeErrorCode::AccessDenied,
             Self::Truncated { .. } | Self::Oversized { .. } | Self::PayloadCrc { .. } => {
                 FoeErrorCode::InvalidChecksum
             }
             Self::BufferTooSmall => FoeErrorCode::ProgramError,
         }
+    }
+}
+
+/// A header whose flags say "signed" must hold the signature.
+const fn check_signed_len(flags: u16, header_len: u16) -> Result<(), EfwError> {
+    if flags & EFW_FLAG_SIGNED != 0 && (header_len as usize) < EFW_SIGNED_HEADER_LEN {
+        return Err(EfwError::BadHeaderLen(header_len));
+    }
+    Ok(())
+}
+
+/// The bytes an image's Ed25519 signature covers, in order: the header
+/// before the signature, the header after it up to the header CRC, and the
+/// payload, i.e. the whole file except [`EFW_SIGNATURE`] and the header
+/// CRC (which is computed after signing). The image must parse (header
+/// CRC included), carry [`EFW_FLAG_SIGNED`] and hold its whole payload.
+pub fn signed_message(image: &[u8]) -> Result<[&[u8]; 3], EfwError> {
+    let h = EfwHeaderRepr::parse(image)?;
+    if h.flags & EFW_FLAG_SIGNED == 0 {
+        return Err(EfwError::Unsigned);
+    }
+    let hl = h.buffer_len();
+    let truncated = EfwError::Truncated {
+        expected: h.image_len(),
+        received: image.len(),
+    };
+    let payload = image.get(hl..h.image_len()).ok_or(truncated)?;
+    Ok([
+        image.get(..EFW_SIGNATURE.start).ok_or(truncated)?,
+        image
+            .get(EFW_SIGNATURE.end..hl.saturating_sub(4))
+            .ok_or(truncated)?,
+        payload,
+    ])
+}
+
+/// Puts `signature` into a signed image made by [`pack`] (a header with
+/// [`EFW_FLAG_SIGNED`]) and recomputes the header CRC.
+pub fn set_signature(image: &mut [u8], signature: &[u8; 64]) -> Result<(), EfwError> {
+    let h = EfwHeaderRepr::parse(image)?;
+    if h.flags & EFW_FLAG_SIGNED == 0 {
+        return Err(EfwError::Unsigned);
+    }
+    let hl = h.buffer_len();
+    image
+        .get_mut(EFW_SIGNATURE)
+        .ok_or(EfwError::BufferTooSmall)?
+        .copy_from_slice(signature);
+    let crc = image.get(..hl - 4).map_or(0, crc32);
+    image
+        .get_mut(hl - 4..hl)
+        .ok_or(EfwError::BufferTooSmall)?
+        .copy_from_slice(&crc.to_le_bytes());
+    Ok(())
+}
+
+/// The streaming Ed25519 check of a signed image: the verifying state once
+/// the signature has arrived. Compared by whether a check runs (the hash
+/// state has no useful equality).
+#[derive(Clone, Default)]
+struct SignatureCheck {
+    #[cfg(feature = "signed-images")]
+    state: Option<ed25519_compact::VerifyingState>,
+}
+
+impl SignatureCheck {
+    fn running(&self) -> bool {
+        #[cfg(feature = "signed-images")]
+        return self.state.is_some();
+        #[cfg(not(feature = "signed-images"))]
+        false
+    }
+
+    /// Starts the check with the signature and the header bytes before it.
+    #[cfg(feature = "signed-images")]
+    fn start(&mut self, key: &[u8; 32], signature: &[u8; 64], head: &[u8]) -> Result<(), EfwError> {
+        let pk = ed25519_compact::PublicKey::new(*key);
+        let sig = ed25519_compact::Signature::new(*signature);
+        let mut state = pk
+            .verify_incremental(&sig)
+            .map_err(|_| EfwError::BadSignature)?;
+        state.absorb(head);
+        self.state = Some(state);
+        Ok(())
+    }
+
+    fn absorb(&mut self, _bytes: &[u8]) {
+        #[cfg(feature = "signed-images")]
+        if let Some(state) = self.state.as_mut() {
+            state.absorb(_bytes);
+        }
+    }
+
+    /// The signature verifies over everything absorbed.
+    fn verify(&self) -> Result<(), EfwError> {
+        #[cfg(feature = "signed-images")]
+        return match &self.state {
+            Some(state) => state.verify().map_err(|_| EfwError::BadSignature),
+            None => Err(EfwError::BadSignature),
+        };
+        #[cfg(not(feature = "signed-images"))]
+        Err(EfwError::SignatureUnsupported)
+    }
+}
+
+impl PartialEq for SignatureCheck {
+    fn eq(&self, other: &Self) -> bool {
+        self.running() == other.running()
+    }
+}
+
+impl Eq for SignatureCheck {}
+
+impl core::fmt::Debug for SignatureCheck {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("SignatureCheck")
+            .field("running", &self.running())
+            .finish()
     }
 }
 
@@ -355,6 +513,7 @@ impl EfwHeaderRepr {
             return Err(EfwError::UnsupportedFormat(h.format_version()));
         }
         h.check_len()?;
+        check_signed_len(h.flags(), h.header_len())?;
         let (expected, computed) = (h.header_crc(), h.computed_header_crc());
         if expected != computed {
             return Err(EfwError::HeaderCrc { expected, computed });
@@ -512,6 +671,14 @@ impl ValidatedImage {
 pub struct EfwValidator {
     device: DeviceIdentity,
     capacity: usize,
+    /// Anti-rollback floor ([`FirmwareVersion::EMPTY`]: none).
+    floor: FirmwareVersion,
+    /// The Ed25519 key images must be signed with (`None`: any image).
+    key: Option<[u8; 32]>,
+    /// The signature bytes of a signed image.
+    signature: [u8; 64],
+    /// The running signature check.
+    check: SignatureCheck,
     /// Bytes accepted so far.
     received: usize,
     /// The header bytes (only the first `header_len` are used).
@@ -530,6 +697,13 @@ impl EfwValidator {
         Self {
             device,
             capacity,
+            floor: FirmwareVersion::EMPTY,
+            key: None,
+            signature: [0; 64],
+            check: SignatureCheck {
+                #[cfg(feature = "signed-images")]
+                state: None,
+            },
             received: 0,
             head: [0; EFW_HEADER_LEN],
             header_crc: Crc32::new(),
@@ -537,6 +711,29 @@ impl EfwValidator {
             payload_crc: Crc32::new(),
             error: None,
         }
+    }
+
+    /// Refuses, as soon as the header is complete (before any payload
+    /// byte is handed out), an image whose version is older than `floor`
+    /// or cannot be compared with it ([`EfwError::Rollback`]);
+    /// [`FirmwareVersion::EMPTY`] (the default) checks nothing.
+    #[must_use]
+    pub const fn with_rollback_floor(mut self, floor: FirmwareVersion) -> Self {
+        self.floor = floor;
+        self
+    }
+
+    /// Requires the image to carry an Ed25519 signature by `key`
+    /// ([`EFW_FLAG_SIGNED`], [`signed_message`]): an unsigned image is
+    /// refused when its header is complete ([`EfwError::Unsigned`]), a
+    /// signature that does not verify at the end ([`EfwError::BadSignature`],
+    /// from [`EfwValidator::finish`], before anything is committed).
+    /// Without the `signed-images` feature every image is refused
+    /// ([`EfwError::SignatureUnsupported`]).
+    #[must_use]
+    pub const fn with_public_key(mut self, key: [u8; 32]) -> Self {
+        self.key = Some(key);
+        self
     }
 
     /// Bytes accepted so far.
@@ -594,6 +791,7 @@ impl EfwValidator {
             return Err(EfwError::Oversized { expected });
         }
         self.payload_crc.update(rest);
+        self.check.absorb(rest);
         self.received += rest.len();
         Ok(rest)
     }
@@ -607,6 +805,14 @@ impl EfwValidator {
             self.header_crc.update(&[byte]);
         } else if pos < header_len.saturating_sub(4) {
             self.header_crc.update(&[byte]);
+            let signed = get_u16(&self.head, field::FLAGS) & EFW_FLAG_SIGNED != 0;
+            match self
+                .signature
+                .get_mut(pos.wrapping_sub(EFW_SIGNATURE.start))
+            {
+                Some(slot) if signed => *slot = byte,
+                _ => self.check.absorb(&[byte]),
+            }
         } else {
             // CRC bytes: stored at the end of the fixed head buffer.
             let at = field::FIXED_END + (pos + 4 - header_len);
@@ -628,6 +834,24 @@ impl EfwValidator {
                 return Err(EfwError::BadHeaderLen(hl));
             }
         }
+        if self.received == field::FLAGS.end {
+            check_signed_len(view.flags(), view.header_len())?;
+            if self.key.is_some() && view.flags() & EFW_FLAG_SIGNED == 0 {
+                return Err(EfwError::Unsigned);
+            }
+            #[cfg(not(feature = "signed-images"))]
+            if self.key.is_some() {
+                return Err(EfwError::SignatureUnsupported);
+            }
+        }
+        #[cfg(feature = "signed-images")]
+        if let Some(key) = self
+            .key
+            .filter(|_| self.received == EFW_SIGNATURE.end && view.flags() & EFW_FLAG_SIGNED != 0)
+        {
+            let head = self.head.get(..EFW_SIGNATURE.start).unwrap_or(&[]);
+            self.check.start(&key, &self.signature, head)?;
+        }
         if self.received >= EFW_HEADER_LEN && self.received == header_len {
             let expected = get_u32(&self.head, field::FIXED_END..EFW_HEADER_LEN);
             let computed = self.header_crc.finish();
@@ -646,6 +870,17 @@ impl EfwValidator {
                 payload_crc: view.payload_crc(),
             };
             repr.check_device(&self.device, self.capacity)?;
+            if self.floor != FirmwareVersion::EMPTY
+                && !matches!(
+                    repr.version.compare(&self.floor),
+                    Some(core::cmp::Ordering::Greater | core::cmp::Ordering::Equal)
+                )
+            {
+                return Err(EfwError::Rollback {
+                    version: repr.version,
+                    floor: self.floor,
+                });
+            }
             self.header = Some(repr);
         }
         Ok(())
@@ -681,6 +916,9 @@ impl EfwValidator {
                 expected: header.payload_crc,
                 computed,
             });
+        }
+        if self.key.is_some() {
+            self.check.verify()?;
         }
         Ok(ValidatedImage { header })
     }
@@ -963,6 +1201,68 @@ mod tests {
     }
 
     #[test]
+    fn an_image_below_the_rollback_floor_is_refused_at_its_header() {
+        let v = |s: &str| FirmwareVersion::new(s).unwrap();
+        let old = image(&header("1.9"), &[7u8; 100]);
+        let mut val = EfwValidator::new(DEVICE, 1000).with_rollback_floor(v("1.10"));
+        assert_eq!(val.feed(&old[..EFW_HEADER_LEN - 1]), Ok(&[][..]));
+        let refused = EfwError::Rollback {
+            version: v("1.9"),
+            floor: v("1.10"),
+        };
+        assert_eq!(val.feed(&old[EFW_HEADER_LEN - 1..]), Err(refused));
+        assert_eq!(val.payload_received(), 0, "no payload byte handed out");
+        assert_eq!(val.finish(), Err(refused));
+        assert_eq!(
+            refused.to_string(),
+            "version 1.9 is older than the minimum 1.10: downgrade refused"
+        );
+        assert_eq!(refused.foe_code(), FoeErrorCode::AccessDenied);
+        // the same version and newer ones pass; no floor checks nothing
+        for ok in ["1.10", "1.10.0", "2"] {
+            let img = image(&header(ok), &[7u8; 100]);
+            let mut val = EfwValidator::new(DEVICE, 1000).with_rollback_floor(v("1.10"));
+            val.feed(&img).unwrap();
+            assert!(val.finish().is_ok(), "{ok}");
+        }
+        let mut val = EfwValidator::new(DEVICE, 1000);
+        val.feed(&old).unwrap();
+        assert!(val.finish().is_ok());
+        // a version without numbers cannot be shown to be newer
+        let beta = image(&header("beta"), &[7u8; 100]);
+        let mut val = EfwValidator::new(DEVICE, 1000).with_rollback_floor(v("1"));
+        assert!(matches!(val.feed(&beta), Err(EfwError::Rollback { .. })));
+    }
+
+    #[test]
+    fn a_signed_flag_without_room_for_the_signature_is_a_bad_header() {
+        let h = EfwHeaderRepr {
+            flags: EFW_FLAG_SIGNED,
+            ..header("1")
+        };
+        let img = image(&h, b"x");
+        assert_eq!(EfwHeaderRepr::parse(&img), Err(EfwError::BadHeaderLen(56)));
+        assert_eq!(validate(&img, 7, 10), Err(EfwError::BadHeaderLen(56)));
+    }
+
+    #[cfg(not(feature = "signed-images"))]
+    #[test]
+    fn a_device_with_a_key_but_no_verifier_accepts_no_image() {
+        let img = image(&header("1"), b"x");
+        let mut v = EfwValidator::new(DEVICE, 10).with_public_key([7; 32]);
+        assert_eq!(v.feed(&img), Err(EfwError::Unsigned));
+        let signed = EfwHeaderRepr {
+            flags: EFW_FLAG_SIGNED,
+            header_len: EFW_SIGNED_HEADER_LEN as u16,
+            ..header("1")
+        };
+        let img = image(&signed, b"x");
+        let mut v = EfwValidator::new(DEVICE, 10).with_public_key([7; 32]);
+        assert_eq!(v.feed(&img), Err(EfwError::SignatureUnsupported));
+        assert_eq!(v.payload_received(), 0);
+    }
+
+    #[test]
     fn errors_map_to_foe_codes() {
         assert_eq!(EfwError::BadMagic.foe_code(), FoeErrorCode::NoFileHeader);
         assert_eq!(
@@ -1021,6 +1321,116 @@ mod tests {
                 h.version(),
             );
             assert!(EfwHeaderRepr::parse(&img[..len]).is_err());
+        }
+    }
+
+    /// Signed images (`signed-images`): keys from fixed seeds, so the
+    /// signatures (deterministic Ed25519) are the same in every run.
+    #[cfg(feature = "signed-images")]
+    mod signed {
+        use super::*;
+        use ed25519_compact::{KeyPair, Seed};
+
+        fn keys(n: u8) -> KeyPair {
+            KeyPair::from_seed(Seed::new([n; 32]))
+        }
+
+        fn signed_header(version: &str) -> EfwHeaderRepr {
+            EfwHeaderRepr {
+                flags: EFW_FLAG_SIGNED,
+                header_len: EFW_SIGNED_HEADER_LEN as u16,
+                ..header(version)
+            }
+        }
+
+        /// Packs and signs as `master-test firmware pack --sign` does.
+        fn signed(kp: &KeyPair, h: &EfwHeaderRepr, payload: &[u8]) -> Vec<u8> {
+            let mut img = image(h, payload);
+            let msg = signed_message(&img).unwrap().concat();
+            let sig = kp.sk.sign(&msg, None);
+            set_signature(&mut img, &sig).unwrap();
+            img
+        }
+
+        fn check(img: &[u8], key: [u8; 32], chunk: usize) -> Result<ValidatedImage, EfwError> {
+            let mut v = EfwValidator::new(DEVICE, 10_000).with_public_key(key);
+            for c in img.chunks(chunk) {
+                v.feed(c)?;
+            }
+            v.finish()
+        }
+
+        #[test]
+        fn a_signed_image_is_laid_out_byte_for_byte() {
+            let kp = keys(1);
+            let img = signed(&kp, &signed_header("1.2.3"), b"abc");
+            assert_eq!(img.len(), 120 + 3);
+            assert_eq!(&img[..8], b"ECATFW\0\x01", "still format 1");
+            assert_eq!(&img[8..10], &120u16.to_le_bytes());
+            assert_eq!(&img[10..12], &1u16.to_le_bytes(), "flags: SIGNED");
+            let mut msg = img[..52].to_vec();
+            msg.extend_from_slice(b"abc");
+            let sig = kp.sk.sign(&msg, None);
+            assert_eq!(&img[52..116], &sig[..], "signature over 0..52 + payload");
+            assert_eq!(&img[116..120], &crc32(&img[..116]).to_le_bytes());
+            assert_eq!(&img[120..], b"abc");
+            assert!(kp.pk.verify(&msg, &sig).is_ok());
+        }
+
+        #[test]
+        fn a_signed_image_passes_in_any_chunking_with_the_right_key() {
+            let kp = keys(1);
+            let payload: Vec<u8> = (0..5000u32).map(|i| (i * 31) as u8).collect();
+            let img = signed(&kp, &signed_header("2.0"), &payload);
+            for chunk in [1, 7, 52, 64, 116, 117, 1018, img.len()] {
+                let ok = check(&img, *kp.pk, chunk).unwrap();
+                assert_eq!(ok.header.payload_len, 5000, "chunk {chunk}");
+            }
+            // a longer header: extension bytes after the signature are signed too
+            let long = EfwHeaderRepr {
+                header_len: 200,
+                ..signed_header("2.0")
+            };
+            let img = signed(&kp, &long, &payload);
+            assert!(check(&img, *kp.pk, 33).is_ok());
+            // a device without a key ignores the signature (as format 1 did)
+            assert!(validate(&img, 100, 10_000).is_ok());
+        }
+
+        #[test]
+        fn an_unsigned_image_is_refused_at_its_header() {
+            let img = image(&header("2.0"), &[1; 500]);
+            let mut v = EfwValidator::new(DEVICE, 10_000).with_public_key(*keys(1).pk);
+            assert_eq!(v.feed(&img[..11]), Ok(&[][..]));
+            assert_eq!(v.feed(&img[11..12]), Err(EfwError::Unsigned));
+            assert_eq!(v.payload_received(), 0);
+            assert_eq!(EfwError::Unsigned.foe_code(), FoeErrorCode::InvalidFirmware);
+        }
+
+        #[test]
+        fn a_changed_or_foreign_signed_image_fails_its_signature_at_the_end() {
+            let kp = keys(1);
+            let img = signed(&kp, &signed_header("2.0"), &[1; 500]);
+            // another key
+            assert_eq!(check(&img, *keys(2).pk, 64), Err(EfwError::BadSignature));
+            // another payload (CRCs made to match) under the same signature
+            let mut other = image(&signed_header("2.0"), &[2; 500]);
+            let sig: [u8; 64] = img[52..116].try_into().unwrap();
+            set_signature(&mut other, &sig).unwrap();
+            assert!(EfwHeaderRepr::parse(&other).is_ok(), "CRCs are right");
+            assert_eq!(check(&other, *kp.pk, 100), Err(EfwError::BadSignature));
+            // the version raised in the header, header CRC fixed
+            let mut raised = img.clone();
+            raised[28] = b'9';
+            let crc = crc32(&raised[..116]);
+            raised[116..120].copy_from_slice(&crc.to_le_bytes());
+            assert_eq!(check(&raised, *kp.pk, 1018), Err(EfwError::BadSignature));
+            // a signature that is no Ed25519 signature at all: at its last byte
+            let mut junk = img.clone();
+            set_signature(&mut junk, &[0xFF; 64]).unwrap();
+            let mut v = EfwValidator::new(DEVICE, 10_000).with_public_key(*kp.pk);
+            assert_eq!(v.feed(&junk[..116]), Err(EfwError::BadSignature));
+            assert_eq!(v.payload_received(), 0);
         }
     }
 }

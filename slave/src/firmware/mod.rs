@@ -41,7 +41,7 @@
 //! |-------:|-----:|-----------------|-----------------------------------------------------------|
 //! | 0      | 8    | `magic`         | `b"ECATFW\0"` + format version byte `0x01`                 |
 //! | 8      | 2    | `header_len`    | header length incl. `header_crc32`; 56 for v1, ≤ 512       |
-//! | 10     | 2    | `flags`         | reserved, written 0, ignored                              |
+//! | 10     | 2    | `flags`         | bit 0 `SIGNED` (below); other bits reserved, written 0, ignored |
 //! | 12     | 4    | `vendor_id`     | must equal the device's vendor ID (0x1018:01)             |
 //! | 16     | 4    | `product_code`  | must equal the device's product code (0x1018:02)          |
 //! | 20     | 4    | `revision_min`  | lowest device revision (0x1018:03) the image supports     |
@@ -52,6 +52,21 @@
 //! | 52     | …    | (extension)     | only if `header_len` > 56: ignored, covered by the CRC     |
 //! | hl − 4 | 4    | `header_crc32`  | CRC-32 of header bytes `0 .. header_len − 4`               |
 //! | hl     | pl   | payload         | `payload_len` bytes; the file ends exactly here           |
+//!
+//! **Signed images** (header revision with [`EFW_FLAG_SIGNED`], still
+//! format 1): `flags` bit 0 set, `header_len` ≥ 120, and the first 64
+//! extension bytes (offset 52..116, [`EFW_SIGNATURE`]) hold an Ed25519
+//! signature (RFC 8032, pure Ed25519) over the whole file except the
+//! signature field and the header CRC: bytes `0..52`, then `116 .. hl − 4`,
+//! then the payload ([`signed_message`]). The header CRC covers the
+//! signature and is computed after it ([`set_signature`]). The format
+//! version stays 1 because a format-1 parser already skips extension bytes
+//! and ignores flags: an older slave installs a signed image as before, a
+//! slave without a key ignores the signature, a slave whose description
+//! has a public key ([`FoeSecurity::public_key`](crate::device::FoeSecurity))
+//! and the `signed-images` feature refuses unsigned images at their
+//! header and badly signed ones before anything is committed (FoE error
+//! `0x800D`). Unsigned images are byte for byte what they were.
 //!
 //! CRC-32 is CRC-32/ISO-HDLC (the zlib/Ethernet `crc32`: polynomial
 //! `0x04C11DB7` reflected, init and xor-out `0xFFFFFFFF`), see [`crc32`].
@@ -64,16 +79,17 @@ mod store;
 
 pub use boot::{
     BootDecision, BootOutcome, MAX_BOOT_ATTEMPTS, RollbackReason, begin_download, cancel_download,
-    commit_pending, confirm_boot, finish_download, power_on, provision, reject_boot, verify_slot,
-    write_chunk,
+    commit_pending, confirm_boot, finish_download, foe_password, power_on, provision, reject_boot,
+    rollback_floor, set_password, verify_slot, write_chunk,
 };
 pub use efw::{
-    EFW_FORMAT_VERSION, EFW_HEADER_LEN, EFW_MAGIC, EFW_MAX_HEADER_LEN, EfwError, EfwHeader,
-    EfwHeaderRepr, EfwValidator, ValidatedImage, pack,
+    EFW_FLAG_SIGNED, EFW_FORMAT_VERSION, EFW_HEADER_LEN, EFW_MAGIC, EFW_MAX_HEADER_LEN,
+    EFW_SIGNATURE, EFW_SIGNED_HEADER_LEN, EfwError, EfwHeader, EfwHeaderRepr, EfwValidator,
+    ValidatedImage, pack, set_signature, signed_message,
 };
 pub use store::{
-    BootState, Candidate, CandidateStage, ImageInfo, ImageStore, MemStore, STATE_RECORD_LEN, Slot,
-    StoreError,
+    BootState, Candidate, CandidateStage, ImageInfo, ImageStore, MemStore, STATE_RECORD_LEN,
+    STATE_RECORD_V1_LEN, Slot, StoreError,
 };
 
 /// Identity of the running device, which an image must match (object
@@ -128,6 +144,12 @@ impl FirmwareVersion {
         self.0.get(..end).unwrap_or(&[])
     }
 
+    /// Compares two versions by their numbers ([`compare_versions`]):
+    /// `None` when either has no digit (e.g. [`FirmwareVersion::EMPTY`]).
+    pub fn compare(&self, other: &Self) -> Option<core::cmp::Ordering> {
+        compare_versions(self.as_bytes(), other.as_bytes())
+    }
+
     /// The version as text; `"?"` if the stored bytes are not UTF-8.
     pub fn as_str(&self) -> &str {
         core::str::from_utf8(self.as_bytes()).unwrap_or("?")
@@ -137,6 +159,35 @@ impl FirmwareVersion {
 impl core::fmt::Display for FirmwareVersion {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(self.as_str())
+    }
+}
+
+/// Compares version texts by their numbers: the runs of ASCII digits, in
+/// order, missing ones counting as 0 (`1.10` > `1.9`, `1.0` = `1.0.0`,
+/// `v2` > `1.9.9`, `2.0-rc1` = `2.0.1`); everything else separates.
+/// `None` when either text has no digit. Numbers beyond `u64` saturate.
+pub fn compare_versions(a: &[u8], b: &[u8]) -> Option<core::cmp::Ordering> {
+    fn numbers(s: &[u8]) -> impl Iterator<Item = u64> + '_ {
+        s.split(|c| !c.is_ascii_digit())
+            .filter(|p| !p.is_empty())
+            .map(|p| {
+                p.iter().fold(0u64, |n, d| {
+                    n.saturating_mul(10).saturating_add(u64::from(d - b'0'))
+                })
+            })
+    }
+    if numbers(a).next().is_none() || numbers(b).next().is_none() {
+        return None;
+    }
+    let (mut x, mut y) = (numbers(a), numbers(b));
+    loop {
+        match (x.next(), y.next()) {
+            (None, None) => return Some(core::cmp::Ordering::Equal),
+            (p, q) => match p.unwrap_or(0).cmp(&q.unwrap_or(0)) {
+                core::cmp::Ordering::Equal => {}
+                other => return Some(other),
+            },
+        }
     }
 }
 
@@ -254,6 +305,23 @@ mod tests {
             c.update(part);
         }
         assert_eq!(c.finish(), crc32(&data));
+    }
+
+    #[test]
+    fn versions_compare_by_their_numbers() {
+        use core::cmp::Ordering::*;
+        let c = |a: &str, b: &str| compare_versions(a.as_bytes(), b.as_bytes());
+        assert_eq!(c("1.10", "1.9"), Some(Greater));
+        assert_eq!(c("1.0", "1.0.0"), Some(Equal));
+        assert_eq!(c("v2", "1.9.9"), Some(Greater));
+        assert_eq!(c("10", "11"), Some(Less));
+        assert_eq!(c("9", "10"), Some(Less));
+        assert_eq!(c("99999999999999999999", "1"), Some(Greater));
+        assert_eq!(c("beta", "1.0"), None);
+        assert_eq!(c("1.0", ""), None);
+        let v = |s: &str| FirmwareVersion::new(s).unwrap();
+        assert_eq!(v("2.0.0").compare(&v("10")), Some(Less));
+        assert_eq!(FirmwareVersion::EMPTY.compare(&v("1")), None);
     }
 
     #[test]

@@ -153,8 +153,13 @@ pub struct Candidate {
     pub stage: CandidateStage,
 }
 
-/// Length of one encoded [`BootState`] record.
+/// Length of one encoded [`BootState`] record (format 2, see
+/// [`BootState::encode`]).
 pub const STATE_RECORD_LEN: usize = rec::CRC.end;
+
+/// Length of a format-1 record (before the owner's FoE password), which
+/// [`BootState::decode`] still reads.
+pub const STATE_RECORD_V1_LEN: usize = rec::V1_CRC.end;
 
 /// Offsets of the boot-state record (see [`BootState::encode`]).
 mod rec {
@@ -167,11 +172,22 @@ mod rec {
     pub const ATTEMPTS: usize = 11;
     pub const ACTIVE_IMAGE: usize = 12;
     pub const CANDIDATE_IMAGE: usize = 36;
-    pub const CRC: Field = 60..64;
+    /// Format 1 ends with its CRC here.
+    pub const V1_CRC: Field = 60..64;
+    /// Format 2: 1 when the owner set a FoE password.
+    pub const PASSWORD_SET: usize = 60;
+    /// Format 2: the owner's FoE password.
+    pub const PASSWORD: Field = 64..68;
+    /// Format 2: the anti-rollback floor (a version, `[u8; 16]`).
+    pub const MIN_VERSION: Field = 68..84;
+    pub const CRC: Field = 92..96;
 }
 
-/// Magic of a boot-state record.
-const STATE_MAGIC: [u8; 4] = *b"PBST";
+/// Magic of a format-1 boot-state record (64 bytes, no password).
+const STATE_MAGIC_V1: [u8; 4] = *b"PBST";
+
+/// Magic of a format-2 boot-state record (96 bytes).
+const STATE_MAGIC: [u8; 4] = *b"PBS2";
 
 /// The boot state: which slot runs, and the new image on its way in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -187,6 +203,17 @@ pub struct BootState {
     pub candidate: Option<Candidate>,
     /// Boots of the candidate on trial so far.
     pub boot_attempts: u8,
+    /// The FoE password the owner set ([`set_password`]); `None`: the
+    /// device's factory password
+    /// ([`FoeSecurity::factory_password`](crate::device::FoeSecurity)) applies.
+    ///
+    /// [`set_password`]: super::set_password
+    pub password: Option<u32>,
+    /// The anti-rollback floor: an image older than this is refused unless
+    /// the owner allows the downgrade ([`FirmwareVersion::compare`]). The
+    /// version of the image last provisioned or confirmed;
+    /// [`FirmwareVersion::EMPTY`]: no floor.
+    pub min_version: FirmwareVersion,
 }
 
 fn put(buf: &mut [u8; STATE_RECORD_LEN], at: usize, bytes: &[u8]) {
@@ -237,14 +264,17 @@ impl BootState {
             },
             candidate: None,
             boot_attempts: 0,
+            password: None,
+            min_version: FirmwareVersion::EMPTY,
         }
     }
 
-    /// Encodes the record, CRC included. Layout (little-endian):
+    /// Encodes the record (format 2), CRC included. Layout
+    /// (little-endian):
     ///
     /// | offset | size | field                                                   |
     /// |-------:|-----:|---------------------------------------------------------|
-    /// | 0      | 4    | magic `b"PBST"`                                          |
+    /// | 0      | 4    | magic `b"PBS2"`                                          |
     /// | 4      | 4    | sequence number                                         |
     /// | 8      | 1    | active slot (0 = A, 1 = B)                              |
     /// | 9      | 1    | candidate stage (0 none, 1 downloaded, 2 pending, 3 trial) |
@@ -252,7 +282,17 @@ impl BootState {
     /// | 11     | 1    | boot attempts of the candidate                          |
     /// | 12     | 24   | active image: len u32, crc u32, version `[u8; 16]`          |
     /// | 36     | 24   | candidate image: len u32, crc u32, version `[u8; 16]`       |
-    /// | 60     | 4    | CRC-32 of bytes 0..60                                   |
+    /// | 60     | 1    | 1: the owner set a FoE password, 0: factory password    |
+    /// | 61     | 3    | reserved, 0                                             |
+    /// | 64     | 4    | the owner's FoE password (0 when not set)               |
+    /// | 68     | 16   | anti-rollback floor: a version, NUL padded (0: none)    |
+    /// | 84     | 8    | reserved, 0                                             |
+    /// | 92     | 4    | CRC-32 of bytes 0..92                                   |
+    ///
+    /// Format 1 (magic `b"PBST"`, 64 bytes: the same up to offset 60, then
+    /// the CRC-32 of bytes 0..60) is still decoded, as a record without a
+    /// password whose floor is the active image's version: a store written before passwords existed keeps working
+    /// and is rewritten in format 2 at its next state change.
     pub fn encode(&self) -> [u8; STATE_RECORD_LEN] {
         let mut buf = [0u8; STATE_RECORD_LEN];
         put(&mut buf, rec::MAGIC.start, &STATE_MAGIC);
@@ -267,24 +307,55 @@ impl BootState {
         put(&mut buf, rec::ATTEMPTS, &[self.boot_attempts]);
         put_image(&mut buf, rec::ACTIVE_IMAGE, &self.active_image);
         put_image(&mut buf, rec::CANDIDATE_IMAGE, &image);
+        put(
+            &mut buf,
+            rec::PASSWORD_SET,
+            &[u8::from(self.password.is_some())],
+        );
+        put(
+            &mut buf,
+            rec::PASSWORD.start,
+            &self.password.unwrap_or(0).to_le_bytes(),
+        );
+        put(&mut buf, rec::MIN_VERSION.start, self.min_version.raw());
         let crc = buf.get(..rec::CRC.start).map_or(0, crc32);
         put(&mut buf, rec::CRC.start, &crc.to_le_bytes());
         buf
     }
 
-    /// Decodes a record; `None` if it is short, torn (CRC), blank or holds
-    /// impossible values.
+    /// Decodes a record of format 2 or 1; `None` if it is short, torn
+    /// (CRC), blank or holds impossible values.
     pub fn decode(buf: &[u8]) -> Option<Self> {
-        let buf = buf.get(..STATE_RECORD_LEN)?;
-        if buf.get(rec::MAGIC)? != STATE_MAGIC {
+        let magic = buf.get(rec::MAGIC)?;
+        let (len, crc_at) = if magic == STATE_MAGIC {
+            (STATE_RECORD_LEN, rec::CRC.start)
+        } else if magic == STATE_MAGIC_V1 {
+            (STATE_RECORD_V1_LEN, rec::V1_CRC.start)
+        } else {
             return None;
-        }
+        };
+        let buf = buf.get(..len)?;
         let mut crc = Crc32::new();
-        crc.update(buf.get(..rec::CRC.start)?);
-        if crc.finish() != get_u32(buf, rec::CRC.start) {
+        crc.update(buf.get(..crc_at)?);
+        if crc.finish() != get_u32(buf, crc_at) {
             return None;
         }
         let byte = |at: usize| buf.get(at).copied();
+        let active_image = get_image(buf, rec::ACTIVE_IMAGE);
+        // Reserved bytes are written 0 and ignored (room for later fields).
+        let (password, min_version) = if len == STATE_RECORD_LEN {
+            let password = match byte(rec::PASSWORD_SET)? {
+                0 => None,
+                1 => Some(get_u32(buf, rec::PASSWORD.start)),
+                _ => return None,
+            };
+            let floor = buf
+                .get(rec::MIN_VERSION)
+                .and_then(|b| <[u8; VERSION_LEN]>::try_from(b).ok())?;
+            (password, FirmwareVersion::from_raw(floor))
+        } else {
+            (None, active_image.version)
+        };
         let active = Slot::from_raw(byte(rec::ACTIVE)?)?;
         let slot = Slot::from_raw(byte(rec::CANDIDATE_SLOT)?)?;
         let stage = match byte(rec::STAGE)? {
@@ -300,13 +371,15 @@ impl BootState {
         Some(Self {
             sequence: get_u32(buf, rec::SEQUENCE.start),
             active,
-            active_image: get_image(buf, rec::ACTIVE_IMAGE),
+            active_image,
             candidate: stage.map(|stage| Candidate {
                 slot,
                 image: get_image(buf, rec::CANDIDATE_IMAGE),
                 stage,
             }),
             boot_attempts: byte(rec::ATTEMPTS)?,
+            password,
+            min_version,
         })
     }
 
@@ -533,6 +606,8 @@ mod tests {
                 stage: CandidateStage::Trial,
             }),
             boot_attempts: 2,
+            password: Some(0x1234_ABCD),
+            min_version: FirmwareVersion::new("0.9").unwrap(),
         }
     }
 
@@ -540,11 +615,72 @@ mod tests {
     fn state_record_round_trips() {
         let s = sample();
         let rec = s.encode();
-        assert_eq!(&rec[..4], b"PBST");
-        assert_eq!(rec.len(), 64);
+        assert_eq!(&rec[..4], b"PBS2");
+        assert_eq!(rec.len(), 96);
+        assert_eq!(&rec[60..68], &[1, 0, 0, 0, 0xCD, 0xAB, 0x34, 0x12]);
+        assert_eq!(&rec[68..72], b"0.9\0");
         assert_eq!(BootState::decode(&rec), Some(s));
         let plain = BootState::initial();
         assert_eq!(BootState::decode(&plain.encode()), Some(plain));
+        // The password 0 set by the owner is not "no password".
+        let zero = BootState {
+            password: Some(0),
+            ..sample()
+        };
+        assert_eq!(BootState::decode(&zero.encode()), Some(zero));
+    }
+
+    /// A format-1 record (64 bytes, magic "PBST", before passwords) as an
+    /// earlier version of this module wrote it: byte for byte.
+    fn v1_record(s: &BootState) -> [u8; 64] {
+        let mut r = [0u8; 64];
+        r[..4].copy_from_slice(b"PBST");
+        r[4..8].copy_from_slice(&s.sequence.to_le_bytes());
+        r[8] = s.active.index() as u8;
+        if let Some(c) = &s.candidate {
+            r[9] = c.stage.raw();
+            r[10] = c.slot.index() as u8;
+            put_image_at(&mut r, 36, &c.image);
+        }
+        r[11] = s.boot_attempts;
+        put_image_at(&mut r, 12, &s.active_image);
+        let crc = crc32(&r[..60]);
+        r[60..].copy_from_slice(&crc.to_le_bytes());
+        r
+    }
+
+    fn put_image_at(r: &mut [u8], at: usize, i: &ImageInfo) {
+        r[at..at + 4].copy_from_slice(&i.len.to_le_bytes());
+        r[at + 4..at + 8].copy_from_slice(&i.crc.to_le_bytes());
+        r[at + 8..at + 24].copy_from_slice(i.version.raw());
+    }
+
+    #[test]
+    fn a_format_1_record_still_decodes_as_one_without_a_password() {
+        let old = BootState {
+            password: None,
+            // a format-1 store's floor: the version that runs
+            min_version: sample().active_image.version,
+            ..sample()
+        };
+        let v1 = v1_record(&old);
+        assert_eq!(BootState::decode(&v1), Some(old));
+        // As a file store reads it: zero padded to the format-2 length.
+        let mut padded = [0u8; STATE_RECORD_LEN];
+        padded[..64].copy_from_slice(&v1);
+        assert_eq!(BootState::decode(&padded), Some(old));
+        // The next write goes to the other copy, in format 2, newer.
+        let (i, rec) = BootState::bank_write([&padded, &[0; STATE_RECORD_LEN]], &sample());
+        assert_eq!(i, 1);
+        assert_eq!(&rec[..4], b"PBS2");
+        assert_eq!(
+            BootState::read_bank([&padded, &rec]).map(|(i, s)| (i, s.password)),
+            Some((1, Some(0x1234_ABCD)))
+        );
+        // A torn format-1 record is as invalid as ever.
+        let mut torn = v1;
+        torn[30] ^= 4;
+        assert_eq!(BootState::decode(&torn), None);
     }
 
     #[test]
@@ -557,7 +693,7 @@ mod tests {
                 assert_eq!(BootState::decode(&bad), None, "byte {byte} bit {bit}");
             }
         }
-        assert_eq!(BootState::decode(&rec[..63]), None);
+        assert_eq!(BootState::decode(&rec[..95]), None);
         assert_eq!(BootState::decode(&[0xFF; 64]), None);
         assert_eq!(BootState::decode(&[0; 64]), None);
     }
@@ -579,13 +715,14 @@ mod tests {
         let (o, n) = (old.encode(), new.encode());
         assert_eq!(BootState::read_bank([&o, &n]), Some((1, new)));
         assert_eq!(BootState::read_bank([&n, &o]), Some((0, new)));
-        assert_eq!(BootState::read_bank([&o, &[0; 64]]), Some((0, old)));
-        assert_eq!(BootState::read_bank([&[0; 64], &[0; 64]]), None);
+        let blank = [0u8; STATE_RECORD_LEN];
+        assert_eq!(BootState::read_bank([&o, &blank]), Some((0, old)));
+        assert_eq!(BootState::read_bank([&blank, &blank]), None);
     }
 
     #[test]
     fn bank_write_targets_the_older_copy() {
-        let blank = [0u8; 64];
+        let blank = [0u8; STATE_RECORD_LEN];
         let (i, rec) = BootState::bank_write([&blank, &blank], &sample());
         assert_eq!(i, 0);
         assert_eq!(BootState::decode(&rec).unwrap().sequence, 1);

@@ -48,7 +48,14 @@ pub fn provision_factory(store: &mut dyn ImageStore) -> Result<(), StoreError> {
 }
 
 fn factory_image_store() -> Box<dyn ImageStore + Send> {
-    let mut store = VecStore::new(IMAGE_SLOT_CAPACITY);
+    factory_image_store_of(IMAGE_SLOT_CAPACITY)
+}
+
+/// A heap image store with slots of `capacity` bytes holding the factory
+/// firmware ([`provision_factory`]); memory follows what is written, up to
+/// two slots of `capacity` bytes.
+pub fn factory_image_store_of(capacity: usize) -> Box<dyn ImageStore + Send> {
+    let mut store = VecStore::new(capacity);
     let _ = provision_factory(&mut store);
     Box::new(store)
 }

@@ -6,7 +6,9 @@
 //! processed (source MAC with the locally administered bit set: our own
 //! replies seen again), is ignored.
 
-use super::chain::{Chain, IMAGE_SLOT_CAPACITY, LineSlave, provision_factory};
+use super::chain::{
+    Chain, IMAGE_SLOT_CAPACITY, LineSlave, factory_image_store_of, provision_factory,
+};
 use super::faults::{Fate, FaultConfig, FaultInjector};
 use super::pcap::PcapWriter;
 use super::state_dir::{Loaded, SlaveState};
@@ -34,6 +36,25 @@ pub struct RunnerConfig {
     /// the next runner after this line processed them, and what comes
     /// back goes out of `iface` to the master ([`run`]).
     pub forward: Option<String>,
+    /// Slot capacity of each slave's firmware store, the largest image it
+    /// accepts ([`IMAGE_SLOT_CAPACITY`] by default); a slave's store takes
+    /// up to two slots of it, in memory (or on disk with `state_dir`).
+    pub image_slot_capacity: usize,
+}
+
+impl RunnerConfig {
+    /// Serves `iface` with the defaults: no capture, no state directory,
+    /// no faults, no forwarding, [`IMAGE_SLOT_CAPACITY`].
+    pub fn new(iface: impl Into<String>) -> Self {
+        Self {
+            iface: iface.into(),
+            pcap: None,
+            state_dir: None,
+            faults: None,
+            forward: None,
+            image_slot_capacity: IMAGE_SLOT_CAPACITY,
+        }
+    }
 }
 
 /// Why the runner could not run.
@@ -64,6 +85,16 @@ pub enum RunnerError {
         .0.display()
     )]
     LostBootState(PathBuf),
+    /// The thread relaying frames that come back on the forwarding
+    /// interface stopped while the runner ran: the line behind this runner
+    /// is cut off, so the runner stops too instead of serving half a line.
+    #[error("the relay of frames coming back on {iface} failed ({reason}); stopping")]
+    RelayFailed {
+        /// The forwarding interface.
+        iface: String,
+        /// What ended the relay.
+        reason: String,
+    },
     /// Any other I/O failure.
     #[error("{context}: {source}")]
     Io {
@@ -128,8 +159,14 @@ pub fn run(
     };
     let (tx, mut rx) = open(&iface)?;
     let (mut chain, mut states) = match &config.state_dir {
-        Some(dir) => persistent_chain(dir, slaves)?,
-        None => (Chain::with_slaves(slaves), Vec::new()),
+        Some(dir) => persistent_chain_with(dir, slaves, config.image_slot_capacity)?,
+        None => {
+            let stores = slaves
+                .iter()
+                .map(|_| factory_image_store_of(config.image_slot_capacity))
+                .collect();
+            (Chain::with_stores(slaves, stores), Vec::new())
+        }
     };
     let out = out_iface.as_ref().map(open).transpose()?;
     // The master-side sender, shared with the thread that relays frames
@@ -197,6 +234,14 @@ pub fn run(
         });
         let result = (|| -> Result<RunStats, RunnerError> {
             while !stop.load(Ordering::Acquire) {
+                // A relay that ended on its own (an error, or a panic) is
+                // noticed at once: joined below, it says why.
+                if relay.as_ref().is_some_and(|h| h.is_finished()) {
+                    return Err(RunnerError::RelayFailed {
+                        iface: out_name.clone(),
+                        reason: String::new(),
+                    });
+                }
                 let now = u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX);
                 let t = Instant::now();
                 if let Some(up) = port1.poll() {
@@ -326,13 +371,21 @@ pub fn run(
         if let Some(p) = pcap.as_mut() {
             let _ = p.flush();
         }
+        let relay_failed = |reason: String| RunnerError::RelayFailed {
+            iface: out_name.clone(),
+            reason,
+        };
         match (result, relayed) {
+            (Err(RunnerError::RelayFailed { .. }) | Ok(_), Some(Ok(Err(e)))) => {
+                Err(relay_failed(e.to_string()))
+            }
+            (Err(RunnerError::RelayFailed { .. }) | Ok(_), Some(Err(_))) => {
+                Err(relay_failed("the relay thread panicked".into()))
+            }
+            (Err(RunnerError::RelayFailed { .. }), _) => {
+                Err(relay_failed("the relay thread ended".into()))
+            }
             (Err(e), _) => Err(e),
-            (Ok(_), Some(Ok(Err(e)))) => Err(e),
-            (Ok(_), Some(Err(_))) => Err(RunnerError::Io {
-                context: format!("relaying frames back from {out_name}"),
-                source: io::Error::other("the relay thread panicked"),
-            }),
             (Ok(stats), _) => Ok(stats),
         }
     })
@@ -518,7 +571,17 @@ fn slave_dir(dir: &Path, i: usize) -> PathBuf {
 /// reports its EEPROM data error.
 pub fn persistent_chain(
     dir: &Path,
+    slaves: Vec<Box<dyn LineSlave>>,
+) -> Result<(Chain, Vec<SlaveState>), RunnerError> {
+    persistent_chain_with(dir, slaves, IMAGE_SLOT_CAPACITY)
+}
+
+/// [`persistent_chain`] with firmware slots of `image_slot_capacity`
+/// bytes.
+pub fn persistent_chain_with(
+    dir: &Path,
     mut slaves: Vec<Box<dyn LineSlave>>,
+    image_slot_capacity: usize,
 ) -> Result<(Chain, Vec<SlaveState>), RunnerError> {
     let mut stores: Vec<Box<dyn ImageStore + Send>> = Vec::with_capacity(slaves.len());
     let mut states = Vec::with_capacity(slaves.len());
@@ -527,7 +590,7 @@ pub fn persistent_chain(
         let fw_dir = sd.join("firmware");
         std::fs::create_dir_all(&fw_dir)
             .map_err(io_err(format!("creating {}", fw_dir.display())))?;
-        let mut store = FileStore::open(&fw_dir, IMAGE_SLOT_CAPACITY).map_err(io_err(format!(
+        let mut store = FileStore::open(&fw_dir, image_slot_capacity).map_err(io_err(format!(
             "opening firmware store {}",
             fw_dir.display()
         )))?;
@@ -692,14 +755,23 @@ mod tests {
     }
 
     #[test]
+    fn the_firmware_store_has_the_configured_slot_capacity() {
+        let dir = std::env::temp_dir().join(format!("ecat-capacity-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let one = || -> Vec<Box<dyn LineSlave>> { vec![Box::new(crate::testing::slave())] };
+        let (chain, _) = persistent_chain_with(&dir, one(), 64 * 1024).unwrap();
+        assert_eq!(chain.image_store(0).unwrap().slot_capacity(), 64 * 1024);
+        assert_eq!(chain.slaves()[0].firmware_version(), "10");
+        let _ = std::fs::remove_dir_all(&dir);
+        assert_eq!(
+            RunnerConfig::new("x").image_slot_capacity,
+            IMAGE_SLOT_CAPACITY
+        );
+    }
+
+    #[test]
     fn unknown_interface_is_named_in_the_error() {
-        let cfg = RunnerConfig {
-            iface: "no-such-if0".into(),
-            pcap: None,
-            state_dir: None,
-            faults: None,
-            forward: None,
-        };
+        let cfg = RunnerConfig::new("no-such-if0");
         let one: Vec<Box<dyn LineSlave>> = vec![Box::new(crate::testing::slave())];
         let err = run(&cfg, one, &AtomicBool::new(false)).unwrap_err();
         assert!(err.to_string().contains("no-such-if0"), "{err}");

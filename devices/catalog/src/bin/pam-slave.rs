@@ -25,7 +25,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
     after_help = "Exit status:\n  0    stopped by Ctrl-C after serving\n  \
                   2    usage or input error (bad argument, unknown device, line too long)\n  \
                   2    also: the --state-dir firmware store lost its boot records\n  \
-                  3    the interface cannot be opened or fails (needs root or CAP_NET_RAW)"
+                  2    also: the slaves' firmware stores could exceed --memory-cap\n  \
+                  3    the interface cannot be opened or fails (needs root or CAP_NET_RAW)\n  \
+                  3    also: the --forward relay of returning frames failed"
 )]
 struct Cli {
     /// Network interface to serve (e.g. eth1, veth-slave).
@@ -99,6 +101,17 @@ struct Cli {
     /// something to compensate; default 0 (ideal clocks).
     #[arg(long, value_name = "PPM", default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=500))]
     oscillators: u32,
+    /// Firmware slot of each slave: the largest image it accepts over FoE
+    /// (4096..=1073741824 bytes; K, M, G suffixes count 1024s). Each
+    /// slave's store holds two slots, in memory as images are written (on
+    /// disk with --state-dir).
+    #[arg(long, value_name = "BYTES", default_value = "2M", value_parser = parse_store_size)]
+    image_store_size: u64,
+    /// Refuse to start (exit 2) when the slaves' firmware stores could
+    /// take more than this: slaves x 2 slots x --image-store-size (K, M,
+    /// G suffixes count 1024s). Default: no cap.
+    #[arg(long, value_name = "BYTES", value_parser = parse_bytes)]
+    memory_cap: Option<u64>,
 }
 
 fn main() -> ExitCode {
@@ -114,6 +127,21 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    let slots = u64::try_from(line.slaves.len())
+        .unwrap_or(u64::MAX)
+        .saturating_mul(2);
+    let worst = slots.saturating_mul(cli.image_store_size);
+    if let Some(cap) = cli.memory_cap.filter(|&cap| worst > cap) {
+        eprintln!(
+            "pam-slave: the firmware stores of {} slave(s) could take {worst} bytes \
+             ({} slaves x 2 slots x --image-store-size {}), more than --memory-cap {cap} bytes: \
+             lower --image-store-size or the number of slaves, or raise --memory-cap",
+            line.slaves.len(),
+            line.slaves.len(),
+            cli.image_store_size
+        );
+        return ExitCode::from(2);
+    }
     if cli.dry_run {
         println!("{}", line.report.join("\n"));
         return ExitCode::SUCCESS;
@@ -145,6 +173,7 @@ fn main() -> ExitCode {
         state_dir: cli.state_dir,
         faults: cli.faults,
         forward: cli.forward,
+        image_slot_capacity: usize::try_from(cli.image_store_size).unwrap_or(usize::MAX),
     };
     let onward = cfg
         .forward
@@ -244,6 +273,42 @@ fn build_line(cli: &Cli, spec: &str) -> Result<Line, String> {
         summary: summarize(&names),
         report: names,
     })
+}
+
+/// A byte count: digits with an optional K, M or G (1024, 1024², 1024³).
+fn parse_bytes(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let (digits, unit) = match t.char_indices().last() {
+        Some((i, c)) if c.is_ascii_alphabetic() => (&t[..i], c.to_ascii_uppercase()),
+        _ => (t, 'B'),
+    };
+    let scale: u64 = match unit {
+        'B' => 1,
+        'K' => 1 << 10,
+        'M' => 1 << 20,
+        'G' => 1 << 30,
+        _ => {
+            return Err(format!(
+                "'{s}' is not a byte count (digits, optionally K, M or G)"
+            ));
+        }
+    };
+    let n: u64 = digits
+        .parse()
+        .map_err(|_| format!("'{s}' is not a byte count (digits, optionally K, M or G)"))?;
+    n.checked_mul(scale)
+        .ok_or_else(|| format!("'{s}' is too large"))
+}
+
+/// `--image-store-size`: a byte count in 4096..=1 GiB.
+fn parse_store_size(s: &str) -> Result<u64, String> {
+    let n = parse_bytes(s)?;
+    if !(4096..=1 << 30).contains(&n) {
+        return Err(format!(
+            "{n} bytes is outside 4096..=1073741824 for a firmware slot"
+        ));
+    }
+    Ok(n)
 }
 
 fn parse_faults(s: &str) -> Result<ecat_slave::host::faults::FaultConfig, String> {

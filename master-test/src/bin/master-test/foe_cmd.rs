@@ -19,7 +19,9 @@ pub enum FoeCmd {
     /// The image is checked first (header, CRC, vendor, product, revision
     /// range of the live slave): a bad image is refused before anything
     /// is sent. An image older than the running firmware is refused
-    /// unless --allow-downgrade confirms it. Ctrl-C aborts the transfer
+    /// unless --allow-downgrade confirms it; the slave refuses it too
+    /// (anti-rollback, FoE error 0x8002) unless the file name sent ends
+    /// in `.downgrade.efw`, which --allow-downgrade does. Ctrl-C aborts the transfer
     /// with a FoE error: the slave keeps its old firmware.
     Write {
         /// The `.efw` file (see `firmware pack`).
@@ -34,6 +36,18 @@ pub enum FoeCmd {
         /// Confirm writing an image older than the running firmware.
         #[arg(long)]
         allow_downgrade: bool,
+    },
+    /// Set the slave's FoE password (the owner's; factory 00000000 for
+    /// the catalog devices): in BOOT, a download of `foe-password.txt`
+    /// with the current password; the slave keeps the new one across
+    /// power cycles and asks for it from then on. Then INIT.
+    Password {
+        /// The new password: 1 to 8 hex digits, 0x optional.
+        #[arg(value_parser = parse_password)]
+        new: u32,
+        /// The current FoE password.
+        #[arg(long, default_value = "00000000", value_parser = parse_password)]
+        password: u32,
     },
     /// Read a file the slave offers (e.g. `info.txt`) in PRE-OP.
     Read {
@@ -70,6 +84,22 @@ pub enum FirmwareCmd {
         /// --revision-min).
         #[arg(long, default_value = "0xFFFFFFFF", value_parser = parse_u32)]
         revision_max: u32,
+        /// Sign the image with this Ed25519 private key: a PEM file
+        /// "-----BEGIN PRIVATE KEY-----" (PKCS#8, as `firmware keygen`
+        /// or `openssl genpkey -algorithm ed25519` writes it). A device
+        /// whose description has the matching public key accepts only
+        /// images signed so.
+        #[arg(long, value_name = "KEYFILE")]
+        sign: Option<PathBuf>,
+    },
+    /// Make an Ed25519 key pair for signing images: the private key to
+    /// KEYFILE (PEM PKCS#8, mode 0600, never overwritten); prints the
+    /// public key for the device description
+    /// (`FoeSecurity::public_key`).
+    Keygen {
+        /// The private key file to create.
+        #[arg(short, long, value_name = "KEYFILE")]
+        output: PathBuf,
     },
 }
 
@@ -94,25 +124,26 @@ fn parse_u32(s: &str) -> Result<u32, String> {
 }
 
 /// Compares firmware versions by their numbers (`1.10` > `1.9`, `v2` >
-/// `1.9.9`); `None` when either has no number.
+/// `1.9.9`); `None` when either has no number. The slave's own rule
+/// ([`ecat_slave::firmware::compare_versions`]), so the client refuses
+/// exactly what the slave's anti-rollback check would.
 pub fn compare_versions(a: &str, b: &str) -> Option<Ordering> {
-    let numbers = |s: &str| -> Vec<u64> {
-        s.split(|c: char| !c.is_ascii_digit())
-            .filter(|p| !p.is_empty())
-            .map(|p| p.parse().unwrap_or(u64::MAX))
-            .collect()
-    };
-    let (x, y) = (numbers(a), numbers(b));
-    if x.is_empty() || y.is_empty() {
-        return None;
+    ecat_slave::firmware::compare_versions(a.as_bytes(), b.as_bytes())
+}
+
+/// The file name that asks the slave to accept a downgrade: `name` with
+/// `.efw` replaced by `.downgrade.efw` (kept if it has it already).
+pub fn downgrade_name(name: &str) -> String {
+    let lower = name.to_ascii_lowercase();
+    if lower.ends_with(".downgrade.efw") {
+        return name.to_string();
     }
-    let n = x.len().max(y.len());
-    let pad = |v: Vec<u64>| {
-        let mut v = v;
-        v.resize(n, 0);
-        v
+    let stem = if lower.ends_with(".efw") {
+        &name[..name.len() - 4]
+    } else {
+        name
     };
-    Some(pad(x).cmp(&pad(y)))
+    format!("{stem}.downgrade.efw")
 }
 
 /// Runs a `foe` command.
@@ -129,7 +160,32 @@ pub async fn foe(w: &Where, op: FoeCmd) -> Result<(), Failure> {
             output,
             password,
         } => foe_read(w, &name, output.as_deref(), password).await,
+        FoeCmd::Password { new, password } => foe_password(w, password, new).await,
     }
+}
+
+async fn foe_password(w: &Where, current: u32, new: u32) -> Result<(), Failure> {
+    let s = Session::open(w).await?;
+    let sel = s.select(w).await?;
+    let boot = sel.bootstrap()?;
+    let md = s.md();
+    master_test::foe::enter_boot_geometry(md, sel.station, boot).await?;
+    let mut client = MailboxClient::new(md, sel.station, boot);
+    let set = master_test::foe::set_password(&mut client, current, new).await;
+    // Leave BOOT whatever happened.
+    let back = master_test::foe::request_state(md, sel.station, 0x11).await;
+    set.map_err(|e| {
+        Failure::from(e).context(format!(
+            "setting the FoE password of {} failed (the old one stays)",
+            sel.label()
+        ))
+    })?;
+    back?;
+    outln!(
+        "{}: FoE password set to {new:08X} (kept across power cycles); BOOT -> INIT",
+        sel.label()
+    );
+    Ok(())
 }
 
 fn read_file(p: &Path) -> Result<Vec<u8>, Failure> {
@@ -225,9 +281,14 @@ async fn foe_write(
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let start = std::time::Instant::now();
+    let name = if allow_downgrade {
+        downgrade_name(name)
+    } else {
+        name.to_string()
+    };
     let sent = master_test::foe::write_cancellable(
         &mut client,
-        name,
+        &name,
         password,
         &image,
         &mut |done, _| bar.set_position(done as u64),
@@ -236,6 +297,14 @@ async fn foe_write(
     .await;
     bar.finish_and_clear();
     let completed = match sent {
+        Err(e) if e.foe_code() == Some(0x8002) && !allow_downgrade => {
+            let _ = master_test::foe::request_state(md, sel.station, 0x11).await;
+            return Err(Failure::from(e).context(format!(
+                "{} refused the image (anti-rollback: older than the last firmware it \
+                 confirmed); confirm the downgrade with --allow-downgrade",
+                sel.label()
+            )));
+        }
         Ok(c) => c,
         Err(e) => {
             // Leave BOOT whatever happened; the old firmware stays.
@@ -316,14 +385,22 @@ async fn foe_read(
 
 /// Runs a `firmware` command.
 pub fn firmware(dev: &device_catalog::DeviceEntry, op: FirmwareCmd) -> Result<(), Failure> {
-    let FirmwareCmd::Pack {
-        binary,
-        version,
-        output,
-        revision_min,
-        revision_max,
-    } = op;
-    use ecat_slave::firmware::{EFW_HEADER_LEN, FirmwareVersion, pack};
+    let (binary, version, output, revision_min, revision_max, sign) = match op {
+        FirmwareCmd::Keygen { output } => return keygen(&output),
+        FirmwareCmd::Pack {
+            binary,
+            version,
+            output,
+            revision_min,
+            revision_max,
+            sign,
+        } => (binary, version, output, revision_min, revision_max, sign),
+    };
+    use ecat_slave::firmware::{
+        EFW_FLAG_SIGNED, EFW_HEADER_LEN, EFW_SIGNED_HEADER_LEN, FirmwareVersion, pack,
+        set_signature, signed_message,
+    };
+    let key = sign.as_deref().map(read_key).transpose()?;
     if revision_min > revision_max {
         return Err(input(format!(
             "--revision-min {revision_min} is above --revision-max {revision_max}: \
@@ -343,9 +420,13 @@ pub fn firmware(dev: &device_catalog::DeviceEntry, op: FirmwareCmd) -> Result<()
             binary.display()
         )));
     }
+    let (header_len, flags) = match key {
+        Some(_) => (EFW_SIGNED_HEADER_LEN, EFW_FLAG_SIGNED),
+        None => (EFW_HEADER_LEN, 0),
+    };
     let header = EfwHeaderRepr {
-        header_len: EFW_HEADER_LEN as u16,
-        flags: 0,
+        header_len: header_len as u16,
+        flags,
         vendor_id: dev.description.identity.vendor_id,
         product_code: dev.description.identity.product_code,
         revision_min,
@@ -356,15 +437,79 @@ pub fn firmware(dev: &device_catalog::DeviceEntry, op: FirmwareCmd) -> Result<()
     };
     let mut out = vec![0u8; payload.len() + 1024];
     let n = pack(&header, &payload, &mut out).map_err(|e| input(format!("cannot pack: {e}")))?;
-    std::fs::write(&output, &out[..n])
+    out.truncate(n);
+    let signed = match &key {
+        Some(kp) => {
+            let message = signed_message(&out)
+                .map_err(|e| input(format!("cannot sign: {e}")))?
+                .concat();
+            let signature = kp.sk.sign(&message, None);
+            kp.pk
+                .verify(&message, &signature)
+                .map_err(|e| input(format!("the signature does not verify: {e}")))?;
+            set_signature(&mut out, &signature).map_err(|e| input(format!("cannot sign: {e}")))?;
+            format!(", signed by key {}", hex(&kp.pk[..]))
+        }
+        None => String::new(),
+    };
+    std::fs::write(&output, &out)
         .map_err(|e| input(format!("cannot write {}: {e}", output.display())))?;
     outln!(
-        "{}: {} bytes ({} payload, {} version {}, revisions {revision_min}..={revision_max})",
+        "{}: {} bytes ({} payload, {} version {}, revisions {revision_min}..={revision_max}{signed})",
         output.display(),
         n,
         payload.len(),
         dev.description.names.type_name,
         version.as_str()
+    );
+    Ok(())
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// An Ed25519 private key from a PEM PKCS#8 file.
+fn read_key(path: &Path) -> Result<ed25519_compact::KeyPair, Failure> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| input(format!("cannot read the key {}: {e}", path.display())))?;
+    ed25519_compact::KeyPair::from_pem(&text).map_err(|e| {
+        input(format!(
+            "{} is not an Ed25519 private key in PEM (PKCS#8, \"-----BEGIN PRIVATE KEY-----\"): {e}",
+            path.display()
+        ))
+    })
+}
+
+/// `firmware keygen`: a fresh key pair from the system's random source.
+fn keygen(output: &Path) -> Result<(), Failure> {
+    use std::io::{Read as _, Write as _};
+    let mut seed = [0u8; 32];
+    std::fs::File::open("/dev/urandom")
+        .and_then(|mut f| f.read_exact(&mut seed))
+        .map_err(|e| input(format!("cannot read /dev/urandom for a key: {e}")))?;
+    let kp = ed25519_compact::KeyPair::from_seed(ed25519_compact::Seed::new(seed));
+    seed.fill(0);
+    let mut options = std::fs::OpenOptions::new();
+    options.write(true).create_new(true);
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::mode(&mut options, 0o600);
+    let mut f = options.open(output).map_err(|e| {
+        input(format!(
+            "cannot create {} (an existing key is never overwritten): {e}",
+            output.display()
+        ))
+    })?;
+    f.write_all(kp.sk.to_pem().as_bytes())
+        .map_err(|e| input(format!("cannot write {}: {e}", output.display())))?;
+    let bytes: Vec<String> = kp.pk.iter().map(|b| format!("0x{b:02x}")).collect();
+    outln!(
+        "{}: Ed25519 private key (keep it secret)\npublic key {}\n\
+         for the device description: foe_security: FoeSecurity {{ factory_password: 0, \
+         public_key: Some([{}]) }}",
+        output.display(),
+        hex(&kp.pk[..]),
+        bytes.join(", ")
     );
     Ok(())
 }
@@ -391,6 +536,14 @@ mod tests {
         assert_eq!(compare_versions("v2", "1.9.9"), Some(Ordering::Greater));
         assert_eq!(compare_versions("10", "11"), Some(Ordering::Less));
         assert_eq!(compare_versions("beta", "1.0"), None);
+    }
+
+    #[test]
+    fn the_downgrade_consent_is_the_efw_suffix_downgrade_efw() {
+        assert_eq!(downgrade_name("firmware.efw"), "firmware.downgrade.efw");
+        assert_eq!(downgrade_name("APP.EFW"), "APP.downgrade.efw");
+        assert_eq!(downgrade_name("a.Downgrade.efw"), "a.Downgrade.efw");
+        assert_eq!(downgrade_name("image"), "image.downgrade.efw");
     }
 
     #[test]
