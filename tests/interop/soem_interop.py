@@ -157,19 +157,31 @@ def set_sm_watchdog(m, ms):
                 time.sleep(0.01)
 
 
-def foe_write(s, name, password, data):
-    """SOEM's foe_write. A frame lost to a scheduling delay (EC_NOFRAME,
-    -1: no answer within SOEM's compiled-in 2 ms) is retried once with a
-    fresh write request after the slave's pending answer has been drained,
-    as a user would; the log says so."""
-    r = s.foe_write(name, password, data, 10_000_000)
-    if r == -1:
-        log("      foe_write: a frame missed SOEM's timeout; retrying once")
-        time.sleep(0.1)
+def drain_mailbox(s):
+    """Reads away whatever answer of an earlier exchange still waits in
+    the slave's SM1 (a reply SOEM gave up on after its compiled-in 2 ms
+    timeout): it would put the next exchange out of step."""
+    for _ in range(4):
         try:
-            s.mbx_receive()
+            if not s.mbx_receive():
+                return
         except Exception:
-            pass
+            return
+
+
+def foe_write(s, name, password, data):
+    """SOEM's foe_write, after draining a stale answer. A frame lost to a
+    scheduling delay (EC_NOFRAME, -1: no answer within SOEM's compiled-in
+    2 ms) or an exchange put out of step by a late answer (-3: a packet of
+    the wrong kind) is retried once with a fresh write request after the
+    pending answers are drained, as a user would; the log says so. A
+    refusal by the slave (-5, an FoE error packet) is never retried."""
+    drain_mailbox(s)
+    r = s.foe_write(name, password, data, 10_000_000)
+    if r in (-1, -3):
+        log(f"      foe_write returned {r} (a late or lost frame); retrying once")
+        time.sleep(0.1)
+        drain_mailbox(s)
         r = s.foe_write(name, password, data, 10_000_000)
     return r
 
