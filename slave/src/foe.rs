@@ -69,12 +69,60 @@
 
 use core::fmt::Write as _;
 
-use crate::device::FoeSecurity;
 use crate::firmware::{
     DeviceIdentity, EfwError, EfwValidator, ImageStore, Slot, StoreError, begin_download,
     cancel_download, finish_download, foe_password, rollback_floor, set_password, write_chunk,
 };
 use crate::wire::foe::{FoeErrorCode, FoeRepr, HEADER_LEN};
+
+/// Firmware-update security of a device: what the factory ships, before
+/// the owner takes over (manual §5.10, the book's "Firmware update"
+/// section).
+///
+/// # The FoE password
+///
+/// ETG.1000.6 §5.8 gives the FoE write and read requests (WRQ, RRQ) a
+/// 32-bit password field and leaves its meaning to the device; a wrong one
+/// is answered with FoE error `0x800A` "no rights". SOES (`soes/esc_foe.c`,
+/// `FOE_fopen`) compares it with a password per file of the application's
+/// compiled-in file table and offers no way to change it at run time.
+///
+/// Here the password starts as [`FoeSecurity::factory_password`] and the
+/// owner changes it with a standard FoE download, which any master can do
+/// (TwinCAT's FoE dialog, SOEM/pysoem `foe_write`, `master-test foe
+/// password`): in BOOT, write the file [`PASSWORD_FILE_NAME`] with the
+/// *current* password in the write request's password field; the file
+/// holds the new password as 1 to 8 hex digits (`0x` and surrounding
+/// whitespace allowed). The slave stores it in its boot records (two
+/// copies with CRC and sequence number: a power cut keeps the old or the
+/// new one) and asks for it from then on, across power cycles. A CoE
+/// object was the alternative; FoE keeps the secret on the one service it
+/// protects, needs no object in every device's dictionary, and works the
+/// same in BOOT, where a bootloader has no object dictionary.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FoeSecurity {
+    /// The FoE password a new device asks for until its owner sets another.
+    pub factory_password: u32,
+    /// Ed25519 public key (32 bytes) whose signature every firmware image
+    /// must carry; `None`: unsigned images are accepted. A device with a
+    /// key built without the `signed-images` feature accepts no image.
+    pub public_key: Option<[u8; 32]>,
+}
+
+impl FoeSecurity {
+    /// Password `0x00000000`, no signature required: what the catalog
+    /// devices ship with, and every master's default.
+    pub const OPEN: FoeSecurity = FoeSecurity {
+        factory_password: 0,
+        public_key: None,
+    };
+}
+
+impl Default for FoeSecurity {
+    fn default() -> Self {
+        Self::OPEN
+    }
+}
 
 /// The factory FoE password of the catalog devices (manual §5.10):
 /// [`FoeSecurity::OPEN`]. A device's own is its description's

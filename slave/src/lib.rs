@@ -12,9 +12,13 @@
 //! A device is one static description plus one application trait
 //! ([`device`]); see `examples/io8/WRITE-YOUR-OWN-DEVICE.md`.
 //!
-//! Layers (top depends on bottom only): `device` → `od` → `coe`/`mailbox` →
-//! `al`/`pdo` → `esc` → `hal`; byte formats live in [`wire`] and carry no
-//! state.
+//! Byte formats live in [`wire`] and carry no state. The modules form
+//! layers; a module uses only modules of layers below its own (the test
+//! `tests/it/layers.rs` reads this list and every `crate::` path):
+//!
+//! Layers: `host` → `device` → `mailbox` → `foe`, `coe` → `params`, `pdo` →
+//! `od` → `led`, `firmware` → `al` → `esc` → `sii` → `hal` → `wire`,
+//! `limits`
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 #![forbid(unsafe_code)]
 #![cfg_attr(
@@ -37,6 +41,7 @@ pub mod hal;
 #[cfg(feature = "std")]
 pub mod host;
 pub mod led;
+pub mod limits;
 pub mod mailbox;
 pub mod od;
 pub mod params;

@@ -17,6 +17,7 @@ mod faults;
 mod foe;
 mod forward;
 mod generic_core;
+mod layers;
 mod long_line;
 mod mixed_line;
 mod power_cut;

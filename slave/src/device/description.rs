@@ -31,12 +31,14 @@
 //! const _: () = DEVICE.assert_valid(); // contradictions fail the build
 //! ```
 
+pub use crate::foe::FoeSecurity;
 use crate::od::dictionary::{DescriptionError, Dictionary};
 use crate::od::modules::{
     CONFIGURED_MODULES, DETECTED_MODULES, MODULAR_DEVICE_PROFILE, ModularLayout,
 };
 use crate::od::{DefaultValue, Object, PdoMapping};
 use crate::pdo::{Direction, MAX_IMAGE, MAX_MAPPED};
+pub use crate::pdo::{PdoSet, ProcessData};
 
 /// Identity (object 0x1018 and SII words 0x08..0x0F).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -64,28 +66,6 @@ pub struct DeviceNames {
     pub group_type: &'static str,
     /// Group display name (ESI `Groups/Group/Name`).
     pub group_name: &'static str,
-}
-
-/// One PDO assignment the device offers: the RxPDOs for SM2 and the TxPDOs
-/// for SM3 that belong together (the ESI's `AlternativeSmMapping`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct PdoSet {
-    /// Name of the assignment (shown by configurators).
-    pub name: &'static str,
-    /// RxPDO mapping objects (0x1600..0x17FF), in assignment order.
-    pub rx: &'static [u16],
-    /// TxPDO mapping objects (0x1A00..0x1BFF), in assignment order.
-    pub tx: &'static [u16],
-}
-
-/// The device's process data: its PDO sets, the first being the default
-/// assignment (the defaults of 0x1C12/0x1C13). An assignment written by a
-/// master must be made of PDOs of one set; PDOs that share no set exclude
-/// each other in the ESI.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ProcessData {
-    /// The PDO sets; empty for a device without process data.
-    pub sets: &'static [PdoSet],
 }
 
 /// CoE services the device offers (SII General "CoE details", ESI
@@ -128,57 +108,6 @@ pub struct MailboxConfig {
     /// Who may update the firmware over FoE: the factory password and the
     /// key images must be signed with ([`FoeSecurity::OPEN`] for none).
     pub foe_security: FoeSecurity,
-}
-
-/// Firmware-update security of a device: what the factory ships, before
-/// the owner takes over (manual §5.10, the book's "Firmware update"
-/// section).
-///
-/// # The FoE password
-///
-/// ETG.1000.6 §5.8 gives the FoE write and read requests (WRQ, RRQ) a
-/// 32-bit password field and leaves its meaning to the device; a wrong one
-/// is answered with FoE error `0x800A` "no rights". SOES (`soes/esc_foe.c`,
-/// `FOE_fopen`) compares it with a password per file of the application's
-/// compiled-in file table and offers no way to change it at run time.
-///
-/// Here the password starts as [`FoeSecurity::factory_password`] and the
-/// owner changes it with a standard FoE download, which any master can do
-/// (TwinCAT's FoE dialog, SOEM/pysoem `foe_write`, `master-test foe
-/// password`): in BOOT, write the file [`PASSWORD_FILE_NAME`] with the
-/// *current* password in the write request's password field; the file
-/// holds the new password as 1 to 8 hex digits (`0x` and surrounding
-/// whitespace allowed). The slave stores it in its boot records (two
-/// copies with CRC and sequence number: a power cut keeps the old or the
-/// new one) and asks for it from then on, across power cycles. A CoE
-/// object was the alternative; FoE keeps the secret on the one service it
-/// protects, needs no object in every device's dictionary, and works the
-/// same in BOOT, where a bootloader has no object dictionary.
-///
-/// [`PASSWORD_FILE_NAME`]: crate::foe::PASSWORD_FILE_NAME
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct FoeSecurity {
-    /// The FoE password a new device asks for until its owner sets another.
-    pub factory_password: u32,
-    /// Ed25519 public key (32 bytes) whose signature every firmware image
-    /// must carry; `None`: unsigned images are accepted. A device with a
-    /// key built without the `signed-images` feature accepts no image.
-    pub public_key: Option<[u8; 32]>,
-}
-
-impl FoeSecurity {
-    /// Password `0x00000000`, no signature required: what the catalog
-    /// devices ship with, and every master's default.
-    pub const OPEN: FoeSecurity = FoeSecurity {
-        factory_password: 0,
-        public_key: None,
-    };
-}
-
-impl Default for FoeSecurity {
-    fn default() -> Self {
-        Self::OPEN
-    }
 }
 
 impl MailboxConfig {

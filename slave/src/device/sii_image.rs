@@ -6,10 +6,10 @@
 //! the PDO tables of one image on the stack (about 20 KiB), which a
 //! microcontroller firmware never needs to do.
 
-use crate::esc::soft::SII_SIZE;
 use crate::od::{DefaultValue, Dictionary};
 use crate::pdo::Direction;
 use crate::sii;
+use crate::sii::SII_SIZE;
 
 use super::description::{DeviceDescription, MemoryLayout};
 use super::slave::SM_CONTROL;

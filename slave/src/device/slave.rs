@@ -32,10 +32,7 @@ pub const SM_CONTROL: [u8; 4] = [0x26, 0x22, 0x64, 0x20];
 /// to.
 pub const FULL_PASS_NS: u64 = 100_000_000;
 
-/// Shortest SYNC0 cycle the firmware accepts in DC mode (0x09A0 below it
-/// is refused at PRE-OP→SAFE-OP with 0x0035): one pass of the firmware
-/// loop with process data must fit in a cycle.
-pub const DC_MIN_CYCLE_NS: u32 = 100_000;
+pub use crate::limits::DC_MIN_CYCLE_NS;
 
 /// How the firmware synchronises its process data (ETG.1020 sync types,
 /// as 0x1C32:01 names them).

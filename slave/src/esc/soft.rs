@@ -25,8 +25,7 @@ pub const FMMU_COUNT: usize = 8;
 /// status follows the AL control register (ESCs without a firmware).
 pub const ESC_CONFIG_DEVICE_EMULATION: u8 = 0x01;
 
-/// Size of the emulated SII EEPROM in bytes (16 Kbit).
-pub const SII_SIZE: usize = 2048;
+pub use crate::sii::SII_SIZE;
 /// Longest datagram payload the ESC processes (an Ethernet frame's worth).
 pub const MAX_DATAGRAM: usize = 1500;
 

@@ -244,7 +244,7 @@ pub const SYNC_PARAMETER_ENTRIES: &[Entry] = &[
         5,
         "Minimum cycle time",
         DataType::UInt32,
-        crate::device::DC_MIN_CYCLE_NS as i64,
+        crate::limits::DC_MIN_CYCLE_NS as i64,
     ),
     constant(6, "Calc and copy time", DataType::UInt32, 0),
     constant(9, "Delay time", DataType::UInt32, 0),

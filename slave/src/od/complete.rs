@@ -9,10 +9,10 @@
 //! carry as many elements as subindex 0 says (upload), or as the data holds
 //! (download, which then sets subindex 0).
 
+use super::bits::{read_bits, write_bits};
 use super::store::{Od, byte_len, from_raw};
 use super::types::{Access, DataType, Entry, Object, ObjectCode};
 use crate::al::AlState;
-use crate::pdo::{read_bits, write_bits};
 use crate::wire::coe::SdoAbortCode;
 
 /// Largest complete-access image handled.

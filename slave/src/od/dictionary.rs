@@ -3,7 +3,7 @@
 //! A [`Dictionary`] is a device's objects (strictly ascending by index,
 //! entries strictly ascending by subindex), its enumeration data types and
 //! the prefix sums that give every entry a *flat position*: the slot of its
-//! live value in an [`ObjectStore`](super::store::ObjectStore). It is built
+//! live value in an `ObjectStore` (`super::store`). It is built
 //! in `const` context, without heap, with the [`dictionary!`](crate::dictionary)
 //! macro:
 //!
@@ -312,10 +312,10 @@ pub const fn natural_range(t: &DataType, bits: u16) -> (i64, i64) {
 }
 
 /// Most string entries a store holds (see
-/// [`STRING_SLOTS`](super::store::STRING_SLOTS)).
-const MAX_STRINGS: usize = super::store::STRING_SLOTS;
-/// Longest string value (see [`STRING_CAPACITY`](super::store::STRING_CAPACITY)).
-const MAX_STRING: usize = super::store::STRING_CAPACITY;
+/// [`STRING_SLOTS`](super::types::STRING_SLOTS)).
+const MAX_STRINGS: usize = super::types::STRING_SLOTS;
+/// Longest string value (see [`STRING_CAPACITY`](super::types::STRING_CAPACITY)).
+const MAX_STRING: usize = super::types::STRING_CAPACITY;
 
 const fn enum_listed(enums: &[&EnumDesc], e: &EnumDesc) -> bool {
     let mut rest = enums;

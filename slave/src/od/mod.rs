@@ -5,7 +5,11 @@
 //! [`Dictionary::validate`]. [`store::ObjectStore`] holds the live values;
 //! [`complete`] does complete access. The ESI, the SII, SDO Information,
 //! the PDO engine and the application all read the one description.
+//!
+//! Layers: `complete`, `modules` → `build` → `store` → `dictionary` →
+//! `sub_names`, `bits`, `types`
 
+pub mod bits;
 pub mod build;
 pub mod complete;
 pub mod dictionary;

@@ -19,10 +19,7 @@ use super::types::{Access, DataType, DefaultValue, Entry};
 use crate::al::AlState;
 use crate::wire::coe::SdoAbortCode;
 
-/// Longest string value an entry can hold.
-pub const STRING_CAPACITY: usize = 32;
-/// Number of string entries the store can hold.
-pub const STRING_SLOTS: usize = 4;
+pub use super::types::{STRING_CAPACITY, STRING_SLOTS};
 
 type Strings = heapless::Vec<(u16, heapless::String<STRING_CAPACITY>), STRING_SLOTS>;
 

@@ -4,6 +4,11 @@
 //! of EtherCAT frames. A device builds its one description from them
 //! (see [`super::dictionary`] and [`super::build`]).
 
+/// Longest string value an entry can hold (the value store's slot size).
+pub const STRING_CAPACITY: usize = 32;
+/// Number of string entries a value store can hold.
+pub const STRING_SLOTS: usize = 4;
+
 /// CoE base data types used by the dictionary (ETG.1000.6 table 63 codes).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DataType {

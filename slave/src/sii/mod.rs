@@ -55,6 +55,10 @@ pub use read::{
 /// Byte offset of the first category header (word 0x40, ETG.2010 Table 2).
 pub const FIRST_CATEGORY_BYTE: usize = 0x80;
 
+/// Size of the SII EEPROM images this crate builds and the software ESC
+/// emulates, in bytes (16 Kbit, the size of the devices' EEPROMs).
+pub const SII_SIZE: usize = 2048;
+
 /// Word address of the first category header (ETG.2010 Table 2).
 pub const FIRST_CATEGORY_WORD: u16 = 0x40;
 

@@ -28,8 +28,8 @@ use crate::telegram::{
     RequestRepr, ResponseRepr, WriteException,
 };
 
+use super::map::{INPUTS, parameter, slot_index};
 use super::model::{self, Module};
-use super::od::{INPUTS, parameter, slot_index};
 
 /// 0x2000 HCS telegram request.
 pub const REQUEST: u16 = 0x2000;

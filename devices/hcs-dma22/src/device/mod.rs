@@ -3,6 +3,8 @@
 //! (module address E22 = slot), each with the parameter list of chapter 7,
 //! its CMD 15 block as process data and the behaviour of [`model`].
 //!
+//! Layers: `od` → `channel` → `model`, `params` → `map`
+//!
 //! ```
 //! use ecat_slave::device::SoftSlave;
 //! use hcs_dma22::device::Dma22Node;
@@ -13,6 +15,7 @@
 //! ```
 
 pub mod channel;
+pub mod map;
 pub mod model;
 pub mod od;
 pub mod params;
@@ -27,20 +30,7 @@ use ecat_slave::wire::coe::SdoAbortCode;
 
 use model::{MODES, Module};
 
-/// Vendor ID used for the DMA-22(A) twin. HCS has no EtherCAT vendor ID
-/// we know of: this is a placeholder from the range our examples use, not
-/// an ETG assignment (README, NOTES.md).
-pub const VENDOR_ID: u32 = 0x0000_0AC5;
-/// Product code: the DMA-22 node.
-pub const PRODUCT_CODE: u32 = 0x0000_0022;
-/// Revision number.
-pub const REVISION: u32 = 1;
-/// Module ident of the DMA-22(A) module (0xF030/0xF050 entries).
-pub const MODULE_IDENT: u32 = 0x0022_0001;
-/// Slots of the node (CMD 15 addresses at most 5 modules, 000 5.1).
-pub const SLOTS: u8 = 5;
-/// Device name (0x1008; the SII's device type, string 1, which SOEM shows).
-pub const DEVICE_NAME: &str = "DMA-22(A)-ECAT";
+pub use map::{DEVICE_NAME, MODULE_IDENT, PRODUCT_CODE, REVISION, SLOTS, VENDOR_ID};
 
 /// The node, described once.
 pub const DEVICE: DeviceDescription = DeviceDescription {
@@ -153,10 +143,10 @@ impl<const N: usize> Application for Dma22Node<N> {
         }
         // E Int (ID 0xB0, subindex 0xB1 of 0x80n0): only Din_1, Din_2 and
         // Bus disable are writable; the value shown is the module's.
-        if d.index & 0xFF8F == od::PARAMS_LOW
+        if d.index & 0xFF8F == map::PARAMS_LOW
             && let Some(v) = d.value(0xB1)
         {
-            let slot = usize::from((d.index - od::PARAMS_LOW) >> 4);
+            let slot = usize::from((d.index - map::PARAMS_LOW) >> 4);
             if let Some(m) = self.modules.get_mut(slot) {
                 m.write_e_int(v as u16);
             }
@@ -179,7 +169,7 @@ impl<const N: usize> Application for Dma22Node<N> {
                 // Manufacturer-specific Emergency: module address, error.
                 t.emergency(0xFF00 | u16::from(err), [s + 1, err, 0, 0, 0]);
             }
-            let diag = od::slot_index(od::DIAGNOSIS, s);
+            let diag = map::slot_index(map::DIAGNOSIS, s);
             t.od.set(diag, 1, i64::from(m.error));
             t.od.set(diag, 2, i64::from(m.errors));
             if m.error != 0 {

@@ -17,76 +17,18 @@
 //! operation mode E00 (5.5.2-5.5.6, see [`super::model`]).
 
 use ecat_slave::od::build::{
-    SYNC_PARAMETER_ENTRIES, assign, assign_count, base, constant, input, map_to, output, ranged,
-    string, sub_name, sub0, var,
+    SYNC_PARAMETER_ENTRIES, assign, assign_count, base, constant, input, map_to, output, string,
+    sub_name, sub0, var,
 };
 use ecat_slave::od::modules::{ModularLayout, ModuleType, SlotRange};
 use ecat_slave::od::{Access, DataType, Entry, Object, ObjectCode, PdoMapping};
 
 use super::channel;
+use super::map::{DEVICE_NAME, MODULE_IDENT, PRODUCT_CODE, REVISION, SLOTS, VENDOR_ID};
+pub use super::map::{
+    DIAGNOSIS, INPUTS, OUTPUTS, PARAMS_HIGH, PARAMS_LOW, parameter, ro, rw, slot_index,
+};
 use super::params::{PARAMETERS_HIGH, PARAMETERS_LOW};
-use super::{MODULE_IDENT, PRODUCT_CODE, REVISION, SLOTS, VENDOR_ID};
-
-/// A read-only parameter (a `d` value, `Vers`, `E00`, `E04`-`E07`, `E28`)
-/// with the range the manual prints.
-pub const fn ro(
-    sub: u8,
-    name: &'static str,
-    t: DataType,
-    default: i64,
-    min: i64,
-    max: i64,
-    unit: &'static str,
-) -> Entry {
-    Entry {
-        access: Access::Ro,
-        backup: false,
-        setting: false,
-        ..rw(sub, name, t, default, min, max, unit)
-    }
-}
-
-/// A read/write parameter, writable in every state as over the HCS
-/// fieldbuses, with its range and default.
-pub const fn rw(
-    sub: u8,
-    name: &'static str,
-    t: DataType,
-    default: i64,
-    min: i64,
-    max: i64,
-    unit: &'static str,
-) -> Entry {
-    ranged(sub, name, t, default, min, max, unit)
-}
-
-/// Index of slot `n`'s copy of `base`.
-pub const fn slot_index(base: u16, n: u8) -> u16 {
-    base + 0x10 * n as u16
-}
-
-/// Inputs of a module (0x60n0).
-pub const INPUTS: u16 = 0x6000;
-/// Outputs of a module (0x70n0).
-pub const OUTPUTS: u16 = 0x7000;
-/// Parameters ID 0x00..=0xFE of a module (0x80n0).
-pub const PARAMS_LOW: u16 = 0x8000;
-/// Parameters ID 0xFF..=0x109 of a module (0x80n1).
-pub const PARAMS_HIGH: u16 = 0x8001;
-/// Diagnosis of a module (0xA0n0).
-pub const DIAGNOSIS: u16 = 0xA000;
-
-/// The `(index, subindex)` of HCS parameter `id` of the module in slot
-/// `n`, if the ID is in the parameter range.
-pub const fn parameter(n: u8, id: u16) -> Option<(u16, u8)> {
-    if id < 0xFF {
-        Some((slot_index(PARAMS_LOW, n), (id + 1) as u8))
-    } else if id <= 0x109 {
-        Some((slot_index(PARAMS_HIGH, n), (id - 0xFE) as u8))
-    } else {
-        None
-    }
-}
 
 const INPUT_ENTRIES: &[Entry] = &[
     sub0(3),
@@ -208,7 +150,7 @@ const HEAD: &[Object] = &[
     // ETG.5001: device type = profile 5001 (0x1389).
     Object { index: 0x1000, name: "Device type", code: Var, entries: &[var("Device type", DataType::UInt32, NoPdo, 0x0000_1389)] },
     Object { index: 0x1001, name: "Error register", code: Var, entries: &[var("Error register", DataType::UInt8, NoPdo, 0)] },
-    Object { index: 0x1008, name: "Device name", code: Var, entries: &[string("Device name", super::DEVICE_NAME)] },
+    Object { index: 0x1008, name: "Device name", code: Var, entries: &[string("Device name", DEVICE_NAME)] },
     Object { index: 0x1009, name: "Hardware version", code: Var, entries: &[string("Hardware version", "1")] },
     Object { index: 0x100A, name: "Software version", code: Var, entries: &[string("Software version", "10.01")] },
     Object { index: 0x1018, name: "Identity", code: Record, entries: &[

@@ -8,7 +8,7 @@ use ecat_slave::od::DataType::{Int16, UInt16};
 use ecat_slave::od::Entry;
 use ecat_slave::od::build::sub0;
 
-use super::od::{ro, rw};
+use super::map::{ro, rw};
 
 /// Parameters with IDs 0x00..=0xFE (object 0x80n0): 169 entries.
 #[rustfmt::skip]

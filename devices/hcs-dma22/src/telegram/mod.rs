@@ -46,10 +46,13 @@
 //! out-of-range writes, so even a view made with `new_unchecked` over a
 //! short buffer is safe; once `check_len` has succeeded every field is in
 //! range.
+//!
+//! Layers: `semantics` → `request`, `response` → `exception`, `limits`
 
 use core::ops::Range;
 
 pub mod exception;
+pub mod limits;
 pub mod request;
 pub mod response;
 pub mod semantics;

@@ -17,7 +17,7 @@
 //!                     one block per module x = 1..=SNUM (E22 order)
 //! ```
 
-use super::semantics::{MAX_READ_WORDS, MODULE_ADDRESSES};
+use super::limits::{MAX_READ_WORDS, MODULE_ADDRESSES};
 use super::{
     Command, HEADER_LEN, MAX_MODULES, MODULE_BLOCK_LEN, SIMPLE_LEN, TelegramError, check_exact,
     check_room, field, get_u8, get_u16_be, set_u8, set_u16_be, shifted,
@@ -228,7 +228,7 @@ const fn multi_write_len(snum: u8) -> usize {
 pub struct ReadRequest {
     /// Telegram address.
     pub tadr: u8,
-    /// Module address (E22), 1..=32 (see [`super::semantics::SADR_RANGE`];
+    /// Module address (E22), 1..=32 (see [`super::limits::SADR_RANGE`];
     /// not checked here, the node answers an unknown one with exception
     /// 5).
     pub sadr: u8,

@@ -21,7 +21,7 @@
 //! in turn (5.2, see [`super::semantics::Multiplexer`]).
 
 use super::exception::Exception;
-use super::semantics::{MAX_READ_CNT, MAX_READ_WORDS, MODULE_ADDRESSES};
+use super::limits::{MAX_READ_CNT, MAX_READ_WORDS, MODULE_ADDRESSES};
 use super::{
     Command, ERROR_FLAG, ERROR_LEN, HEADER_LEN, MULTI_WRITE_RESPONSE_LEN, SIMPLE_LEN,
     TelegramError, WriteParameter, check_exact, check_room, field, get_u8, get_u16_be, set_u8,
