@@ -155,23 +155,10 @@ impl Inspection {
 
 /// Readable name of a CoE base data type code.
 pub fn data_type_name(code: u8) -> String {
-    match code {
-        0x00 => "-".into(),
-        0x01 => "BOOL".into(),
-        0x02 => "SINT".into(),
-        0x03 => "INT".into(),
-        0x04 => "DINT".into(),
-        0x05 => "USINT".into(),
-        0x06 => "UINT".into(),
-        0x07 => "UDINT".into(),
-        0x08 => "REAL".into(),
-        0x09 => "STRING".into(),
-        0x0A => "OCTET_STRING".into(),
-        0x11 => "LREAL".into(),
-        0x15 => "LINT".into(),
-        0x1B => "ULINT".into(),
-        0x30..=0x37 => format!("BIT{}", code - 0x2F),
-        other => format!("{other:#04x}"),
+    match ecat_slave::od::types::base_type(u16::from(code)) {
+        _ if code == 0 => "-".into(),
+        Some(t) => t.name.into(),
+        None => format!("{code:#04x}"),
     }
 }
 

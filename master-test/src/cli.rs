@@ -121,22 +121,14 @@ pub fn kind(code: u16) -> Kind {
 /// The ETG type name of `code` (`BOOL`, `UINT`, `BIT7`, `STRING`,
 /// `DT0801EN03`, ...), or the code in hex for types this tool does not know.
 pub fn type_name(code: u16) -> String {
+    if let Some(t) = ecat_slave::od::types::base_type(code) {
+        return t.name.to_string();
+    }
     let name = match code {
-        0x0001 => "BOOL",
-        0x0002 => "SINT",
-        0x0003 => "INT",
-        0x0004 => "DINT",
-        0x0005 => "USINT",
-        0x0006 => "UINT",
-        0x0007 => "UDINT",
-        0x0009 => "STRING",
-        0x0015 => "LINT",
-        0x001B => "ULINT",
         0x0021 => "PDO_MAPPING",
         0x0023 => "IDENTITY",
         0x002A => "RECORD",
         0x0000 => "NULL",
-        0x0030..=0x0037 => return format!("BIT{}", code - 0x2F),
         c => match kind(c) {
             Kind::Enum(e) => e.name,
             _ => return format!("{c:#06x}"),

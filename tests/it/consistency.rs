@@ -10,21 +10,12 @@ use std::collections::BTreeMap;
 
 /// CoE data type code of an ESI type name.
 fn type_code(name: &str) -> Option<u16> {
-    Some(match name {
-        "BOOL" => 0x01,
-        "SINT" => 0x02,
-        "INT" => 0x03,
-        "DINT" => 0x04,
-        "USINT" => 0x05,
-        "UINT" => 0x06,
-        "UDINT" => 0x07,
-        "LINT" => 0x15,
-        "ULINT" => 0x1B,
-        n if n.starts_with("STRING(") => 0x09,
-        n if n.starts_with("BIT") => 0x2F + n[3..].parse::<u16>().ok()?,
-        n if n.starts_with("DT08") && n.contains("EN") => u16::from_str_radix(&n[2..6], 16).ok()?,
-        _ => return None,
-    })
+    if let Some(t) = ecat_slave::od::types::base_type_named(name) {
+        return Some(t.code);
+    }
+    (name.starts_with("DT08") && name.contains("EN"))
+        .then(|| u16::from_str_radix(name.get(2..6)?, 16).ok())
+        .flatten()
 }
 
 /// One entry as the ESI describes it.

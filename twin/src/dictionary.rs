@@ -48,19 +48,8 @@ fn child_u(e: &Element, name: &str, what: &'static str) -> Result<Option<i64>, E
 /// The core's data type of a CoE base type code (`None` for types the
 /// core does not serve: REAL, UINT24, ...).
 pub(crate) fn data_type_of_code(code: u8) -> Option<DataType> {
-    Some(match code {
-        0x01 => DataType::Bool,
-        0x02 => DataType::Int8,
-        0x03 => DataType::Int16,
-        0x04 => DataType::Int32,
-        0x05 => DataType::UInt8,
-        0x06 => DataType::UInt16,
-        0x07 => DataType::UInt32,
-        0x15 => DataType::Int64,
-        0x1B => DataType::UInt64,
-        c @ 0x30..=0x37 => DataType::Bits(c - 0x2F),
-        _ => return None,
-    })
+    // Strings are served from their own entries, not as a scalar.
+    DataType::from_code(u16::from(code)).filter(|t| *t != DataType::VisibleString)
 }
 
 /// A scalar type the core can serve.

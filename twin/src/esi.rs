@@ -387,30 +387,16 @@ fn flag(e: &Element, name: &str) -> bool {
 /// The CoE code of a base data type name of ETG.2000 (`BOOL`, `UINT`,
 /// `BIT3`, `STRING(8)`...), `None` for a name it does not know.
 pub fn base_type_code(name: &str) -> Option<u8> {
-    let n = name.trim();
-    if let Some(bits) = n.strip_prefix("BIT") {
-        let b: u8 = bits.parse().ok()?;
-        return (1..=8).contains(&b).then(|| 0x2F + b);
-    }
-    if n.starts_with("STRING(") && n.ends_with(')') {
-        return Some(0x09);
-    }
-    Some(match n {
-        "BOOL" => 0x01,
-        "SINT" => 0x02,
-        "INT" => 0x03,
-        "DINT" => 0x04,
-        "USINT" | "BYTE" => 0x05,
-        "UINT" | "WORD" => 0x06,
-        "UDINT" | "DWORD" => 0x07,
-        "REAL" => 0x08,
-        "LREAL" => 0x11,
-        "INT24" => 0x10,
-        "UINT24" => 0x16,
-        "LINT" => 0x15,
-        "ULINT" => 0x1B,
-        _ => return None,
-    })
+    let t = ecat_slave::od::types::base_type_named(name)?;
+    // The core models BYTE, WORD and DWORD as the unsigned integers of
+    // their width.
+    let code = match t.name {
+        "BYTE" => 0x05,
+        "WORD" => 0x06,
+        "DWORD" => 0x07,
+        _ => t.code,
+    };
+    u8::try_from(code).ok()
 }
 
 /// Device-specific data types of a dictionary: name → base type code.

@@ -57,6 +57,25 @@ impl DataType {
         }
     }
 
+    /// The type of a base data type code the core serves (not an
+    /// enumeration), the inverse of [`DataType::code`].
+    pub const fn from_code(code: u16) -> Option<DataType> {
+        Some(match code {
+            0x0001 => DataType::Bool,
+            0x0002 => DataType::Int8,
+            0x0003 => DataType::Int16,
+            0x0004 => DataType::Int32,
+            0x0005 => DataType::UInt8,
+            0x0006 => DataType::UInt16,
+            0x0007 => DataType::UInt32,
+            0x0009 => DataType::VisibleString,
+            0x0015 => DataType::Int64,
+            0x001B => DataType::UInt64,
+            0x0030..=0x0037 => DataType::Bits((code - 0x002F) as u8),
+            _ => return None,
+        })
+    }
+
     /// Whether values of this type are signed integers.
     pub const fn is_signed(&self) -> bool {
         matches!(
@@ -91,6 +110,114 @@ impl DataType {
             DataType::Enum(e) => e.name,
         }
     }
+}
+
+/// What values of a base data type are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BaseKind {
+    /// `BOOL`.
+    Bool,
+    /// A signed integer.
+    Signed,
+    /// An unsigned integer (`BYTE`, `WORD`, `DWORD` too).
+    Unsigned,
+    /// An IEEE 754 float (`REAL`, `LREAL`).
+    Real,
+    /// `BITn`: n bits of a packed field.
+    Bits,
+    /// An array of bits (`BITARRn`).
+    BitArray,
+    /// A character or octet string (`STRING(n)`, `OCTET_STRING`,
+    /// `UNICODE_STRING`): its length is the entry's.
+    String,
+    /// A time (`TIME_OF_DAY`, `TIME_DIFFERENCE`) or a `GUID`.
+    Other,
+}
+
+/// One CoE base data type: its code (ETG.1000.6 Table 64, as SDO
+/// Information and the SII report it), its ETG.2000 / IEC 61131 name (as
+/// the ESI writes it), its size and kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BaseType {
+    /// Data type code.
+    pub code: u16,
+    /// ESI name (`UDINT`, `BIT3`, `STRING`: the ESI appends the length).
+    pub name: &'static str,
+    /// Bits of one value; 0 for strings, whose length is the entry's.
+    pub bits: u16,
+    /// What the values are.
+    pub kind: BaseKind,
+}
+
+const fn base(code: u16, name: &'static str, bits: u16, kind: BaseKind) -> BaseType {
+    BaseType {
+        code,
+        name,
+        bits,
+        kind,
+    }
+}
+
+/// The base data types of ETG.1000.6 (Table 64) with their ETG.2000 names:
+/// the one table every reader and writer of type codes and names uses
+/// (SDO Information, the ESI writer and readers, `esi inspect`, the
+/// commissioning tool).
+pub const BASE_TYPES: &[BaseType] = &[
+    base(0x0001, "BOOL", 1, BaseKind::Bool),
+    base(0x0002, "SINT", 8, BaseKind::Signed),
+    base(0x0003, "INT", 16, BaseKind::Signed),
+    base(0x0004, "DINT", 32, BaseKind::Signed),
+    base(0x0005, "USINT", 8, BaseKind::Unsigned),
+    base(0x0006, "UINT", 16, BaseKind::Unsigned),
+    base(0x0007, "UDINT", 32, BaseKind::Unsigned),
+    base(0x0008, "REAL", 32, BaseKind::Real),
+    base(0x0009, "STRING", 0, BaseKind::String),
+    base(0x000A, "OCTET_STRING", 0, BaseKind::String),
+    base(0x000B, "UNICODE_STRING", 0, BaseKind::String),
+    base(0x000C, "TIME_OF_DAY", 48, BaseKind::Other),
+    base(0x000D, "TIME_DIFFERENCE", 48, BaseKind::Other),
+    base(0x0010, "INT24", 24, BaseKind::Signed),
+    base(0x0011, "LREAL", 64, BaseKind::Real),
+    base(0x0012, "INT40", 40, BaseKind::Signed),
+    base(0x0013, "INT48", 48, BaseKind::Signed),
+    base(0x0014, "INT56", 56, BaseKind::Signed),
+    base(0x0015, "LINT", 64, BaseKind::Signed),
+    base(0x0016, "UINT24", 24, BaseKind::Unsigned),
+    base(0x0018, "UINT40", 40, BaseKind::Unsigned),
+    base(0x0019, "UINT48", 48, BaseKind::Unsigned),
+    base(0x001A, "UINT56", 56, BaseKind::Unsigned),
+    base(0x001B, "ULINT", 64, BaseKind::Unsigned),
+    base(0x001D, "GUID", 128, BaseKind::Other),
+    base(0x001E, "BYTE", 8, BaseKind::Unsigned),
+    base(0x001F, "WORD", 16, BaseKind::Unsigned),
+    base(0x0020, "DWORD", 32, BaseKind::Unsigned),
+    base(0x002D, "BITARR8", 8, BaseKind::BitArray),
+    base(0x002E, "BITARR16", 16, BaseKind::BitArray),
+    base(0x002F, "BITARR32", 32, BaseKind::BitArray),
+    base(0x0030, "BIT1", 1, BaseKind::Bits),
+    base(0x0031, "BIT2", 2, BaseKind::Bits),
+    base(0x0032, "BIT3", 3, BaseKind::Bits),
+    base(0x0033, "BIT4", 4, BaseKind::Bits),
+    base(0x0034, "BIT5", 5, BaseKind::Bits),
+    base(0x0035, "BIT6", 6, BaseKind::Bits),
+    base(0x0036, "BIT7", 7, BaseKind::Bits),
+    base(0x0037, "BIT8", 8, BaseKind::Bits),
+];
+
+/// The base data type of `code`, if it is one.
+pub fn base_type(code: u16) -> Option<&'static BaseType> {
+    BASE_TYPES.iter().find(|t| t.code == code)
+}
+
+/// The base data type an ESI names (`UDINT`, `BIT3`, `STRING(12)`:
+/// surrounding blanks ignored), if it is one.
+pub fn base_type_named(name: &str) -> Option<&'static BaseType> {
+    let n = name.trim();
+    let n = match n.strip_prefix("STRING(") {
+        Some(rest) if rest.ends_with(')') => "STRING",
+        _ => n,
+    };
+    BASE_TYPES.iter().find(|t| t.name == n)
 }
 
 /// An enumeration data type (manual 6.1.7, objects 0x0800..0x0805).
@@ -253,5 +380,38 @@ impl Object {
     /// Highest subindex of the object (SDO Info "max subindex").
     pub fn max_sub(&self) -> u8 {
         self.entries.iter().map(|e| e.sub).max().unwrap_or(0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_data_type_agrees_with_the_base_type_table() {
+        use super::DataType::*;
+        for t in [
+            Bool,
+            Int8,
+            Int16,
+            Int32,
+            UInt8,
+            UInt16,
+            UInt32,
+            VisibleString,
+            Int64,
+            UInt64,
+        ]
+        .into_iter()
+        .chain((1..=8).map(Bits))
+        {
+            let b = base_type(t.code()).expect("in the table");
+            assert_eq!(DataType::from_code(t.code()), Some(t));
+            assert_eq!(b.name, t.etg_name(), "{t:?}");
+            assert_eq!(base_type_named(t.etg_name()), Some(b));
+        }
+        assert_eq!(base_type_named(" STRING(13) ").map(|t| t.code), Some(9));
+        assert_eq!(base_type_named("BIT9"), None);
+        assert_eq!(base_type(0x0017), None);
     }
 }

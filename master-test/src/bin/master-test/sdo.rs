@@ -70,18 +70,17 @@ pub enum OdCmd {
     },
 }
 
-/// Data types by name for `--type` (code, bits).
-const TYPES: &[(&str, u16, u16)] = &[
-    ("BOOL", 0x0001, 1),
-    ("SINT", 0x0002, 8),
-    ("INT", 0x0003, 16),
-    ("DINT", 0x0004, 32),
-    ("USINT", 0x0005, 8),
-    ("UINT", 0x0006, 16),
-    ("UDINT", 0x0007, 32),
-    ("LINT", 0x0015, 64),
-    ("ULINT", 0x001B, 64),
-];
+/// Data types `--type` takes: the integer and boolean base types (code,
+/// bits) of the one table, `ecat_slave::od::types::BASE_TYPES`.
+fn integer_types() -> impl Iterator<Item = &'static ecat_slave::od::types::BaseType> {
+    use ecat_slave::od::types::{BASE_TYPES, BaseKind};
+    BASE_TYPES.iter().filter(|t| {
+        matches!(
+            t.kind,
+            BaseKind::Bool | BaseKind::Signed | BaseKind::Unsigned
+        ) && t.bits <= 64
+    })
+}
 
 /// An entry description made from `--type` (`STRING` takes the length
 /// the slave gives).
@@ -90,14 +89,14 @@ fn typed_entry(index: u16, sub: u8, t: &str, string_len: usize) -> Result<EntryI
     let (code, bits) = if upper == "STRING" {
         (0x0009, u16::try_from(string_len * 8).unwrap_or(u16::MAX))
     } else {
-        let (_, code, bits) = TYPES.iter().find(|(n, _, _)| *n == upper).ok_or_else(|| {
-            let names: Vec<&str> = TYPES.iter().map(|(n, _, _)| *n).collect();
+        let ty = integer_types().find(|ty| ty.name == upper).ok_or_else(|| {
+            let names: Vec<&str> = integer_types().map(|ty| ty.name).collect();
             input(format!(
                 "--type {t}: unknown data type (one of {}, STRING)",
                 names.join(", ")
             ))
         })?;
-        (*code, *bits)
+        (ty.code, ty.bits)
     };
     Ok(EntryInfo {
         index,
