@@ -7,6 +7,7 @@
 //! `inspect` found problems, 2 usage or input error (a file that cannot be
 //! read, parsed or written).
 
+use device_catalog::exit::Exit;
 use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -179,7 +180,7 @@ fn run(cli: Cli) -> Result<ExitCode, Failure> {
                     file.display(),
                     report.problems.len()
                 );
-                return Ok(ExitCode::from(1));
+                return Ok(Exit::Refused.into());
             }
         }
         Command::Check { esi, sii } => {
@@ -208,7 +209,7 @@ fn run(cli: Cli) -> Result<ExitCode, Failure> {
             }
             write(None, text.as_bytes())?;
             if !mismatches.is_empty() {
-                return Ok(ExitCode::from(1));
+                return Ok(Exit::Refused.into());
             }
         }
     }
@@ -220,7 +221,7 @@ fn main() -> ExitCode {
         Ok(code) => code,
         Err(Failure(msg)) => {
             eprintln!("esi: {msg}");
-            ExitCode::from(2)
+            Exit::Input.into()
         }
     }
 }

@@ -18,6 +18,7 @@
 use ecat_slave::device::{Application, DeviceDescription, SoftSlave};
 use ecat_slave::host::chain::LineSlave;
 
+pub mod exit;
 pub mod spi_pdi;
 pub mod twins;
 

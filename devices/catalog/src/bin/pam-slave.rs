@@ -11,6 +11,7 @@
 //! ```
 
 use clap::Parser;
+use device_catalog::exit::Exit;
 use ecat_slave::host::raw::{RunnerConfig, run};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -124,7 +125,7 @@ fn main() -> ExitCode {
         Ok(l) => l,
         Err(e) => {
             eprintln!("pam-slave: {e}");
-            return ExitCode::from(2);
+            return Exit::Input.into();
         }
     };
     let slots = u64::try_from(line.slaves.len())
@@ -140,7 +141,7 @@ fn main() -> ExitCode {
             line.slaves.len(),
             cli.image_store_size
         );
-        return ExitCode::from(2);
+        return Exit::Input.into();
     }
     if cli.dry_run {
         println!("{}", line.report.join("\n"));
@@ -163,7 +164,7 @@ fn main() -> ExitCode {
             }
             Err(e) => {
                 eprintln!("pam-slave: error: {e}");
-                ExitCode::from(3)
+                Exit::Comm.into()
             }
         };
     }
@@ -209,8 +210,8 @@ fn main() -> ExitCode {
             eprintln!("pam-slave: error: {e}");
             match e {
                 // The state directory is input the user gave.
-                ecat_slave::host::raw::RunnerError::LostBootState(_) => ExitCode::from(2),
-                _ => ExitCode::from(3),
+                ecat_slave::host::raw::RunnerError::LostBootState(_) => Exit::Input.into(),
+                _ => Exit::Comm.into(),
             }
         }
     }

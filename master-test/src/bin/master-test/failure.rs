@@ -1,16 +1,8 @@
 //! Why a command failed, and the exit status that says so.
 //!
-//! One scheme for every tool of the workspace (`master-test`, `esi`,
-//! `pam-slave`), documented in their `--help` and docs/book/src/commissioning.md:
-//!
-//! | status | meaning |
-//! |---|---|
-//! | 0 | done (also when the reader of the output went away) |
-//! | 1 | the device refused (SDO abort, FoE error, AL status code, EEPROM error) or a check found mismatches |
-//! | 2 | usage or input error: bad argument, file or value; nothing was sent |
-//! | 3 | communication failure: no slave, no answer, interface cannot be opened |
-//! | 130 | stopped by Ctrl-C before the command finished |
+//! The statuses are the workspace's one scheme, [`device_catalog::exit`].
 
+use device_catalog::exit::Exit;
 use master_test::BusError;
 use master_test::eeprom::EepromError;
 use master_test::mailbox::ClientError;
@@ -36,10 +28,10 @@ impl Failure {
     /// The process exit status.
     pub fn exit_code(&self) -> ExitCode {
         ExitCode::from(match self {
-            Failure::Refused(_) | Failure::Mismatch(_) => 1,
-            Failure::Input(_) => 2,
-            Failure::Comm(_) => 3,
-            Failure::Interrupted(_) => 130,
+            Failure::Refused(_) | Failure::Mismatch(_) => Exit::Refused,
+            Failure::Input(_) => Exit::Input,
+            Failure::Comm(_) => Exit::Comm,
+            Failure::Interrupted(_) => Exit::Interrupted,
         })
     }
 

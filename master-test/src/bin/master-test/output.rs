@@ -78,7 +78,7 @@ pub fn install_ctrlc() {
         }
         _ => {
             eprintln!("\ninterrupted");
-            std::process::exit(130);
+            std::process::exit(i32::from(device_catalog::exit::Exit::Interrupted.status()));
         }
     });
 }
