@@ -1,4 +1,4 @@
-//! Application-layer state machine (layer 4, ETG.1000.6 6.4.1; manual 5.9).
+//! Application-layer state machine (ETG.1000.6 6.4.1).
 //!
 //! [`transition`] is a pure function of the current AL status, the value the
 //! master wrote into AL control (0x0120) and the checks the device performs

@@ -1,5 +1,5 @@
 //! FoE server (mailbox protocol layer, ETG.1000.6 §5.8 "File Access over
-//! EtherCAT"): firmware download in BOOT (manual §5.10) and a small
+//! EtherCAT"): firmware download in BOOT (ETG.1000.6 §5.8) and a small
 //! read-only info file.
 //!
 //! [`FoeServer::handle`] takes one parsed request ([`FoeRepr`]) and writes
@@ -76,7 +76,7 @@ use crate::firmware::{
 use crate::wire::foe::{FoeErrorCode, FoeRepr, HEADER_LEN};
 
 /// Firmware-update security of a device: what the factory ships, before
-/// the owner takes over (manual §5.10, the book's "Firmware update"
+/// the owner takes over (the book's "Firmware update"
 /// section).
 ///
 /// # The FoE password
@@ -124,7 +124,8 @@ impl Default for FoeSecurity {
     }
 }
 
-/// The factory FoE password of the catalog devices (manual §5.10):
+/// The factory FoE password of the catalog devices (the PAM's manual §5.10
+/// gives 00000000):
 /// [`FoeSecurity::OPEN`]. A device's own is its description's
 /// [`FoeSecurity::factory_password`] until the owner sets another (see
 /// [`PASSWORD_FILE_NAME`]).

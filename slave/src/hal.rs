@@ -1,4 +1,4 @@
-//! Board interfaces (layer 6) the core offers beside the ESC: non-volatile
+//! Board interfaces the core offers beside the ESC: non-volatile
 //! parameter storage here, the firmware image store with the bootloader
 //! ([`crate::firmware::ImageStore`]). Device hardware (a power stage, I/O
 //! drivers) belongs to the device's own crate.

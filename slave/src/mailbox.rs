@@ -1,4 +1,4 @@
-//! Mailbox layer (layer 3, ETG.1000.6 5.3): framing, counters, dispatch to
+//! Mailbox layer (ETG.1000.6 5.3): framing, counters, dispatch to
 //! the protocol servers, mailbox error replies.
 //!
 //! [`MailboxServer::handle`] takes the bytes the master wrote into the

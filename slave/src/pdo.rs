@@ -1,4 +1,4 @@
-//! PDO assignment, mapping and the process image (layer 4).
+//! PDO assignment, mapping and the process image.
 //!
 //! A [`ProcessImage`] is computed from the assignment object (0x1C12 for
 //! outputs, 0x1C13 for inputs) and the mapping objects it names, as the live

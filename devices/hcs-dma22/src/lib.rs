@@ -1,13 +1,10 @@
-//! # hcs-dma22: the HCS DMA-22(A) amplifier, telegram codec
+//! # hcs-dma22: the HCS DMA-22(A) amplifier node and its telegram
 //!
-//! This crate will hold the HCS DMA-22(A) digital amplifier node as an
-//! EtherCAT *modular device* on the `ecat-slave` core: one node with up to
-//! five (CMD 15) or 32 (CMD 3 / CMD 6) DMA-22(A) modules behind it, each
-//! addressed by its parameter E22.
-//!
-//! **Today it holds the telegram codec only.** There is no object
-//! dictionary, no PDO mapping, no ESI and no device application yet; the
-//! crate does not depend on `ecat-slave`.
+//! The HCS DMA-22(A) digital amplifier node as an EtherCAT *modular
+//! device* (ETG.5001) on the `ecat-slave` core ([`device`]): one node with
+//! 1..=5 DMA-22(A) modules in its slots (module address E22 = slot), each
+//! with the parameter list of the manual's chapter 7, its CMD 15 block as
+//! process data, a behaviour model, and the telegram channel over CoE.
 //!
 //! The codec ([`telegram`]) reads and writes the HCS fieldbus telegram that
 //! the DMA-22(A) node exchanges with its master over EtherNet/IP and

@@ -1,4 +1,4 @@
-//! CANopen over EtherCAT servers (layer 3).
+//! CANopen over EtherCAT servers.
 //!
 //! [`CoeServer`] takes the CoE part of a mailbox request, dispatches on the
 //! CoE service and writes the CoE response. Object access goes through the

@@ -1,4 +1,4 @@
-//! EtherCAT Slave Controller (layer 5).
+//! EtherCAT Slave Controller.
 //!
 //! [`Esc`] is the PDI side of an ESC: what firmware sees (read and write
 //! ESC memory; events appear in the AL event request register). The software

@@ -18,7 +18,8 @@ pub const SM_COUNT: u16 = 0x0005;
 pub const RAM_SIZE: u16 = 0x0006;
 /// Port descriptor (1 byte, 2 bits per port: 0 not implemented, 3 MII).
 pub const PORT_DESCRIPTOR: u16 = 0x0007;
-/// ESC features supported (2 bytes). Bit 2 = distributed clocks (kept clear).
+/// ESC features supported (2 bytes). Bit 2 = distributed clocks (the
+/// software ESC sets it: its DC unit is emulated, see `esc::dc`).
 pub const FEATURES: u16 = 0x0008;
 /// Configured station address (2 bytes, written by the master).
 pub const STATION_ADDRESS: u16 = 0x0010;

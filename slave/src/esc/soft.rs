@@ -404,7 +404,8 @@ impl SoftEsc {
         self.set_u16(reg::DL_STATUS, if ok { dl | 0x0002 } else { dl & !0x0002 });
     }
 
-    /// Watchdog base tick in ns: (0x0400 + 2) x 40 ns (manual 5.11).
+    /// Watchdog base tick in ns: (0x0400 + 2) x 40 ns (ET1100 datasheet,
+    /// ETG.1000.4 6.7).
     pub fn watchdog_base_ns(&self) -> u64 {
         (u64::from(self.mem_u16(reg::WATCHDOG_DIVIDER)) + 2) * 40
     }

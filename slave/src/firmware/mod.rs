@@ -1,6 +1,6 @@
 //! Firmware update: the `.efw` image format, its incremental validator, the
 //! A/B image store and the bootloader decisions (application layer, used by
-//! the FoE server in BOOT; manual §5.10 "Firmware update via FoE").
+//! the FoE server in BOOT, ETG.1000.6 §5.8).
 //!
 //! This module holds no wire formats of the EtherCAT protocol and never
 //! touches the ESC; flash access goes through the [`ImageStore`] HAL trait,
@@ -8,7 +8,7 @@
 //! or `file_store::FileStore` with the `std` feature) and in tests. Nothing here
 //! allocates or panics on input.
 //!
-//! # Update flow (manual §5.10)
+//! # Update flow (as the PAM manual §5.10 describes it to its users)
 //!
 //! 1. The master switches the slave to BOOT and downloads the `.efw` file by
 //!    FoE (password `00000000`). [`begin_download`] picks the inactive slot

@@ -1,4 +1,4 @@
-//! A device's object dictionary as one static description (layer 2).
+//! A device's object dictionary as one static description.
 //!
 //! A [`Dictionary`] is a device's objects (strictly ascending by index,
 //! entries strictly ascending by subindex), its enumeration data types and

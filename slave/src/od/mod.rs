@@ -1,4 +1,4 @@
-//! Object dictionary (layer 2): the engine, not the objects.
+//! Object dictionary: the engine, not the objects.
 //!
 //! A device describes its objects once, as a [`Dictionary`] of [`Object`]s
 //! built with the `const` constructors of [`build`] and checked by

@@ -1,4 +1,4 @@
-//! Live values of the object dictionary (layer 2).
+//! Live values of the object dictionary.
 //!
 //! One `i64` slot per entry of the device's [`Dictionary`], indexed by the
 //! entry's flat position, plus a few string slots. SDO access goes through

@@ -1,4 +1,4 @@
-//! Types of the static object-dictionary description (layer 2, `od`).
+//! Types of the static object-dictionary description.
 //!
 //! These types describe objects; they hold no live values and know nothing
 //! of EtherCAT frames. A device builds its one description from them
