@@ -18,7 +18,7 @@
 //! (part A); the bracketed keys in the comments refer to that file.
 
 use crate::check_range;
-use ecat_slave::esc::{Esc, EscError};
+use ecat_pdi::{Esc, EscError};
 use embedded_hal::spi::{Operation, SpiDevice};
 
 /// CMD 000b: no operation [ET1200-III Table 39; IPX-III Table 45].
@@ -240,7 +240,9 @@ impl<D: SpiDevice> Et1100Spi<D> {
     /// Runs one SEL cycle.
     fn run(&mut self, ops: &mut [Operation<'_, u8>]) -> Result<(), EscError> {
         self.transactions = self.transactions.wrapping_add(1);
-        self.spi.transaction(ops).map_err(|_| EscError::Interface)
+        self.spi
+            .transaction(ops)
+            .map_err(|e| EscError::Bus(crate::bus_kind(&e)))
     }
 }
 
@@ -679,7 +681,7 @@ mod tests {
     }
 
     #[test]
-    fn bus_error_is_interface_error_and_keeps_latched_event() {
+    fn a_bus_error_keeps_its_kind_and_the_latched_event() {
         let mut d = drv(
             plain(),
             vec![
@@ -690,9 +692,10 @@ mod tests {
             ],
         );
         assert_eq!(d.al_event(), Ok(0x0005));
-        assert_eq!(d.read_u16(0x0130), Err(EscError::Interface));
-        assert_eq!(d.write_u16(0x0120, 2), Err(EscError::Interface));
-        assert_eq!(d.al_event(), Err(EscError::Interface));
+        let bus = Err(EscError::Bus(ecat_pdi::BusErrorKind::Other));
+        assert_eq!(d.read_u16(0x0130), bus);
+        assert_eq!(d.write_u16(0x0120, 2).map(|_| 0), bus);
+        assert_eq!(d.al_event().map(|_| 0), bus);
         assert_eq!(d.latched_al_event(), 0x0005);
         assert_eq!(d.transactions(), 4);
     }

@@ -30,7 +30,7 @@
 //! LAN9252 facts there rest on vendor and SOES code, not on the datasheet.
 
 use crate::check_range;
-use ecat_slave::esc::{Esc, EscError};
+use ecat_pdi::{Esc, EscError};
 use embedded_hal::spi::{Operation, SpiDevice};
 
 /// Instruction 0x0B: fast read, one dummy byte in SPI mode [MCHP lan9252
@@ -134,9 +134,9 @@ pub const FIFO_POLLS: u32 = 1000;
 /// Errors of the LAN9252 driver.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum Lan9252Error {
-    /// The SPI device reported an error.
-    #[error("SPI bus error")]
-    Spi,
+    /// The SPI device reported an error of this kind.
+    #[error("SPI bus error: {0}")]
+    Spi(ecat_pdi::BusErrorKind),
     /// BYTE_TEST never read 0x87654321.
     #[error("LAN9252 not responding: BYTE_TEST reads {last:#010x}")]
     NotResponding {
@@ -164,9 +164,14 @@ pub enum Lan9252Error {
 }
 
 impl From<Lan9252Error> for EscError {
-    /// Every driver error is an interface failure.
-    fn from(_: Lan9252Error) -> Self {
-        EscError::Interface
+    /// An SPI error keeps its kind ([`EscError::Bus`]); the chip's own
+    /// failures (timeouts, a chip that does not answer) are interface
+    /// failures.
+    fn from(e: Lan9252Error) -> Self {
+        match e {
+            Lan9252Error::Spi(kind) => EscError::Bus(kind),
+            _ => EscError::Interface,
+        }
     }
 }
 
@@ -337,7 +342,9 @@ impl<D: SpiDevice> Lan9252Spi<D> {
     /// Runs one SEL cycle.
     fn run(&mut self, ops: &mut [Operation<'_, u8>]) -> Result<(), Lan9252Error> {
         self.transactions = self.transactions.wrapping_add(1);
-        self.spi.transaction(ops).map_err(|_| Lan9252Error::Spi)
+        self.spi
+            .transaction(ops)
+            .map_err(|e| Lan9252Error::Spi(crate::bus_kind(&e)))
     }
 
     /// Reads HW_CFG until READY is set [SOES raspberrypi-lan9252
@@ -951,10 +958,11 @@ mod tests {
     }
 
     #[test]
-    fn bus_error_is_spi_error_and_interface_error() {
+    fn a_bus_error_keeps_its_kind_up_to_the_esc_error() {
         let mut d = drv(vec![bus_error(), bus_error()]);
-        assert_eq!(d.read_register(0x0064), Err(Lan9252Error::Spi));
-        assert_eq!(d.al_event(), Err(EscError::Interface));
+        let other = ecat_pdi::BusErrorKind::Other;
+        assert_eq!(d.read_register(0x0064), Err(Lan9252Error::Spi(other)));
+        assert_eq!(d.al_event(), Err(EscError::Bus(other)));
         assert_eq!(d.transactions(), 2);
     }
 

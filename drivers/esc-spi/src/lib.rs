@@ -1,7 +1,7 @@
 //! # ecat-esc-spi: SPI PDI drivers for real EtherCAT slave controllers
 //!
 //! Drivers that implement the `ecat-slave` core's PDI trait
-//! ([`ecat_slave::esc::Esc`]) on an `embedded-hal` 1.0
+//! ([`ecat_pdi::Esc`]) on an `embedded-hal` 1.0
 //! [`SpiDevice`](embedded_hal::spi::SpiDevice), so a firmware built on the
 //! core runs on a microcontroller next to a real ESC chip:
 //!
@@ -30,7 +30,20 @@
 pub mod et1100;
 pub mod lan9252;
 
-use ecat_slave::esc::EscError;
+use ecat_pdi::{BusErrorKind, EscError};
+
+/// The kind of an SPI error, kept in [`EscError::Bus`] so the firmware
+/// (and its diagnosis) knows what failed on the bus.
+fn bus_kind(e: &impl embedded_hal::spi::Error) -> BusErrorKind {
+    use embedded_hal::spi::ErrorKind;
+    match e.kind() {
+        ErrorKind::Overrun => BusErrorKind::Overrun,
+        ErrorKind::ModeFault => BusErrorKind::ModeFault,
+        ErrorKind::FrameFormat => BusErrorKind::FrameFormat,
+        ErrorKind::ChipSelectFault => BusErrorKind::ChipSelectFault,
+        _ => BusErrorKind::Other,
+    }
+}
 
 /// Size of the ESC address space (16-bit addresses).
 const MEMORY_SIZE: usize = 0x1_0000;

@@ -126,17 +126,21 @@ impl Emergencies {
     }
 
     /// Queues a PDI failure (0x5000 device hardware; data byte 0 says
-    /// which: 1 access out of range, 2 SyncManager busy, 3 interface).
+    /// which: 1 access out of range, 2 SyncManager busy, 3 interface; for
+    /// a bus error byte 1 gives its kind, [`BusErrorKind::code`]).
+    ///
+    /// [`BusErrorKind::code`]: crate::esc::BusErrorKind::code
     pub fn pdi_failure(&mut self, e: EscError) {
-        let kind = match e {
-            EscError::OutOfRange { .. } => 1,
-            EscError::SmBusy { .. } => 2,
-            EscError::Interface => 3,
+        let (kind, detail) = match e {
+            EscError::OutOfRange { .. } => (1, 0),
+            EscError::SmBusy { .. } => (2, 0),
+            EscError::Interface => (3, 0),
+            EscError::Bus(b) => (3, b.code()),
         };
         self.push(EmergencyRepr {
             error_code: 0x5000,
             error_register: self.register() | register::GENERIC,
-            data: [kind, 0, 0, 0, 0],
+            data: [kind, detail, 0, 0, 0],
         });
     }
 
@@ -263,5 +267,14 @@ mod tests {
         assert_eq!(out[4] & 0x11, 0x11);
         q.pop_into(&mut out).unwrap();
         assert_eq!((code_of(&out), out[5]), (0x5000, 3));
+    }
+
+    #[test]
+    fn a_bus_error_names_its_kind_in_the_second_data_byte() {
+        let mut q = Emergencies::default();
+        q.pdi_failure(EscError::Bus(crate::esc::BusErrorKind::ChipSelectFault));
+        let mut out = [0u8; 16];
+        q.pop_into(&mut out).unwrap();
+        assert_eq!((code_of(&out), out[5], out[6]), (0x5000, 3, 4));
     }
 }
