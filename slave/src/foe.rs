@@ -388,19 +388,8 @@ impl FoeServer {
                 _ => self.fail(out, FoeErrorCode::Illegal, "no download in progress"),
             };
         };
-        if packet != *next_packet {
-            if packet.wrapping_add(1) == *next_packet && packet != 0 {
-                // A repeat of the packet just acknowledged.
-                return emit(out, FoeRepr::Ack { packet });
-            }
-            return self.fail(out, FoeErrorCode::PacketNumberWrong, "packet number wrong");
-        }
-        if !ctx.in_boot {
-            return self.fail(
-                out,
-                FoeErrorCode::BootstrapOnly,
-                "firmware download only in BOOT",
-            );
+        if let Err(r) = gate(packet, *next_packet, ctx.in_boot) {
+            return self.refuse(r, packet, out);
         }
         if ctx.busy {
             let (done, entire) = progress(validator);
@@ -433,6 +422,22 @@ impl FoeServer {
         emit(out, FoeRepr::Ack { packet })
     }
 
+    /// The answer to a DATA packet [`gate`] did not let through.
+    fn refuse(&mut self, r: Refusal, packet: u32, out: &mut [u8]) -> Option<usize> {
+        match r {
+            // A repeat of the packet just acknowledged.
+            Refusal::Repeat => emit(out, FoeRepr::Ack { packet }),
+            Refusal::WrongNumber => {
+                self.fail(out, FoeErrorCode::PacketNumberWrong, "packet number wrong")
+            }
+            Refusal::NotInBoot => self.fail(
+                out,
+                FoeErrorCode::BootstrapOnly,
+                "firmware download only in BOOT",
+            ),
+        }
+    }
+
     /// A DATA packet of the password file; the last one stores the new
     /// password.
     fn password_data(
@@ -450,18 +455,8 @@ impl FoeServer {
         else {
             return None;
         };
-        if packet != *next_packet {
-            if packet.wrapping_add(1) == *next_packet && packet != 0 {
-                return emit(out, FoeRepr::Ack { packet });
-            }
-            return self.fail(out, FoeErrorCode::PacketNumberWrong, "packet number wrong");
-        }
-        if !ctx.in_boot {
-            return self.fail(
-                out,
-                FoeErrorCode::BootstrapOnly,
-                "firmware download only in BOOT",
-            );
+        if let Err(r) = gate(packet, *next_packet, ctx.in_boot) {
+            return self.refuse(r, packet, out);
         }
         if ctx.busy {
             return emit(out, FoeRepr::Busy { done: 0, entire: 0 });
@@ -652,6 +647,30 @@ fn info_file(ctx: &FoeContext<'_>) -> heapless::Vec<u8, INFO_FILE_CAPACITY> {
         id.vendor_id, id.product_code, id.revision, ctx.version
     );
     text.into_bytes()
+}
+
+/// Why a DATA packet of a download is not taken.
+enum Refusal {
+    /// The packet just acknowledged, again: acknowledge it again.
+    Repeat,
+    /// Any other packet number than the next one.
+    WrongNumber,
+    /// Downloads go on only in BOOT.
+    NotInBoot,
+}
+
+/// Whether DATA packet `packet` is the `next` one of a download in BOOT.
+fn gate(packet: u32, next: u32, in_boot: bool) -> Result<(), Refusal> {
+    if packet != next {
+        if packet.wrapping_add(1) == next && packet != 0 {
+            return Err(Refusal::Repeat);
+        }
+        return Err(Refusal::WrongNumber);
+    }
+    if !in_boot {
+        return Err(Refusal::NotInBoot);
+    }
+    Ok(())
 }
 
 #[cfg(test)]
