@@ -124,8 +124,8 @@ impl Default for FoeSecurity {
     }
 }
 
-/// The factory FoE password of the catalog devices (the PAM's manual §5.10
-/// gives 00000000):
+/// The factory FoE password of the catalog devices (00000000, the value
+/// their manuals give):
 /// [`FoeSecurity::OPEN`]. A device's own is its description's
 /// [`FoeSecurity::factory_password`] until the owner sets another (see
 /// [`PASSWORD_FILE_NAME`]).

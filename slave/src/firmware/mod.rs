@@ -8,7 +8,7 @@
 //! or `file_store::FileStore` with the `std` feature) and in tests. Nothing here
 //! allocates or panics on input.
 //!
-//! # Update flow (as the PAM manual §5.10 describes it to its users)
+//! # Update flow (as a device manual describes it to its users)
 //!
 //! 1. The master switches the slave to BOOT and downloads the `.efw` file by
 //!    FoE (password `00000000`). [`begin_download`] picks the inactive slot
