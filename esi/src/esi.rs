@@ -12,10 +12,10 @@
 use std::collections::BTreeMap;
 use std::io;
 
+use ecat_sim::esc::SoftEsc;
 use ecat_slave::device::DeviceDescription;
 use ecat_slave::esc::Esc;
 use ecat_slave::esc::registers as reg;
-use ecat_slave::esc::soft::SoftEsc;
 use ecat_slave::od::Dictionary;
 use ecat_slave::od::modules::ModularLayout;
 use ecat_slave::od::types::{

@@ -7,7 +7,7 @@
 //!
 //! - `line_frames`, `mailbox`: frames of real ethercrab sessions on the
 //!   virtual bus (master-test's `VirtualBus`, captured to pcap and read
-//!   back with `ecat_slave::host::pcap::read_all`): bring-up to OP of 1
+//!   back with `ecat_sim::pcap::read_all`): bring-up to OP of 1
 //!   and 3 PAMs, SDO uploads/downloads (expedited, segmented, complete
 //!   access), SDO Information, FoE read of `info.txt`, BOOT and an FoE
 //!   firmware download. The master's frames become `line_frames` inputs;
@@ -26,7 +26,7 @@ use std::time::Duration;
 
 use ecat_fuzz::records::push;
 use ecat_slave::firmware::{BootState, EFW_HEADER_LEN, EfwHeaderRepr, FirmwareVersion, pack};
-use ecat_slave::host::pcap::read_all;
+use ecat_sim::pcap::read_all;
 use ecat_slave::wire::ecat::{Command, Datagram, EcatFrame};
 use ecat_slave::wire::ethernet::EthernetFrame;
 use master_test::VirtualBus;

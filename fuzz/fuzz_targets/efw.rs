@@ -25,8 +25,8 @@ use ecat_slave::firmware::{
     EfwError, EfwHeader, EfwHeaderRepr, EfwValidator, STATE_RECORD_LEN, ValidatedImage, crc32,
     signed_message,
 };
-use ecat_slave::host::chain::{IMAGE_SLOT_CAPACITY, provision_factory};
-use ecat_slave::host::image_store::VecStore;
+use ecat_sim::chain::{IMAGE_SLOT_CAPACITY, provision_factory};
+use ecat_sim::image_store::VecStore;
 use libfuzzer_sys::fuzz_target;
 
 const PAM: DeviceIdentity = DeviceIdentity {

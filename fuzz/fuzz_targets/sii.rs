@@ -17,7 +17,7 @@
 use std::sync::OnceLock;
 
 use ecat_esi::{check, ihex, inspect};
-use ecat_slave::esc::soft::SoftEsc;
+use ecat_sim::esc::SoftEsc;
 use ecat_slave::sii::{
     self, FmmuUsage, PdoDirection, SiiConfig, SiiGeneral, SiiPdo, SiiPdoEntry, SiiReader,
     SiiSyncManager,

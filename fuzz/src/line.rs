@@ -10,8 +10,8 @@
 use std::ops::Range;
 use std::sync::OnceLock;
 
-use ecat_slave::esc::soft::FrameOutcome;
-use ecat_slave::host::chain::Chain;
+use ecat_sim::esc::FrameOutcome;
+use ecat_sim::chain::Chain;
 use ecat_slave::sii::{PdoDirection, SiiReader};
 use ecat_slave::wire::builder::FrameBuilder;
 use ecat_slave::wire::ecat::Command;
@@ -292,8 +292,8 @@ impl Line {
     /// interface (8-byte reads, read command in 0x0502, data in 0x0508).
     pub fn read_sii(&mut self, pos: usize) -> Vec<u8> {
         let adp = position_adp(pos);
-        let mut image = Vec::with_capacity(ecat_slave::esc::soft::SII_SIZE);
-        for word in (0..ecat_slave::esc::soft::SII_SIZE / 2).step_by(4) {
+        let mut image = Vec::with_capacity(ecat_sim::esc::SII_SIZE);
+        for word in (0..ecat_sim::esc::SII_SIZE / 2).step_by(4) {
             let [lo, hi] = (word as u16).to_le_bytes();
             let (f, r) = self.send(&[
                 (

@@ -65,7 +65,7 @@ impl Bus {
             return Err(BusError::LineTooLong(line.slaves.len(), MAX_SUBDEVICES));
         }
         Ok(Bus::Virtual(VirtualBus::with_chain(
-            ecat_slave::host::chain::Chain::with_slaves(line.slaves),
+            ecat_sim::chain::Chain::with_slaves(line.slaves),
             Clock::frames_paced(),
             pcap,
         )?))

@@ -173,9 +173,7 @@ impl VirtualBus {
         clock: Clock,
         pcap: Option<&std::path::Path>,
     ) -> Result<Self, BusError> {
-        let pcap = pcap
-            .map(ecat_slave::host::pcap::PcapWriter::create)
-            .transpose()?;
+        let pcap = pcap.map(ecat_sim::pcap::PcapWriter::create).transpose()?;
         Self::on_shared(Arc::new(Mutex::new(chain)), clock, pcap, None, 0)
     }
 
@@ -215,7 +213,7 @@ impl VirtualBus {
     fn on_shared(
         chain: SharedChain,
         clock: Clock,
-        pcap: Option<ecat_slave::host::pcap::PcapWriter<std::io::BufWriter<std::fs::File>>>,
+        pcap: Option<ecat_sim::pcap::PcapWriter<std::io::BufWriter<std::fs::File>>>,
         faults: Option<SharedFaults>,
         dc_static_sync_iterations: u32,
     ) -> Result<Self, BusError> {

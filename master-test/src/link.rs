@@ -9,11 +9,11 @@
 //! With a [`FaultInjector`] the link is a bad wire: frames are dropped
 //! (before or after the slaves), corrupted (the first slave counts an
 //! invalid frame, nobody acts on it), duplicated, delayed, reordered, or
-//! lost while the link is down (see [`ecat_slave::host::faults`]).
+//! lost while the link is down (see [`ecat_sim::faults`]).
 
-pub use ecat_slave::host::chain::Chain;
-pub use ecat_slave::host::faults::{Fate, FaultConfig, FaultInjector, FaultStats};
-use ecat_slave::host::pcap::PcapWriter;
+pub use ecat_sim::chain::Chain;
+pub use ecat_sim::faults::{Fate, FaultConfig, FaultInjector, FaultStats};
+use ecat_sim::pcap::PcapWriter;
 use ethercrab::{PduRx, PduTx};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -399,7 +399,7 @@ impl RawLink {
                     }
                     if let Ok(frame) = net_rx.next() {
                         // EtherCAT frames a slave processed.
-                        if ecat_slave::host::raw::is_processed(frame) {
+                        if ecat_sim::raw::is_processed(frame) {
                             let _ = rx.receive_frame(frame);
                         }
                     }

@@ -1,8 +1,10 @@
 //! # ecat-slave: an EtherCAT SubDevice (slave) stack core
 //!
-//! A `#![no_std]`, heap-free EtherCAT slave core that names no device: a
-//! software EtherCAT Slave Controller ([`esc::soft`]) that processes real
-//! EtherCAT frames, the PDI trait for hardware ESCs ([`esc::Esc`]), the AL
+//! A `#![no_std]`, heap-free EtherCAT slave core that names no device:
+//! what a firmware links. The PDI trait through which it reaches an
+//! EtherCAT Slave Controller ([`esc::Esc`]: a chip over SPI, or the
+//! software ESC of the `ecat-sim` crate, which also holds the lines of
+//! software slaves and the raw-socket runner), the AL
 //! state machine ([`al`]), SyncManager and PDI watchdogs, the mailbox
 //! ([`mailbox`]) with CoE ([`coe`]: SDO, complete access, SDO Information,
 //! Emergency) and FoE firmware update ([`foe`], [`firmware`]), the PDO
@@ -16,10 +18,10 @@
 //! layers; a module uses only modules of layers below its own (the test
 //! `tests/it/layers.rs` reads this list and every `crate::` path):
 //!
-//! Layers: `host` → `device` → `mailbox` → `foe`, `coe` → `params`, `pdo` →
+//! Layers: `device` → `mailbox` → `foe`, `coe` → `params`, `pdo` →
 //! `od` → `led`, `firmware` → `al` → `esc` → `sii` → `hal` → `wire`,
 //! `limits`
-#![cfg_attr(not(any(test, feature = "std")), no_std)]
+#![cfg_attr(not(any(test, feature = "std", feature = "testing")), no_std)]
 #![forbid(unsafe_code)]
 #![cfg_attr(
     not(test),
@@ -38,8 +40,6 @@ pub mod esc;
 pub mod firmware;
 pub mod foe;
 pub mod hal;
-#[cfg(feature = "std")]
-pub mod host;
 pub mod led;
 pub mod limits;
 pub mod mailbox;
@@ -47,6 +47,7 @@ pub mod od;
 pub mod params;
 pub mod pdo;
 pub mod sii;
-#[cfg(test)]
-pub(crate) mod testing;
+#[cfg(any(test, feature = "testing"))]
+#[doc(hidden)]
+pub mod testing;
 pub mod wire;

@@ -1,13 +1,14 @@
-//! A small test device for the core's own unit tests: every dictionary
-//! shape the core handles (VAR, RECORD with a padding gap, ARRAY, strings,
-//! an enumeration, ranges, two PDO sets, the assignment objects) and an
-//! application with parameter storage. It names no real device.
+//! A small test device for the unit tests of the core and of the
+//! simulator (feature `testing`): every dictionary shape the core handles
+//! (VAR, RECORD with a padding gap, ARRAY, strings, an enumeration, ranges,
+//! two PDO sets, the assignment objects) and an application with parameter
+//! storage. It names no real device.
 
 #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
 
 use crate::device::{
     Application, CoeServices, DeviceDescription, DeviceNames, EscConfig, FoeSecurity, Identity,
-    MailboxConfig, PdoSet, ProcessData, SoftSlave,
+    MailboxConfig, PdoSet, ProcessData,
 };
 use crate::hal::{MemNv, NvStorage};
 use crate::od::build::{
@@ -207,15 +208,4 @@ impl Application for TestApp {
 /// A store of the test device at its defaults.
 pub fn store() -> crate::od::ObjectStore<[i64; ENTRIES]> {
     crate::od::ObjectStore::new(&DICT)
-}
-
-/// A test-device slave on the software ESC.
-pub fn slave() -> SoftSlave<TestApp> {
-    SoftSlave::new(TestApp::default())
-}
-
-/// A line of `n` test devices.
-#[cfg(feature = "std")]
-pub fn line(n: usize) -> crate::host::chain::Chain {
-    crate::host::chain::Chain::of(n, TestApp::default)
 }

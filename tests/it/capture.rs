@@ -1,7 +1,7 @@
 //! pcap capture of the virtual link: every frame in both directions, in a
 //! file Wireshark's EtherCAT dissector reads.
 
-use ecat_slave::host::pcap::read_all;
+use ecat_sim::pcap::read_all;
 use master_test::VirtualBus;
 use master_test::link::Clock;
 use std::process::Command;

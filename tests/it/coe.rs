@@ -326,7 +326,8 @@ fn an_injected_fault_produces_an_emergency_the_master_decodes() {
 
 #[test]
 fn a_48_byte_mailbox_is_advertised_in_the_sii_and_long_uploads_are_segmented() {
-    use ecat_slave::device::{MemoryLayout, SoftSlave};
+    use ecat_sim::SoftSlave;
+    use ecat_slave::device::MemoryLayout;
     use master_test::link::{Chain, Clock};
     let pam = pam_199_p_etc::DEVICE.layout();
     let layout = pam.with_mailbox_size(48).expect("valid size");

@@ -184,7 +184,7 @@ pub fn wait_for_line(host_if: &str, slaves: Option<u16>) {
         let sent = std::time::Instant::now();
         while sent.elapsed() < Duration::from_millis(50) {
             if let Ok(f) = rx.next()
-                && ecat_slave::host::raw::is_processed(f)
+                && ecat_sim::raw::is_processed(f)
             {
                 let wkc = f.get(28..30).map(|b| u16::from_le_bytes([b[0], b[1]]));
                 if slaves.is_none() || wkc == slaves {

@@ -9,13 +9,13 @@
 //! would write it), or by a wrong SII written over the EEPROM interface.
 
 use crate::common::{binary, runner_binary, setup, skip};
+use ecat_sim::chain::{Chain, LineSlave};
+use ecat_sim::esc::{FrameOutcome, SoftEsc};
 use ecat_slave::al::AlStatus;
 use ecat_slave::device::DeviceDescription;
 use ecat_slave::esc::Esc;
-use ecat_slave::esc::soft::{FrameOutcome, SoftEsc};
 use ecat_slave::firmware::ImageStore;
 use ecat_slave::hal::NvStorage;
-use ecat_slave::host::chain::{Chain, LineSlave};
 use ecat_slave::led::LedPattern;
 use ecat_slave::od::Od;
 use master_test::VirtualBus;

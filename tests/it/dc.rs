@@ -5,8 +5,8 @@
 //! is what a scope on the slaves' SYNC outputs would show: every slave's
 //! system time at the same instant.
 
+use ecat_sim::chain::DEFAULT_HOP_NS;
 use ecat_slave::esc::registers as reg;
-use ecat_slave::host::chain::DEFAULT_HOP_NS;
 use master_test::VirtualBus;
 use master_test::link::{Chain, Clock, lock};
 use std::time::Duration;
@@ -206,7 +206,7 @@ fn line_spec(spec: &str) -> Chain {
 fn firmware(
     chain: &Chain,
     i: usize,
-) -> &ecat_slave::device::Slave<ecat_slave::esc::soft::SoftEsc, io8_example::Io8> {
+) -> &ecat_slave::device::Slave<ecat_sim::esc::SoftEsc, io8_example::Io8> {
     chain.slave::<io8_example::Io8>(i).expect("an IO8").slave()
 }
 

@@ -5,11 +5,11 @@
 //! master session.
 
 use crate::common::{request, settle, status};
+use ecat_sim::chain::{IMAGE_SLOT_CAPACITY, provision_factory};
+use ecat_sim::esc::PdiFault;
+use ecat_sim::image_store::VecStore;
 use ecat_slave::esc::EscError;
-use ecat_slave::esc::soft::PdiFault;
 use ecat_slave::firmware::{BootState, ImageStore, Slot, StoreError};
-use ecat_slave::host::chain::{IMAGE_SLOT_CAPACITY, provision_factory};
-use ecat_slave::host::image_store::VecStore;
 use ecat_slave::wire::coe::{CoeHeader, CoeService, Emergency, EmergencyRepr};
 use ecat_slave::wire::mailbox::MailboxType;
 use master_test::VirtualBus;
@@ -209,7 +209,9 @@ fn a_store_that_cannot_commit_the_image_reports_0x0007_at_boot_to_init() {
             fail: fail.clone(),
         };
         let chain = Chain::with_stores(
-            vec![Box::new(pam_199_p_etc::soft_slave())],
+            vec![Box::new(ecat_sim::SoftSlave::new(
+                pam_199_p_etc::Pam::default(),
+            ))],
             vec![Box::new(store)],
         );
         let bus = VirtualBus::with_chain(chain, Clock::frames(), None).expect("bus");

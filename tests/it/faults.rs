@@ -3,8 +3,8 @@
 //! cable; and transfers interrupted at every single frame.
 
 use crate::common::status;
+use ecat_sim::SoftSlave;
 use ecat_slave::al::{AlState, AlStatusCode};
-use ecat_slave::device::SoftSlave;
 use master_test::link::{Chain, Clock, Fate, FaultConfig, lock, lock_faults};
 use master_test::mailbox::{MailboxClient, MailboxGeometry};
 use master_test::{VirtualBus, pam_line};

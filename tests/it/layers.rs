@@ -35,6 +35,13 @@ const SCOPES: &[Scope] = &[
         test_only: &["testing"],
     },
     Scope {
+        dir: "sim/src",
+        doc: "lib.rs",
+        top_level: true,
+        path: "",
+        test_only: &["testing"],
+    },
+    Scope {
         dir: "slave/src/od",
         doc: "mod.rs",
         top_level: false,

@@ -28,7 +28,7 @@
 //! skipped with a message otherwise (a failure under `CI=true`).
 
 use crate::common::{binary, runner_binary, setup, skip};
-use ecat_slave::host::raw::persistent_chain;
+use ecat_sim::raw::persistent_chain;
 use master_test::VirtualBus;
 use master_test::link::Clock;
 use rand::Rng;

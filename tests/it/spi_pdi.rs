@@ -9,8 +9,8 @@
 
 use crate::common::{abort_code, status};
 use device_catalog::{Et1100Pdi, Lan9252Pdi};
-use ecat_slave::device::SoftSlave;
-use ecat_slave::host::chain::LineSlave;
+use ecat_sim::SoftSlave;
+use ecat_sim::chain::LineSlave;
 use io8_example::Io8;
 use master_test::VirtualBus;
 use master_test::foe::{self, enter_boot, request_state};

@@ -10,7 +10,7 @@ use std::time::Duration;
 
 use device_catalog::twins;
 use ecat_esi::inspect::{Inspection, inspect};
-use ecat_slave::host::chain::Chain;
+use ecat_sim::chain::Chain;
 use ecat_slave::sii::PdoDirection;
 use ecat_twin::{EscTwin, EsiFile, InputRule};
 use master_test::VirtualBus;
@@ -485,7 +485,7 @@ fn pam_slave_refuses_a_broken_esi_before_serving_with_exit_2() {
 /// object list, every object's description and every entry's with its
 /// unit, default, minimum and maximum.
 fn sdo_information(
-    slaves: Vec<Box<dyn ecat_slave::host::chain::LineSlave>>,
+    slaves: Vec<Box<dyn ecat_sim::chain::LineSlave>>,
     layout: ecat_slave::device::MemoryLayout,
 ) -> Vec<String> {
     use master_test::mailbox::{MailboxClient, MailboxGeometry};

@@ -20,9 +20,10 @@
 //!
 //! [`Slave`]: ecat_slave::device::Slave
 
+use ecat_sim::SoftSlave;
 use ecat_slave::device::{
     Application, CoeServices, DeviceDescription, EscConfig, MailboxConfig, MemoryLayout, PdoSet,
-    ProcessData, SoftSlave, Tick,
+    ProcessData, Tick,
 };
 use ecat_slave::od::build::{assign, assign_count, constant, input, map, output, sub0, var};
 use ecat_slave::od::{DataType, DefaultValue, Entry, Object, ObjectCode, PdoMapping};

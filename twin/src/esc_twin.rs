@@ -11,15 +11,15 @@
 
 use std::any::Any;
 
+use ecat_sim::chain::LineSlave;
+use ecat_sim::esc::{FrameOutcome, SoftEsc};
 use ecat_slave::al::{AlState, AlStatus, AlStatusCode};
 use ecat_slave::device::{
     CoeServices, DeviceDescription, EscConfig, FoeSecurity, MailboxConfig, ProcessData,
 };
-use ecat_slave::esc::soft::{FrameOutcome, SoftEsc};
 use ecat_slave::esc::{Esc, EscError};
 use ecat_slave::firmware::ImageStore;
 use ecat_slave::hal::NvStorage;
-use ecat_slave::host::chain::LineSlave;
 use ecat_slave::led::LedPattern;
 use ecat_slave::od::store::{ObjectStore, Od};
 use ecat_slave::od::{Dictionary, ValueStorage};

@@ -40,7 +40,7 @@ pub use esi::{EsiDevice, EsiError, EsiFile};
 
 use std::path::Path;
 
-use ecat_slave::host::chain::LineSlave;
+use ecat_sim::chain::LineSlave;
 
 /// `s` as `'static` text: a twin's description lives as long as its line,
 /// which a process builds once, so it is leaked on purpose (once per

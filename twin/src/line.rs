@@ -9,7 +9,7 @@
 
 use std::path::{Path, PathBuf};
 
-use ecat_slave::host::chain::LineSlave;
+use ecat_sim::chain::LineSlave;
 
 use crate::eni::EniSlave;
 use crate::esi::{EsiDevice, EsiFile};

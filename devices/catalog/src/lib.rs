@@ -15,8 +15,9 @@
 //! Adding a device: write its crate (see `examples/io8/WRITE-YOUR-OWN-DEVICE.md`),
 //! add a [`DeviceEntry`] to [`DEVICES`].
 
-use ecat_slave::device::{Application, DeviceDescription, SoftSlave};
-use ecat_slave::host::chain::LineSlave;
+use ecat_sim::SoftSlave;
+use ecat_sim::chain::LineSlave;
+use ecat_slave::device::{Application, DeviceDescription};
 
 pub mod exit;
 pub mod spi_pdi;

@@ -13,8 +13,8 @@ use ecat_esc_spi::lan9252::Lan9252Spi;
 use ecat_esc_spi_emu::Counters;
 use ecat_esc_spi_emu::et1100::Et1100Emu;
 use ecat_esc_spi_emu::lan9252::Lan9252Emu;
-use ecat_slave::device::{SoftPdi, SpiStats};
-use ecat_slave::esc::soft::SoftEsc;
+use ecat_sim::esc::SoftEsc;
+use ecat_sim::{SoftPdi, SpiStats};
 use ecat_slave::esc::{Esc, EscError};
 
 /// The line's view of what an emulated chip counted.

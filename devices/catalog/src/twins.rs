@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use ecat_slave::host::chain::LineSlave;
+use ecat_sim::chain::LineSlave;
 use ecat_twin::eni::{self, EniSlave};
 use ecat_twin::line::{self, BuiltLine, EsiLibrary};
 use ecat_twin::{InputRules, TwinError};

@@ -19,8 +19,8 @@
 #![allow(missing_docs)]
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use ecat_slave::esc::soft::SoftEsc;
-use ecat_slave::host::chain::Chain;
+use ecat_sim::chain::Chain;
+use ecat_sim::esc::SoftEsc;
 use ecat_slave::wire::builder::FrameBuilder;
 use ecat_slave::wire::ecat::Command;
 use std::hint::black_box;

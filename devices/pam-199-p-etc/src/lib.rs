@@ -7,7 +7,7 @@
 //! emergencies). `#![no_std]` without its `std` feature.
 //!
 //! ```
-//! use ecat_slave::device::SoftSlave;
+//! use ecat_sim::SoftSlave;
 //! use pam_199_p_etc::Pam;
 //! let mut slave = SoftSlave::new(Pam::default());
 //! slave.poll(0).unwrap();
@@ -43,12 +43,4 @@ pub type Store = ecat_slave::od::ObjectStore<[i64; od::ENTRY_COUNT]>;
 /// A store of the PAM's dictionary at its defaults.
 pub fn store() -> Store {
     Store::new(&od::DICT)
-}
-
-/// The PAM on the software ESC, as simulated lines hold it.
-pub type SoftPam = ecat_slave::device::SoftSlave<Pam>;
-
-/// A PAM on the software ESC in its power-on state.
-pub fn soft_slave() -> SoftPam {
-    ecat_slave::device::SoftSlave::new(Pam::default())
 }

@@ -23,8 +23,8 @@
 //! per access, as on silicon.
 
 use crate::Counters;
+use ecat_sim::esc::{MEM_SIZE, SoftEsc};
 use ecat_slave::esc::Esc;
-use ecat_slave::esc::soft::{MEM_SIZE, SoftEsc};
 use embedded_hal::spi::{self, ErrorKind, Operation, SpiDevice};
 
 /// The AL event request register the address phase echoes

@@ -22,8 +22,8 @@
 
 use crate::Counters;
 use crate::et1100::{clock_ops, clocked_len, esc_irq, mem_u32};
+use ecat_sim::esc::{MEM_SIZE, SoftEsc};
 use ecat_slave::esc::Esc;
-use ecat_slave::esc::soft::{MEM_SIZE, SoftEsc};
 use embedded_hal::spi::{self, Operation, SpiDevice};
 
 pub use crate::et1100::EmuError;

@@ -4,7 +4,7 @@
 //! [`SpiDevice`](embedded_hal::spi::SpiDevice) that decodes the bytes a
 //! microcontroller clocks out as the chip's datasheet describes and turns
 //! them into PDI accesses of the `ecat-slave` software ESC
-//! ([`ecat_slave::esc::soft::SoftEsc`]) behind it. A PDI driver under test
+//! ([`ecat_sim::esc::SoftEsc`]) behind it. A PDI driver under test
 //! then talks to it exactly as to a chip, while a master drives the
 //! software ESC's other side with real EtherCAT frames:
 //!

@@ -11,10 +11,10 @@ use std::vec;
 use std::vec::Vec;
 
 use ecat_esc_spi_emu::lan9252::Lan9252Emu;
+use ecat_sim::esc::SoftEsc;
 use ecat_slave::al::AlState;
 use ecat_slave::device::SM_CONTROL;
 use ecat_slave::esc::registers as reg;
-use ecat_slave::esc::soft::SoftEsc;
 use ecat_slave::hal::MemNv;
 use ecat_slave::wire::builder::FrameBuilder;
 use ecat_slave::wire::ecat::Command;

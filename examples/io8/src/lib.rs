@@ -15,7 +15,8 @@
 //! ```
 //! use ecat_slave::al::AlState;
 //!
-//! let slave = io8_example::soft_slave();
+//! // On the software ESC of ecat-sim (on a board: `Slave::new(esc, Io8::default())`).
+//! let slave = ecat_sim::SoftSlave::new(io8_example::Io8::default());
 //! assert_eq!(slave.slave().al_status().state, AlState::Init);
 //! assert_eq!(slave.slave().od().get(0x8000, 1), Some(10), "filter 10 ms");
 //! ```
@@ -38,15 +39,6 @@ pub mod description;
 pub use app::{Debounce, Io8};
 pub use board::{Board, SimBoard};
 pub use description::{DEVICE, DICT, ENTRIES, OBJECTS};
-
-use ecat_slave::device::SoftSlave;
-
-/// An IO8 on a simulated board and the software ESC, in its power-on state:
-/// feed it EtherCAT frames ([`SoftSlave::process_frame`]) and poll it
-/// ([`SoftSlave::poll`]).
-pub fn soft_slave() -> SoftSlave<Io8> {
-    SoftSlave::new(Io8::default())
-}
 
 #[doc = include_str!("../WRITE-YOUR-OWN-DEVICE.md")]
 pub mod guide {}

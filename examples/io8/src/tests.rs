@@ -2,8 +2,9 @@
 //! raw EtherCAT frames (auto-increment physical reads and writes to the
 //! slave at position 0): the device's behaviour seen from the wire.
 
+use ecat_sim::SoftSlave;
 use ecat_slave::al::{AlState, AlStatus, AlStatusCode};
-use ecat_slave::device::{Application, Download, SM_CONTROL, SoftSlave, Write};
+use ecat_slave::device::{Application, Download, SM_CONTROL, Write};
 use ecat_slave::esc::registers as reg;
 use ecat_slave::od::ObjectStore;
 use ecat_slave::pdo::Direction;
@@ -26,7 +27,7 @@ struct Master {
 impl Master {
     fn new() -> Self {
         Master {
-            slave: soft_slave(),
+            slave: SoftSlave::new(Io8::default()),
             now_ns: 0,
         }
     }

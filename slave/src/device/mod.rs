@@ -44,12 +44,22 @@
 //!     }
 //!     type Values = [i64; 2]; // the dictionary has 3 entries
 //! }
-//! let _ = SoftSlave::new(Bad);
+//! struct NoEsc; // any ESC: a chip driver, or ecat-sim's software ESC
+//! impl ecat_slave::esc::Esc for NoEsc {
+//!     fn read(&mut self, _: u16, buf: &mut [u8]) -> Result<(), ecat_slave::esc::EscError> {
+//!         buf.fill(0);
+//!         Ok(())
+//!     }
+//!     fn write(&mut self, _: u16, _: &[u8]) -> Result<(), ecat_slave::esc::EscError> {
+//!         Ok(())
+//!     }
+//! }
+//! let _ = Slave::new(NoEsc, Bad);
 //! ```
 //!
 //! The core does the rest: [`Slave`] is the firmware loop on any ESC
-//! reached through the [`Esc`](crate::esc::Esc) PDI trait, [`SoftSlave`] the
-//! same on the software ESC. The ESI, the SII ([`DeviceDescription::sii_image`]),
+//! reached through the [`Esc`](crate::esc::Esc) PDI trait (`ecat_sim::SoftSlave`
+//! runs the same loop on the software ESC). The ESI, the SII ([`DeviceDescription::sii_image`]),
 //! SDO Information and the PDO engine all read the one description.
 
 mod application;
@@ -57,7 +67,6 @@ mod description;
 mod schedule;
 mod sii_image;
 mod slave;
-mod soft;
 
 pub use application::{Application, Download, StateChange, Tick, Write};
 pub use description::{
@@ -67,4 +76,3 @@ pub use description::{
 pub use schedule::PollSchedule;
 pub use sii_image::mapping_entries;
 pub use slave::{DC_MIN_CYCLE_NS, FULL_PASS_NS, SM_CONTROL, Slave, SyncMode};
-pub use soft::{SoftPdi, SoftSlave, SpiStats};

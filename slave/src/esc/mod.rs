@@ -1,13 +1,11 @@
-//! EtherCAT Slave Controller.
+//! EtherCAT Slave Controller: the PDI contract.
 //!
 //! [`Esc`] is the PDI side of an ESC: what firmware sees (read and write
-//! ESC memory; events appear in the AL event request register). The software
-//! implementation [`soft::SoftEsc`] also processes EtherCAT frames itself; a
-//! hardware ESC (e.g. a LAN9252 over SPI) implements the same trait in board
-//! support code. This layer knows nothing of CoE, the object dictionary or
-//! the amplifier.
-
-pub mod dc;
-pub mod soft;
+//! ESC memory; events appear in the AL event request register). A hardware
+//! ESC (an ET1100 or a LAN9252 over SPI, `ecat-esc-spi`) implements it in
+//! a driver; the software ESC of `ecat-sim` implements it too and also
+//! processes EtherCAT frames itself. The trait, its error and the register
+//! map live in the dependency-free `ecat-pdi` crate, re-exported here. This
+//! layer knows nothing of CoE or the object dictionary.
 
 pub use ecat_pdi::{BusErrorKind, Esc, EscError, registers};

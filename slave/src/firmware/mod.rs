@@ -5,8 +5,8 @@
 //! This module holds no wire formats of the EtherCAT protocol and never
 //! touches the ESC; flash access goes through the [`ImageStore`] HAL trait,
 //! so the same logic runs on the device, in the soft slave ([`MemStore`],
-//! or `file_store::FileStore` with the `std` feature) and in tests. Nothing here
-//! allocates or panics on input.
+//! or `ecat_sim::file_store::FileStore` on a host) and in tests. Nothing
+//! here allocates or panics on input.
 //!
 //! # Update flow (as a device manual describes it to its users)
 //!
@@ -73,8 +73,6 @@
 
 mod boot;
 mod efw;
-#[cfg(feature = "std")]
-pub mod file_store;
 mod store;
 
 pub use boot::{

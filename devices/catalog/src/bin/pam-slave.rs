@@ -12,7 +12,7 @@
 
 use clap::Parser;
 use device_catalog::exit::Exit;
-use ecat_slave::host::raw::{RunnerConfig, run};
+use ecat_sim::raw::{RunnerConfig, run};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -83,7 +83,7 @@ struct Cli {
     /// drop=1%,corrupt=0.1%,dup=0.1%,delay=5ms@1%,reorder=0.5%,down=2s+500ms,seed=7
     /// (rates per frame; `down` pulls the cable at START for LENGTH).
     #[arg(long, value_name = "SPEC", value_parser = parse_faults)]
-    faults: Option<ecat_slave::host::faults::FaultConfig>,
+    faults: Option<ecat_sim::faults::FaultConfig>,
     /// Port 1 of the last slave: pass every frame, after these slaves
     /// processed it, out of this interface to the next runner (or real
     /// device) and return what comes back to --iface; with no link on it
@@ -157,7 +157,7 @@ fn main() -> ExitCode {
             "pam-slave: reflecting EtherCAT frames on {} (no slaves; Ctrl-C stops)",
             cli.iface
         );
-        return match ecat_slave::host::raw::reflect(&cli.iface, &stop) {
+        return match ecat_sim::raw::reflect(&cli.iface, &stop) {
             Ok(stats) => {
                 eprintln!("pam-slave: reflected {} EtherCAT frames", stats.answered);
                 ExitCode::SUCCESS
@@ -210,7 +210,7 @@ fn main() -> ExitCode {
             eprintln!("pam-slave: error: {e}");
             match e {
                 // The state directory is input the user gave.
-                ecat_slave::host::raw::RunnerError::LostBootState(_) => Exit::Input.into(),
+                ecat_sim::raw::RunnerError::LostBootState(_) => Exit::Input.into(),
                 _ => Exit::Comm.into(),
             }
         }
@@ -219,7 +219,7 @@ fn main() -> ExitCode {
 
 /// The slaves to serve and what to say about them.
 struct Line {
-    slaves: Vec<Box<dyn ecat_slave::host::chain::LineSlave>>,
+    slaves: Vec<Box<dyn ecat_sim::chain::LineSlave>>,
     summary: String,
     report: Vec<String>,
 }
@@ -312,9 +312,9 @@ fn parse_store_size(s: &str) -> Result<u64, String> {
     Ok(n)
 }
 
-fn parse_faults(s: &str) -> Result<ecat_slave::host::faults::FaultConfig, String> {
+fn parse_faults(s: &str) -> Result<ecat_sim::faults::FaultConfig, String> {
     s.parse()
-        .map_err(|e: ecat_slave::host::faults::FaultConfigError| e.to_string())
+        .map_err(|e: ecat_sim::faults::FaultConfigError| e.to_string())
 }
 
 /// `PAM-199-P-ETC x2, IO8` for a line.

@@ -6,7 +6,7 @@
 //! Layers: `od` → `channel` → `model`, `params` → `map`
 //!
 //! ```
-//! use ecat_slave::device::SoftSlave;
+//! use ecat_sim::SoftSlave;
 //! use hcs_dma22::device::Dma22Node;
 //!
 //! // The node of manual 5.4.2: three modules in operation mode 3.

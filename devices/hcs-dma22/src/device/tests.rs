@@ -1,4 +1,4 @@
-use ecat_slave::device::SoftSlave;
+use ecat_sim::SoftSlave;
 
 use ecat_slave::al::AlState;
 use ecat_slave::device::Tick;

@@ -1,0 +1,781 @@
+//! The raw-socket runner: a line of software slaves (any devices) answering
+//! EtherCAT frames (EtherType 0x88A4) on a real network interface, so any
+//! master (TwinCAT, SOEM/pysoem, IgH, ethercrab's raw-socket task) can drive
+//! them. Frames come back out of the same interface, as from the last slave
+//! of a line. Everything that is not EtherCAT, and frames a slave already
+//! processed (source MAC with the locally administered bit set: our own
+//! replies seen again), is ignored.
+
+use crate::chain::{
+    Chain, IMAGE_SLOT_CAPACITY, LineSlave, factory_image_store_of, provision_factory,
+};
+use crate::faults::{Fate, FaultConfig, FaultInjector};
+use crate::file_store::FileStore;
+use crate::pcap::PcapWriter;
+use crate::state_dir::{Loaded, SlaveState};
+use ecat_slave::firmware::ImageStore;
+use pnet_datalink::{Channel, Config, NetworkInterface};
+use std::fs::File;
+use std::io::{self, BufWriter};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// What to run (the slaves themselves are handed to [`run`]).
+#[derive(Debug, Clone)]
+pub struct RunnerConfig {
+    /// Network interface name.
+    pub iface: String,
+    /// Capture every frame (both directions) to this pcap file.
+    pub pcap: Option<PathBuf>,
+    /// Directory for the slaves' persistent state.
+    pub state_dir: Option<PathBuf>,
+    /// A faulty wire in front of the line ([`crate::faults`]).
+    pub faults: Option<FaultConfig>,
+    /// Port 1 of the last slave: frames leave through this interface to
+    /// the next runner after this line processed them, and what comes
+    /// back goes out of `iface` to the master ([`run`]).
+    pub forward: Option<String>,
+    /// Slot capacity of each slave's firmware store, the largest image it
+    /// accepts ([`IMAGE_SLOT_CAPACITY`] by default); a slave's store takes
+    /// up to two slots of it, in memory (or on disk with `state_dir`).
+    pub image_slot_capacity: usize,
+}
+
+impl RunnerConfig {
+    /// Serves `iface` with the defaults: no capture, no state directory,
+    /// no faults, no forwarding, [`IMAGE_SLOT_CAPACITY`].
+    pub fn new(iface: impl Into<String>) -> Self {
+        Self {
+            iface: iface.into(),
+            pcap: None,
+            state_dir: None,
+            faults: None,
+            forward: None,
+            image_slot_capacity: IMAGE_SLOT_CAPACITY,
+        }
+    }
+}
+
+/// Why the runner could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum RunnerError {
+    /// No interface of that name.
+    #[error("network interface '{name}' does not exist (available: {available})")]
+    NoSuchInterface {
+        /// The name asked for.
+        name: String,
+        /// Interfaces that exist.
+        available: String,
+    },
+    /// The process may not open a raw socket.
+    #[error(
+        "no permission to open a raw socket on '{0}': run as root or grant CAP_NET_RAW (sudo setcap cap_net_raw+ep <binary>)"
+    )]
+    Permission(String),
+    /// The slave count is out of range.
+    #[error("a line needs 1 to {MAX_LINE} slaves, got {0}")]
+    Count(usize),
+    /// The firmware store was written once but its boot records are gone:
+    /// the runner will not fall back to the factory firmware silently.
+    #[error(
+        "the firmware boot records in {} are unreadable although the store was written: \
+         refusing to fall back to the factory firmware silently (remove the directory to \
+         start from the factory firmware)",
+        .0.display()
+    )]
+    LostBootState(PathBuf),
+    /// The thread relaying frames that come back on the forwarding
+    /// interface stopped while the runner ran: the line behind this runner
+    /// is cut off, so the runner stops too instead of serving half a line.
+    #[error("the relay of frames coming back on {iface} failed ({reason}); stopping")]
+    RelayFailed {
+        /// The forwarding interface.
+        iface: String,
+        /// What ended the relay.
+        reason: String,
+    },
+    /// Any other I/O failure.
+    #[error("{context}: {source}")]
+    Io {
+        /// What was being done.
+        context: String,
+        /// The error.
+        source: io::Error,
+    },
+}
+
+/// Counters of a run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RunStats {
+    /// EtherCAT frames answered.
+    pub answered: u64,
+    /// Frames ignored (other EtherTypes, our own replies).
+    pub ignored: u64,
+    /// The SPI wires' counters summed over the slaves whose firmware runs
+    /// through an SPI driver and an emulated chip (`None`: no such slave).
+    pub spi: Option<crate::slave::SpiStats>,
+}
+
+/// Most slaves one runner serves.
+pub const MAX_LINE: usize = 4096;
+
+/// How long a reordered reply is held (it then follows later replies).
+const REORDER_HOLD: Duration = Duration::from_millis(2);
+
+/// Opens the interface and serves frames for the line `slaves` (first to
+/// last) until `stop` is set.
+pub fn run(
+    config: &RunnerConfig,
+    slaves: Vec<Box<dyn LineSlave>>,
+    stop: &AtomicBool,
+) -> Result<RunStats, RunnerError> {
+    if slaves.is_empty() || slaves.len() > MAX_LINE {
+        return Err(RunnerError::Count(slaves.len()));
+    }
+    let iface = find_interface(&config.iface)?;
+    let out_iface = config.forward.as_deref().map(find_interface).transpose()?;
+    if out_iface.as_ref().is_some_and(|o| o.name == iface.name) {
+        return Err(RunnerError::Io {
+            context: format!("forwarding from {} to itself", iface.name),
+            source: io::Error::new(
+                io::ErrorKind::InvalidInput,
+                "--forward needs a second interface",
+            ),
+        });
+    }
+    if let Some(dir) = &config.state_dir {
+        std::fs::create_dir_all(dir).map_err(|source| RunnerError::Io {
+            context: format!("creating state directory {}", dir.display()),
+            source,
+        })?;
+    }
+    let mut pcap: Option<PcapWriter<BufWriter<File>>> = match &config.pcap {
+        Some(p) => Some(PcapWriter::create(p).map_err(|source| RunnerError::Io {
+            context: format!("creating pcap file {}", p.display()),
+            source,
+        })?),
+        None => None,
+    };
+    let (tx, mut rx) = open(&iface)?;
+    let (mut chain, mut states) = match &config.state_dir {
+        Some(dir) => persistent_chain_with(dir, slaves, config.image_slot_capacity)?,
+        None => {
+            let stores = slaves
+                .iter()
+                .map(|_| factory_image_store_of(config.image_slot_capacity))
+                .collect();
+            (Chain::with_stores(slaves, stores), Vec::new())
+        }
+    };
+    let out = out_iface.as_ref().map(open).transpose()?;
+    // The master-side sender, shared with the thread that relays frames
+    // coming back from the next runner.
+    let tx = std::sync::Mutex::new(tx);
+    let (mut out_tx, out_rx) = match out {
+        Some((t, r)) => (Some(t), Some(r)),
+        None => (None, None),
+    };
+    let mut port1 = PortWatch::new(out_iface.as_ref().map(|i| i.name.clone()));
+    if let Some(up) = port1.poll() {
+        set_last_port1(&mut chain, up);
+    }
+    let start = Instant::now();
+    let mut stats = RunStats::default();
+    let mut buf = Vec::with_capacity(1600);
+    let mut faults = config.faults.clone().map(FaultInjector::new);
+    // Replies held back by the faulty wire: (release time, frame).
+    let mut held: Vec<(Instant, Vec<u8>)> = Vec::new();
+    let mut was_down = false;
+    let send = |tx: &std::sync::Mutex<Tx>, frame: &[u8]| -> Result<(), RunnerError> {
+        let mut tx = tx.lock().unwrap_or_else(|e| e.into_inner());
+        match tx.send_to(frame, None) {
+            Some(Err(source)) => Err(RunnerError::Io {
+                context: format!("sending on {}", iface.name),
+                source,
+            }),
+            _ => Ok(()),
+        }
+    };
+    // A processed frame goes on down the line when port 1 has a link
+    // (without the "processed" mark, so the next runner takes it as a
+    // request; it marks it again), else it turns around to the master.
+    let out_name = out_iface
+        .as_ref()
+        .map(|i| i.name.clone())
+        .unwrap_or_default();
+    let reply = |out_tx: &mut Option<Tx>, up: bool, frame: &mut [u8]| -> Result<(), RunnerError> {
+        match out_tx.as_mut().filter(|_| up) {
+            Some(o) => {
+                if let Some(b) = frame.get_mut(6) {
+                    *b &= !0x02;
+                }
+                let r = o.send_to(frame, None);
+                if let Some(b) = frame.get_mut(6) {
+                    *b |= 0x02;
+                }
+                match r {
+                    Some(Err(source)) => Err(RunnerError::Io {
+                        context: format!("forwarding on {out_name}"),
+                        source,
+                    }),
+                    _ => Ok(()),
+                }
+            }
+            None => send(&tx, frame),
+        }
+    };
+    let done = AtomicBool::new(false);
+    let mut reopened: Option<Instant> = None;
+    std::thread::scope(|scope| {
+        let relay = out_rx.zip(out_iface.as_ref()).map(|(r, out)| {
+            let (tx, done) = (&tx, &done);
+            scope.spawn(move || relay_back(r, out, tx, stop, done))
+        });
+        let result = (|| -> Result<RunStats, RunnerError> {
+            while !stop.load(Ordering::Acquire) {
+                // A relay that ended on its own (an error, or a panic) is
+                // noticed at once: joined below, it says why.
+                if relay.as_ref().is_some_and(|h| h.is_finished()) {
+                    return Err(RunnerError::RelayFailed {
+                        iface: out_name.clone(),
+                        reason: String::new(),
+                    });
+                }
+                let now = u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX);
+                let t = Instant::now();
+                if let Some(up) = port1.poll() {
+                    set_last_port1(&mut chain, up);
+                }
+                let mut due = Vec::new();
+                held.retain(|(at, f)| {
+                    let ready = *at <= t;
+                    if ready {
+                        due.push(f.clone());
+                    }
+                    !ready
+                });
+                for mut f in due {
+                    reply(&mut out_tx, port1.up, &mut f)?;
+                }
+                match rx.next() {
+                    Ok(frame) => {
+                        if !is_request(frame) {
+                            stats.ignored += 1;
+                            continue;
+                        }
+                        buf.clear();
+                        buf.extend_from_slice(frame);
+                        if let Some(p) = pcap.as_mut() {
+                            let _ = p.write_frame(&buf);
+                        }
+                        let fate = faults
+                            .as_mut()
+                            .map_or(Fate::Deliver, |f| f.fate(start.elapsed()));
+                        let down = fate == Fate::LinkDown;
+                        if down && !was_down {
+                            chain.link_lost();
+                        }
+                        was_down = down;
+                        if matches!(fate, Fate::DropBefore | Fate::LinkDown | Fate::Corrupt) {
+                            if fate == Fate::Corrupt {
+                                chain.corrupted_frame();
+                            }
+                            let _ = chain.service(now);
+                            persist_parameters(&chain, &mut states)?;
+                            continue;
+                        }
+                        let request = (fate == Fate::Duplicate).then(|| buf.clone());
+                        // As on silicon, the ESCs answer the frame at once;
+                        // the firmware runs afterwards. A slow firmware step
+                        // (a flash write with fsync in FoE) delays the
+                        // mailbox answer, never the frame: masters with
+                        // short frame timeouts (SOEM: 2 ms) keep working.
+                        let arrived = u64::try_from(start.elapsed().as_nanos()).unwrap_or(now);
+                        chain.process_frame_at(&mut buf, arrived);
+                        if let Some(p) = pcap.as_mut() {
+                            let _ = p.write_frame(&buf);
+                        }
+                        match fate {
+                            Fate::DropAfter => {}
+                            Fate::Delay(d) => held.push((Instant::now() + d, buf.clone())),
+                            Fate::Reorder => {
+                                held.push((Instant::now() + REORDER_HOLD, buf.clone()))
+                            }
+                            _ => {
+                                reply(&mut out_tx, port1.up, &mut buf)?;
+                                if let Some(mut again) = request {
+                                    chain.process_frame_at(&mut again, arrived);
+                                    reply(&mut out_tx, port1.up, &mut again)?;
+                                }
+                            }
+                        }
+                        stats.answered += 1;
+                        let _ = chain.service(arrived);
+                        // Before the next frame: whatever the firmware step
+                        // just acknowledged (SAVE) is on stable storage
+                        // before the master can read the acknowledgement.
+                        persist_parameters(&chain, &mut states)?;
+                    }
+                    Err(e)
+                        if matches!(
+                            e.kind(),
+                            io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock
+                        ) =>
+                    {
+                        // The soft ESC's PDI cannot fail unless a fault is
+                        // injected; the slave handles it (fail-safe) and
+                        // `Chain::pdi_failures` counts it.
+                        let _ = chain.idle(now);
+                        persist_parameters(&chain, &mut states)?;
+                    }
+                    Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                    Err(_) if link_is_down(&iface.name) => {
+                        // A pulled cable on port 0: the slaves keep running
+                        // on their own until it is back.
+                        if !was_down {
+                            chain.link_lost();
+                        }
+                        was_down = true;
+                        let _ = chain.idle(now);
+                        persist_parameters(&chain, &mut states)?;
+                        std::thread::sleep(Duration::from_millis(5));
+                    }
+                    // The link is back but the socket keeps the error of
+                    // its going down: a fresh socket (once; an error right
+                    // after that is real).
+                    Err(_) if reopened.is_none_or(|t| t.elapsed() > Duration::from_millis(50)) => {
+                        let (t, r) = open(&iface)?;
+                        *tx.lock().unwrap_or_else(|e| e.into_inner()) = t;
+                        rx = r;
+                        reopened = Some(Instant::now());
+                        was_down = false;
+                    }
+                    Err(source) => {
+                        return Err(RunnerError::Io {
+                            context: format!("receiving on {}", iface.name),
+                            source,
+                        });
+                    }
+                }
+            }
+            stats.spi = chain
+                .slaves()
+                .iter()
+                .filter_map(|s| s.spi_stats())
+                .reduce(crate::slave::SpiStats::sum);
+            Ok(stats)
+        })();
+        done.store(true, Ordering::Release);
+        let relayed = relay.map(|h| h.join());
+        if let Some(p) = pcap.as_mut() {
+            let _ = p.flush();
+        }
+        let relay_failed = |reason: String| RunnerError::RelayFailed {
+            iface: out_name.clone(),
+            reason,
+        };
+        match (result, relayed) {
+            (Err(RunnerError::RelayFailed { .. }) | Ok(_), Some(Ok(Err(e)))) => {
+                Err(relay_failed(e.to_string()))
+            }
+            (Err(RunnerError::RelayFailed { .. }) | Ok(_), Some(Err(_))) => {
+                Err(relay_failed("the relay thread panicked".into()))
+            }
+            (Err(RunnerError::RelayFailed { .. }), _) => {
+                Err(relay_failed("the relay thread ended".into()))
+            }
+            (Err(e), _) => Err(e),
+            (Ok(stats), _) => Ok(stats),
+        }
+    })
+}
+
+/// The floor of [`run`] for latency measurements: answers every EtherCAT
+/// request on `iface` at once, unchanged but marked as processed (source
+/// MAC bit 1), through the same socket path and loop as the runner but
+/// without any slave. What a benchmark measures against it is what the
+/// kernel and the socket cost without EtherCAT work. Runs until `stop`.
+pub fn reflect(iface: &str, stop: &AtomicBool) -> Result<RunStats, RunnerError> {
+    let nic = find_interface(iface)?;
+    let (mut tx, mut rx) = open(&nic)?;
+    let mut stats = RunStats::default();
+    let mut buf = Vec::with_capacity(1600);
+    while !stop.load(Ordering::Acquire) {
+        match rx.next() {
+            Ok(frame) if is_request(frame) => {
+                buf.clear();
+                buf.extend_from_slice(frame);
+                if let Some(b) = buf.get_mut(6) {
+                    *b |= 0x02;
+                }
+                if let Some(Err(source)) = tx.send_to(&buf, None) {
+                    return Err(RunnerError::Io {
+                        context: format!("sending on {iface}"),
+                        source,
+                    });
+                }
+                stats.answered += 1;
+            }
+            Ok(_) => stats.ignored += 1,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    io::ErrorKind::TimedOut
+                        | io::ErrorKind::WouldBlock
+                        | io::ErrorKind::Interrupted
+                ) => {}
+            Err(source) => {
+                return Err(RunnerError::Io {
+                    context: format!("receiving on {iface}"),
+                    source,
+                });
+            }
+        }
+    }
+    Ok(stats)
+}
+
+/// Frames coming back from the next runner on port 1 (processed there,
+/// marked) go out of port 0 to the master unchanged, as the return path
+/// of an ESC passes them through. Runs until `stop` or `done`.
+fn relay_back(
+    mut rx: Rx,
+    out: &NetworkInterface,
+    tx: &std::sync::Mutex<Tx>,
+    stop: &AtomicBool,
+    done: &AtomicBool,
+) -> Result<(), RunnerError> {
+    let out_name = out.name.as_str();
+    let mut reopened: Option<Instant> = None;
+    while !stop.load(Ordering::Acquire) && !done.load(Ordering::Acquire) {
+        match rx.next() {
+            Ok(frame) => {
+                if is_processed(frame) {
+                    let mut tx = tx.lock().unwrap_or_else(|e| e.into_inner());
+                    if let Some(Err(source)) = tx.send_to(frame, None) {
+                        return Err(RunnerError::Io {
+                            context: "relaying a returning frame to the master".into(),
+                            source,
+                        });
+                    }
+                }
+            }
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    io::ErrorKind::TimedOut
+                        | io::ErrorKind::WouldBlock
+                        | io::ErrorKind::Interrupted
+                ) => {}
+            // The next runner's cable pulled: wait for it.
+            Err(_) if link_is_down(out_name) => std::thread::sleep(Duration::from_millis(5)),
+            // Back: a fresh socket (see `run`).
+            Err(_) if reopened.is_none_or(|t| t.elapsed() > Duration::from_millis(50)) => {
+                rx = open(out)?.1;
+                reopened = Some(Instant::now());
+            }
+            Err(source) => {
+                return Err(RunnerError::Io {
+                    context: format!("receiving frames back on {out_name}"),
+                    source,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Whether port 1 (the forwarding interface) has a link, checked every
+/// 100 ms (carrier: the interface is up and its peer too).
+struct PortWatch {
+    name: Option<String>,
+    up: bool,
+    checked: Option<Instant>,
+}
+
+impl PortWatch {
+    fn new(name: Option<String>) -> Self {
+        PortWatch {
+            name,
+            up: false,
+            checked: None,
+        }
+    }
+
+    /// Checks the link when due; returns the new state when it changed
+    /// (or on the first check).
+    fn poll(&mut self) -> Option<bool> {
+        let name = self.name.as_ref()?;
+        if self
+            .checked
+            .is_some_and(|t| t.elapsed() < Duration::from_millis(100))
+        {
+            return None;
+        }
+        let first = self.checked.is_none();
+        self.checked = Some(Instant::now());
+        let up = pnet_datalink::interfaces()
+            .iter()
+            .find(|i| &i.name == name)
+            .is_some_and(|i| i.is_up() && i.is_running());
+        let changed = up != self.up || first;
+        self.up = up;
+        changed.then_some(up)
+    }
+}
+
+/// Whether interface `name` is down or has no carrier (or is gone).
+fn link_is_down(name: &str) -> bool {
+    !pnet_datalink::interfaces()
+        .iter()
+        .any(|i| i.name == name && i.is_up() && i.is_running())
+}
+
+/// Port 1 of the line's last slave has a link when frames go on to a next
+/// runner (DL status shows it; the loop is closed there otherwise).
+fn set_last_port1(chain: &mut Chain, up: bool) {
+    if let Some(last) = chain.slaves_mut().last_mut() {
+        last.set_port1_link(up);
+    }
+}
+
+fn find_interface(name: &str) -> Result<NetworkInterface, RunnerError> {
+    let all = pnet_datalink::interfaces();
+    all.iter()
+        .find(|i| i.name == name)
+        .cloned()
+        .ok_or_else(|| RunnerError::NoSuchInterface {
+            name: name.to_string(),
+            available: all
+                .iter()
+                .map(|i| i.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+        })
+}
+
+fn io_err(context: String) -> impl FnOnce(io::Error) -> RunnerError {
+    move |source| RunnerError::Io { context, source }
+}
+
+fn slave_dir(dir: &Path, i: usize) -> PathBuf {
+    dir.join(format!("slave-{i}"))
+}
+
+/// Slaves whose parameter storage (`slave-N/params-*.bin`, see
+/// [`crate::state_dir`]) and firmware store (`slave-N/firmware/`) live
+/// under `dir`. A blank firmware store gets the factory firmware; a store
+/// whose boot records were lost is an error, not a silent downgrade to the
+/// factory version. Damaged parameter storage is loaded as such: the device
+/// reports its EEPROM data error.
+pub fn persistent_chain(
+    dir: &Path,
+    slaves: Vec<Box<dyn LineSlave>>,
+) -> Result<(Chain, Vec<SlaveState>), RunnerError> {
+    persistent_chain_with(dir, slaves, IMAGE_SLOT_CAPACITY)
+}
+
+/// [`persistent_chain`] with firmware slots of `image_slot_capacity`
+/// bytes.
+pub fn persistent_chain_with(
+    dir: &Path,
+    mut slaves: Vec<Box<dyn LineSlave>>,
+    image_slot_capacity: usize,
+) -> Result<(Chain, Vec<SlaveState>), RunnerError> {
+    let mut stores: Vec<Box<dyn ImageStore + Send>> = Vec::with_capacity(slaves.len());
+    let mut states = Vec::with_capacity(slaves.len());
+    for (i, slave) in slaves.iter_mut().enumerate() {
+        let sd = slave_dir(dir, i);
+        let fw_dir = sd.join("firmware");
+        std::fs::create_dir_all(&fw_dir)
+            .map_err(io_err(format!("creating {}", fw_dir.display())))?;
+        let mut store = FileStore::open(&fw_dir, image_slot_capacity).map_err(io_err(format!(
+            "opening firmware store {}",
+            fw_dir.display()
+        )))?;
+        if store.read_state().is_err() && store.has_been_written() {
+            return Err(RunnerError::LostBootState(fw_dir));
+        }
+        let _ = provision_factory(&mut store);
+        stores.push(Box::new(store));
+        let mut state =
+            SlaveState::open(&sd).map_err(io_err(format!("opening {}", sd.display())))?;
+        if let Some(nv) = slave.nv_mut() {
+            let loaded = state.load(nv).map_err(io_err(format!(
+                "reading the parameters in {}",
+                sd.display()
+            )))?;
+            if let Loaded::Damaged(regions) = &loaded {
+                eprintln!(
+                    "warning: slave {i}: parameter storage in {} damaged (regions {regions:?}); \
+                     the device reports an EEPROM data error unless its other copy is valid",
+                    sd.display()
+                );
+            }
+            if loaded != Loaded::Blank {
+                // Restart with the loaded EEPROM so the parameters apply.
+                slave.power_cycle();
+            }
+        }
+        states.push(state);
+    }
+    Ok((Chain::with_stores(slaves, stores), states))
+}
+
+/// Writes the parameter storage of every slave whose EEPROM changed,
+/// durably ([`SlaveState::persist`]).
+fn persist_parameters(chain: &Chain, states: &mut [SlaveState]) -> Result<(), RunnerError> {
+    for (s, state) in chain.slaves().iter().zip(states.iter_mut()) {
+        if let Some(nv) = s.nv() {
+            state.persist(nv).map_err(io_err(format!(
+                "writing the parameters in {}",
+                state.dir().display()
+            )))?;
+        }
+    }
+    Ok(())
+}
+
+type Tx = Box<dyn pnet_datalink::DataLinkSender>;
+type Rx = Box<dyn pnet_datalink::DataLinkReceiver>;
+
+fn open(iface: &NetworkInterface) -> Result<(Tx, Rx), RunnerError> {
+    let cfg = Config {
+        read_timeout: Some(Duration::from_millis(1)),
+        write_buffer_size: 16384,
+        read_buffer_size: 16384,
+        promiscuous: true,
+        ..Config::default()
+    };
+    match pnet_datalink::channel(iface, cfg) {
+        Ok(Channel::Ethernet(tx, rx)) => Ok((tx, rx)),
+        Ok(_) => Err(RunnerError::Io {
+            context: format!("opening {}", iface.name),
+            source: io::Error::other("not an Ethernet channel"),
+        }),
+        Err(e) if e.kind() == io::ErrorKind::PermissionDenied => {
+            Err(RunnerError::Permission(iface.name.clone()))
+        }
+        Err(source) => Err(RunnerError::Io {
+            context: format!("opening raw socket on {}", iface.name),
+            source,
+        }),
+    }
+}
+
+/// Whether `frame` is an EtherCAT frame from a master (not yet processed
+/// by any slave).
+pub fn is_request(frame: &[u8]) -> bool {
+    is_ethercat(frame) && frame.get(6).is_some_and(|b| b & 0x02 == 0)
+}
+
+/// Whether `frame` is an EtherCAT frame a slave has processed (source MAC
+/// with the locally administered bit set): a reply on its way back.
+pub fn is_processed(frame: &[u8]) -> bool {
+    is_ethercat(frame) && frame.get(6).is_some_and(|b| b & 0x02 != 0)
+}
+
+fn is_ethercat(frame: &[u8]) -> bool {
+    frame.len() >= 16 && frame.get(12..14) == Some(&[0x88, 0xA4][..])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_unprocessed_ethercat_frames_are_requests() {
+        let mut f = vec![0u8; 60];
+        f[6] = 0x10;
+        f[12] = 0x88;
+        f[13] = 0xA4;
+        assert!(is_request(&f));
+        f[6] = 0x12;
+        assert!(!is_request(&f), "our own reply");
+        f[6] = 0x10;
+        f[12] = 0x08;
+        f[13] = 0x00;
+        assert!(!is_request(&f), "IPv4");
+        assert!(!is_request(&f[..10]));
+    }
+
+    #[test]
+    fn state_dir_keeps_saved_parameters_and_the_firmware_store_across_restarts() {
+        use crate::testing::{TestApp, line};
+        let dir = std::env::temp_dir().join(format!("ecat-state-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let slaves = || -> Vec<Box<dyn LineSlave>> {
+            (0..2)
+                .map(|_| Box::new(crate::testing::slave()) as Box<dyn LineSlave>)
+                .collect()
+        };
+        {
+            let (mut chain, mut states) = persistent_chain(&dir, slaves()).unwrap();
+            assert_eq!(chain.slaves()[1].firmware_version(), "10");
+            let s = chain.slave_mut::<TestApp>(1).unwrap().slave_mut();
+            s.od_mut().set(0x8000, 1, 777);
+            let (app, od) = s.app_and_od();
+            ecat_slave::params::save(od, &mut app.nv).unwrap();
+            persist_parameters(&chain, &mut states).unwrap();
+        }
+        assert!(dir.join("slave-1/params-0.bin").exists());
+        assert!(dir.join("slave-1/params-1.bin").exists());
+        assert!(!dir.join("slave-0/params-0.bin").exists(), "never saved");
+        assert!(dir.join("slave-1/firmware").is_dir());
+        let (chain, _) = persistent_chain(&dir, slaves()).unwrap();
+        assert_eq!(chain.slaves()[1].od().get(0x8000, 1), Some(777), "restored");
+        assert_eq!(
+            chain.slaves()[0].od().get(0x8000, 1),
+            Some(100),
+            "untouched"
+        );
+        assert_eq!(chain.slaves()[0].firmware_version(), "10");
+        let _ = line(1);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn lost_firmware_boot_records_are_an_error_not_a_silent_factory_reflash() {
+        let dir = std::env::temp_dir().join(format!("ecat-lost-boot-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let one = || -> Vec<Box<dyn LineSlave>> { vec![Box::new(crate::testing::slave())] };
+        drop(persistent_chain(&dir, one()).unwrap());
+        let fw = dir.join("slave-0/firmware");
+        std::fs::remove_file(fw.join("state_0.bin")).unwrap();
+        let _ = std::fs::remove_file(fw.join("state_1.bin"));
+        let err = persistent_chain(&dir, one()).map(|_| ()).unwrap_err();
+        assert!(matches!(err, RunnerError::LostBootState(_)), "{err}");
+        assert!(err.to_string().contains("refusing to fall back"), "{err}");
+        // Removing the store is the explicit way back to the factory image.
+        std::fs::remove_dir_all(&fw).unwrap();
+        let (chain, _) = persistent_chain(&dir, one()).unwrap();
+        assert_eq!(chain.slaves()[0].firmware_version(), "10");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn the_firmware_store_has_the_configured_slot_capacity() {
+        let dir = std::env::temp_dir().join(format!("ecat-capacity-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let one = || -> Vec<Box<dyn LineSlave>> { vec![Box::new(crate::testing::slave())] };
+        let (chain, _) = persistent_chain_with(&dir, one(), 64 * 1024).unwrap();
+        assert_eq!(chain.image_store(0).unwrap().slot_capacity(), 64 * 1024);
+        assert_eq!(chain.slaves()[0].firmware_version(), "10");
+        let _ = std::fs::remove_dir_all(&dir);
+        assert_eq!(
+            RunnerConfig::new("x").image_slot_capacity,
+            IMAGE_SLOT_CAPACITY
+        );
+    }
+
+    #[test]
+    fn unknown_interface_is_named_in_the_error() {
+        let cfg = RunnerConfig::new("no-such-if0");
+        let one: Vec<Box<dyn LineSlave>> = vec![Box::new(crate::testing::slave())];
+        let err = run(&cfg, one, &AtomicBool::new(false)).unwrap_err();
+        assert!(err.to_string().contains("no-such-if0"), "{err}");
+        let err = run(&cfg, Vec::new(), &AtomicBool::new(false)).unwrap_err();
+        assert!(err.to_string().contains("1 to 4096"), "{err}");
+    }
+}
