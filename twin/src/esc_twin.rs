@@ -17,7 +17,7 @@ use ecat_slave::al::{AlState, AlStatus, AlStatusCode};
 use ecat_slave::device::{
     CoeServices, DeviceDescription, EscConfig, FoeSecurity, MailboxConfig, ProcessData,
 };
-use ecat_slave::esc::{Esc, EscError};
+use ecat_slave::esc::{Esc, EscError, registers as reg};
 use ecat_slave::firmware::ImageStore;
 use ecat_slave::hal::NvStorage;
 use ecat_slave::led::LedPattern;
@@ -172,12 +172,6 @@ fn build_description(dev: &EsiDevice) -> &'static DeviceDescription {
     }))
 }
 
-/// SyncManager register block (ETG.1000.4 Table 58): start, length,
-/// control, status, activate, PDI control.
-const SM_BASE: u16 = 0x0800;
-const SM_LEN: u16 = 8;
-const AL_STATUS: u16 = 0x0130;
-
 /// A twin of an ESC-only device on a line.
 pub struct EscTwin {
     esc: SoftEsc,
@@ -255,17 +249,21 @@ impl EscTwin {
     /// The SyncManager's area as the master configured it, when active.
     fn sm_area(&self, sm: u8) -> Option<(u16, u16)> {
         let mem = self.esc.raw_memory();
-        let base = usize::from(SM_BASE + SM_LEN * u16::from(sm));
-        let r = mem.get(base..base + 8)?;
-        let start = u16::from_le_bytes([*r.first()?, *r.get(1)?]);
-        let len = u16::from_le_bytes([*r.get(2)?, *r.get(3)?]);
-        let active = r.get(6)? & 0x01 != 0;
+        let base = usize::from(reg::sm(sm)?);
+        let r = mem.get(base..base + usize::from(reg::SM_LEN))?;
+        let word = |at: u16| -> Option<u16> {
+            let at = usize::from(at);
+            Some(u16::from_le_bytes([*r.get(at)?, *r.get(at + 1)?]))
+        };
+        let start = word(reg::sm::START)?;
+        let len = word(reg::sm::LENGTH)?;
+        let active = r.get(usize::from(reg::sm::ACTIVATE))? & reg::sm::ACTIVATE_ENABLE != 0;
         (active && len > 0).then_some((start, len))
     }
 
     fn al_state(&self) -> Option<AlState> {
         let mem = self.esc.raw_memory();
-        let v = mem.get(usize::from(AL_STATUS))?;
+        let v = mem.get(usize::from(reg::AL_STATUS))?;
         AlState::from_bits(v & 0x0F)
     }
 

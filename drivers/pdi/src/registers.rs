@@ -44,6 +44,26 @@ pub const PHYSICAL_RW_OFFSET: u16 = 0x0108;
 /// bit 4 + n physical link on port n, bit 8 + 2n loop port n, bit 9 + 2n
 /// communication on port n.
 pub const DL_STATUS: u16 = 0x0110;
+
+/// Bits of [`DL_STATUS`] (ET1100 Section II, register 0x0110).
+pub mod dl_status {
+    /// PDI operational (the EEPROM was loaded).
+    pub const PDI_OPERATIONAL: u16 = 0x0001;
+    /// PDI watchdog status: 1 = reloaded / not expired.
+    pub const PDI_WATCHDOG_OK: u16 = 0x0002;
+    /// Physical link on port `n` (0..=3).
+    pub const fn link(n: u8) -> u16 {
+        0x0010 << (n & 3)
+    }
+    /// Loop of port `n` closed (0..=3).
+    pub const fn loop_closed(n: u8) -> u16 {
+        0x0100 << (2 * (n & 3))
+    }
+    /// Communication established on port `n` (0..=3).
+    pub const fn communication(n: u8) -> u16 {
+        0x0200 << (2 * (n & 3))
+    }
+}
 /// AL control (2 bytes, written by the master): bits 0-3 requested state,
 /// bit 4 error acknowledge, bit 5 device identification.
 pub const AL_CONTROL: u16 = 0x0120;
@@ -73,6 +93,12 @@ pub const ECAT_EVENT_REQUEST: u16 = 0x0210;
 pub const AL_EVENT_REQUEST: u16 = 0x0220;
 /// RX error counters, ports 0-3 (8 bytes; a write clears them).
 pub const RX_ERROR_COUNTER: u16 = 0x0300;
+/// Forwarded RX error counters, ports 0-3 (4 bytes; a write clears them).
+pub const FORWARDED_RX_ERROR_COUNTER: u16 = 0x0308;
+/// ECAT processing unit error counter (1 byte) and PDI error counter (1 byte).
+pub const PROCESSING_ERROR_COUNTER: u16 = 0x030C;
+/// Lost link counters, ports 0-3 (4 bytes; a write clears them).
+pub const LOST_LINK_COUNTER: u16 = 0x0310;
 /// Watchdog divider (2 bytes): base tick = (value + 2) x 40 ns.
 pub const WATCHDOG_DIVIDER: u16 = 0x0400;
 /// PDI watchdog time in base ticks (2 bytes, 0 disables).

@@ -1,0 +1,153 @@
+//! The mailbox side of the firmware loop: SM0 requests to the mailbox server
+//! (CoE, FoE), responses into SM1 when it is free, the repeat service
+//! (ETG.1000.4 mailbox repeat toggle).
+
+use super::*;
+
+impl<E: Esc, A: Application> Slave<E, A> {
+    pub(super) fn mailbox_layout(&self) -> ((u16, u16), (u16, u16)) {
+        if self.al.state == AlState::Boot {
+            (self.layout.boot_out, self.layout.boot_in)
+        } else {
+            (self.layout.mbx_out, self.layout.mbx_in)
+        }
+    }
+
+    /// Writes the waiting response into SM1 if SM1 is free. The whole
+    /// buffer is written so that the ESC sees its last byte and marks the
+    /// mailbox full.
+    pub(super) fn deliver_pending(&mut self) -> Result<(), EscError> {
+        if self.pending.is_none() || self.sm_full(1)? {
+            return Ok(());
+        }
+        let (_, inp) = self.mailbox_layout();
+        if let Some((len, buf)) = self.pending.take() {
+            let n = usize::from(inp.1).min(MAX_MAILBOX);
+            let mut frame = [0u8; MAX_MAILBOX];
+            if let (Some(dst), Some(src)) = (frame.get_mut(..len), buf.get(..len)) {
+                dst.copy_from_slice(src);
+            }
+            if let Some(f) = frame.get(..n) {
+                self.esc.write(inp.0, f)?;
+                self.sm1_writes = self.sm1_writes.wrapping_add(1);
+            }
+            self.last_sent = Some((len, frame));
+        }
+        Ok(())
+    }
+
+    /// Mailbox repeat (ETG.1000.4 SyncManager repeat): when the master
+    /// toggles the repeat request bit of SM1 (activate byte bit 1), the
+    /// last response is put into SM1 again and the repeat acknowledge bit
+    /// (PDI control bit 1) is toggled to match.
+    pub(super) fn serve_repeat(&mut self) -> Result<(), EscError> {
+        let base = reg::sm(1).ok_or(EscError::OutOfRange { addr: 0, len: 0 })?;
+        let request = self.esc.read_u8(base + smr::ACTIVATE)? & smr::ACTIVATE_REPEAT;
+        let pdi = self.esc.read_u8(base + smr::PDI_CONTROL)?;
+        if request == pdi & smr::PDI_REPEAT_ACK {
+            return Ok(());
+        }
+        if !self.sm_full(1)?
+            && let Some((_, frame)) = &self.last_sent
+        {
+            let (_, inp) = self.mailbox_layout();
+            let n = usize::from(inp.1).min(MAX_MAILBOX);
+            let copy = *frame;
+            if let Some(f) = copy.get(..n) {
+                self.esc.write(inp.0, f)?;
+                self.sm1_writes = self.sm1_writes.wrapping_add(1);
+            }
+        }
+        self.esc.write(
+            base + smr::PDI_CONTROL,
+            &[(pdi & !smr::PDI_REPEAT_ACK) | request],
+        )
+    }
+
+    pub(super) fn serve_mailbox<'s>(
+        &mut self,
+        images: Option<&mut (dyn ImageStore + 's)>,
+    ) -> Result<(), EscError> {
+        self.serve_repeat()?;
+        self.deliver_pending()?;
+        // One request at a time: a new request waits in SM0 until the
+        // previous response has left.
+        if self.pending.is_some() {
+            return Ok(());
+        }
+        let view = object_view(self.app.description(), A::Values::view(&self.store));
+        if !self.sm_full(0)? {
+            // Nothing new: continue a response that spans several mailboxes.
+            let (_, inp) = self.mailbox_layout();
+            let max = usize::from(inp.1).min(MAX_MAILBOX);
+            let mut response = [0u8; MAX_MAILBOX];
+            let mut produced = response
+                .get_mut(..max)
+                .and_then(|r| self.mailbox.next_pending(r, view));
+            if produced.is_none() && self.emergencies_enabled && !self.emergencies.is_empty() {
+                produced = response.get_mut(..max).and_then(|r| {
+                    let body = r.get_mut(crate::wire::mailbox::HEADER_LEN..)?;
+                    let n = self.emergencies.pop_into(body)?;
+                    self.mailbox.frame_coe(r, n)
+                });
+            }
+            if let Some(len) = produced {
+                self.pending = Some((len, response));
+                self.deliver_pending()?;
+            }
+            return Ok(());
+        }
+        let (out, inp) = self.mailbox_layout();
+        let mut request = [0u8; MAX_MAILBOX];
+        let n = usize::from(out.1).min(MAX_MAILBOX);
+        let Some(req) = request.get_mut(..n) else {
+            return Ok(());
+        };
+        self.esc.read(out.0, req)?;
+        let mut response = [0u8; MAX_MAILBOX];
+        let max = usize::from(inp.1).min(MAX_MAILBOX);
+        let state = self.al.state;
+        let version = self.firmware_version();
+        let desc = self.app.description();
+        let id = &desc.identity;
+        let foe_offered = desc.mailbox.foe;
+        let mut ctx = images.filter(|_| foe_offered).map(|store| FoeContext {
+            store,
+            identity: DeviceIdentity {
+                vendor_id: id.vendor_id,
+                product_code: id.product_code,
+                revision: id.revision,
+            },
+            version: version.as_str(),
+            security: desc.mailbox.foe_security,
+            in_boot: state == AlState::Boot,
+            busy: false,
+        });
+        let now_ns = self.now_ns;
+        let produced = match response.get_mut(..max) {
+            // Disjoint field borrows: no copy of the mailbox server.
+            Some(resp) => self.mailbox.handle(
+                req,
+                resp,
+                &mut OdAccess {
+                    app: &mut self.app,
+                    od: A::Values::view_mut(&mut self.store),
+                    state,
+                    now_ns,
+                },
+                ctx.as_mut(),
+            ),
+            None => None,
+        };
+        if let Some(len) = produced {
+            self.pending = Some((len, response));
+            self.deliver_pending()?;
+        }
+        Ok(())
+    }
+
+    pub(super) fn sm_full(&mut self, n: u8) -> Result<bool, EscError> {
+        let base = reg::sm(n).ok_or(EscError::OutOfRange { addr: 0, len: 0 })?;
+        Ok(self.esc.read_u8(base + smr::STATUS)? & smr::STATUS_MAILBOX_FULL != 0)
+    }
+}

@@ -1,0 +1,174 @@
+//! The SDO adapter: CoE's view of the dictionary ([`ObjectAccess`]) with the
+//! checks the device adds (PDO assignment and module list writes, state-
+//! dependent access) and the application's write hooks.
+
+use super::*;
+
+/// The object dictionary as the CoE server sees it: the store, the core's
+/// rules for the PDO assignment, and the application's hooks.
+pub(super) struct OdAccess<'a, A: Application> {
+    pub(super) app: &'a mut A,
+    pub(super) od: &'a mut Od,
+    pub(super) state: AlState,
+    pub(super) now_ns: u64,
+}
+
+/// What SDO access and SDO Information show of a device's dictionary (a
+/// modular device hides its empty slots).
+pub(super) fn object_view(desc: &'static DeviceDescription, od: &Od) -> ObjectView {
+    let dict = desc.dictionary;
+    match desc.modules {
+        Some(m) => ObjectView::modular(dict, m, od),
+        None => ObjectView::all(dict),
+    }
+}
+
+impl<A: Application> OdAccess<'_, A> {
+    /// A configured module list (0xF030) holds idents of module types the
+    /// device knows (0 for an empty slot), at most one per slot.
+    fn check_module_list(&self, index: u16, changes: &[(u8, i64)]) -> Result<(), SdoAbortCode> {
+        let Some(m) = self.app.description().modules else {
+            return Ok(());
+        };
+        if index != CONFIGURED_MODULES {
+            return Ok(());
+        }
+        for (s, v) in changes {
+            if *s == 0 {
+                if *v > i64::from(m.slots) {
+                    return Err(SdoAbortCode::ValueTooHigh);
+                }
+            } else if *v != 0 && m.module(*v as u32).is_none() {
+                return Err(SdoAbortCode::ValueRange);
+            }
+        }
+        Ok(())
+    }
+
+    /// The core's rules for 0x1C12/0x1C13: only PDOs of the assignment's
+    /// direction that exist, no more than its capacity, all of one PDO set.
+    fn check_assignment(&self, index: u16, changes: &[(u8, i64)]) -> Result<(), SdoAbortCode> {
+        let dir = match index {
+            0x1C12 => Direction::Outputs,
+            0x1C13 => Direction::Inputs,
+            _ => return Ok(()),
+        };
+        let new = |s: u8| -> Option<i64> {
+            changes
+                .iter()
+                .find(|(x, _)| *x == s)
+                .map(|(_, v)| *v)
+                .or_else(|| self.od.get(index, s))
+        };
+        let dict = self.od.dictionary();
+        let cap = dict.find(index).map_or(0, |(_, o)| o.max_sub());
+        let count = new(0).unwrap_or(0);
+        if count > i64::from(cap) {
+            return Err(SdoAbortCode::ValueTooHigh);
+        }
+        let (lo, hi) = dir.pdo_range();
+        // Every written PDO must be one of the direction's mapping objects.
+        for (s, v) in changes.iter().filter(|(s, _)| *s != 0) {
+            let pdo = *v as u16;
+            if pdo < lo || pdo > hi || self.view().find(pdo).is_none() {
+                let _ = s;
+                return Err(SdoAbortCode::ValueRange);
+            }
+        }
+        // The assigned PDOs (1..=count) must share a PDO set.
+        let pd = &self.app.description().process_data;
+        if !pd.sets.is_empty() {
+            let mut sets = u32::MAX;
+            for s in 1..=count.clamp(0, 255) as u8 {
+                let pdo = new(s).unwrap_or(0) as u16;
+                let m = crate::pdo::sets_of(pd, pdo);
+                if m == 0 {
+                    continue;
+                }
+                if sets & m == 0 {
+                    return Err(SdoAbortCode::ParameterIncompatible);
+                }
+                sets &= m;
+            }
+        }
+        Ok(())
+    }
+
+    fn hand_over(
+        &mut self,
+        index: u16,
+        sub: u8,
+        complete_access: bool,
+        changes: &[(u8, i64)],
+    ) -> Result<(), SdoAbortCode> {
+        self.check_assignment(index, changes)?;
+        self.check_module_list(index, changes)?;
+        let d = Download {
+            index,
+            sub,
+            complete_access,
+            state: self.state,
+            now_ns: self.now_ns,
+            changes,
+        };
+        match self.app.sdo_download(self.od, &d)? {
+            Write::Store => d.apply(self.od),
+            Write::Done => {}
+        }
+        Ok(())
+    }
+}
+
+impl<A: Application> ObjectAccess for OdAccess<'_, A> {
+    fn dictionary(&self) -> &'static Dictionary {
+        self.app.description().dictionary
+    }
+
+    fn view(&self) -> ObjectView {
+        object_view(self.app.description(), self.od)
+    }
+
+    fn sdo_upload(
+        &mut self,
+        index: u16,
+        sub: u8,
+        complete_access: bool,
+        out: &mut [u8],
+    ) -> Result<usize, SdoAbortCode> {
+        if !self.view().visible(index) {
+            return Err(SdoAbortCode::ObjectNotFound);
+        }
+        self.app.sdo_upload(self.od, index, sub)?;
+        if complete_access {
+            return complete::upload(self.od, index, sub, out);
+        }
+        self.od.upload(index, sub, out)
+    }
+
+    fn sdo_download(
+        &mut self,
+        index: u16,
+        sub: u8,
+        complete_access: bool,
+        data: &[u8],
+    ) -> Result<(), SdoAbortCode> {
+        if !self.view().visible(index) {
+            return Err(SdoAbortCode::ObjectNotFound);
+        }
+        if complete_access {
+            let flat_changes = complete::check_download(self.od, index, sub, data, self.state)?;
+            let dict = self.od.dictionary();
+            let mut changes: heapless::Vec<(u8, i64), MAX_CHANGES> = heapless::Vec::new();
+            for (flat, v) in flat_changes {
+                let s = dict.entry_at(flat).map_or(0, |e| e.sub);
+                changes
+                    .push((s, v))
+                    .map_err(|_| SdoAbortCode::ObjectTooLong)?;
+            }
+            return self.hand_over(index, sub, true, &changes);
+        }
+        let (_, entry) = self.od.lookup(index, sub)?;
+        let value = Od::check(entry, data, self.state)?;
+        self.hand_over(index, sub, false, &[(sub, value)])
+    }
+}

@@ -1,0 +1,290 @@
+//! AL state transitions: what the AL control register asks for, the checks of
+//! each transition (mailbox and SM configuration, PDO assignment against the
+//! SM lengths, DC settings) and the AL status codes of ETG.1000.6 a refusal
+//! answers with.
+
+use super::*;
+
+pub(super) fn read_sm<E: Esc>(esc: &mut E, n: u8) -> Result<(u16, u16, u8, bool), EscError> {
+    let base = reg::sm(n).ok_or(EscError::OutOfRange { addr: 0, len: 0 })?;
+    let mut b = [0u8; 8];
+    esc.read(base, &mut b)?;
+    Ok((
+        u16::from_le_bytes([b[0], b[1]]),
+        u16::from_le_bytes([b[2], b[3]]),
+        b[4],
+        b[6] & smr::ACTIVATE_ENABLE != 0,
+    ))
+}
+
+/// SM0/SM1 are enabled with the given start and length and mailbox
+/// control bits; `Err` when the PDI cannot read them.
+pub(super) fn mailbox_matches<E: Esc>(
+    esc: &mut E,
+    out: (u16, u16),
+    inp: (u16, u16),
+) -> Result<bool, EscError> {
+    let sm0 = read_sm(esc, 0)?;
+    let sm1 = read_sm(esc, 1)?;
+    Ok(sm0 == (out.0, out.1, sm0.2, true)
+        && sm0.2 & 0x0F == SM_CONTROL[0] & 0x0F
+        && sm1 == (inp.0, inp.1, sm1.2, true)
+        && sm1.2 & 0x0F == SM_CONTROL[1] & 0x0F)
+}
+
+/// What the checks need to see while the AL state machine runs.
+pub(super) struct Checks<'a, E: Esc, A: Application> {
+    pub(super) esc: &'a mut E,
+    pub(super) app: &'a mut A,
+    pub(super) od: &'a mut Od,
+    pub(super) layout: MemoryLayout,
+    pub(super) images: Option<(ProcessImage, ProcessImage)>,
+    pub(super) now_ns: u64,
+    /// A PDI access that failed during a check: the check refuses with
+    /// 0x0001 and the firmware goes to its fail-safe state (never "assume
+    /// all is well").
+    pub(super) pdi_error: Option<EscError>,
+    /// The synchronisation the PRE-OP→SAFE-OP check found.
+    pub(super) sync_mode: Option<SyncMode>,
+    /// Only the bootloader runs: INIT→PRE-OP is refused (0x0014).
+    pub(super) no_valid_firmware: bool,
+}
+
+impl<E: Esc, A: Application> Checks<'_, E, A> {
+    /// Records a failed PDI access; the refusal code of a check that could
+    /// not read the ESC.
+    fn pdi_failed(&mut self, e: EscError) -> AlStatusCode {
+        self.pdi_error.get_or_insert(e);
+        AlStatusCode::Unspecified
+    }
+}
+
+impl<E: Esc, A: Application> Checks<'_, E, A> {
+    /// The DC SYNC configuration the master left in the activation
+    /// register (0x0981) and the SYNC0 cycle time (0x09A0): no SYNC means
+    /// free run; cyclic operation with SYNC0 means DC mode if the cycle
+    /// fits. A SYNC signal without cyclic operation, or SYNC1 (not
+    /// supported yet), is refused with 0x0030; a SYNC0 cycle of 0 (single
+    /// shot) or shorter than [`DC_MIN_CYCLE_NS`] with 0x0035 (ETG.1000.6
+    /// AL status codes; ETG.1020 §22).
+    fn check_dc(&mut self) -> Result<SyncMode, AlStatusCode> {
+        let act = self
+            .esc
+            .read_u8(reg::DC_ACTIVATION)
+            .map_err(|e| self.pdi_failed(e))?;
+        // A sync mode the master wrote into 0x1C32:01 must match the
+        // registers; a free-run/SM value with SYNC0 active is overruled
+        // by the registers (as the SSC derives the mode from 0x0981).
+        let requested = self.od.get(0x1C32, 1);
+        if act & 0x06 == 0 {
+            if requested == Some(crate::od::build::sync_mode::DC_SYNC0) {
+                return Err(AlStatusCode::InvalidDcSyncConfig);
+            }
+            return Ok(SyncMode::FreeRun);
+        }
+        if act & 0x01 == 0 || act & 0x04 != 0 {
+            return Err(AlStatusCode::InvalidDcSyncConfig);
+        }
+        // The firmware runs on SYNC0 through the AL event request; an SII
+        // that does not map SYNC0 there (0x0151 bit 3) leaves it deaf.
+        let sync_map = self
+            .esc
+            .read_u8(reg::PDI_CONFIG + 1)
+            .map_err(|e| self.pdi_failed(e))?;
+        if sync_map & 0x08 == 0 {
+            return Err(AlStatusCode::InvalidDcSyncConfig);
+        }
+        let cycle = self
+            .esc
+            .read_u32(reg::DC_SYNC0_CYCLE_TIME)
+            .map_err(|e| self.pdi_failed(e))?;
+        if cycle < DC_MIN_CYCLE_NS {
+            return Err(AlStatusCode::InvalidDcCycleTime);
+        }
+        Ok(SyncMode::DcSync0)
+    }
+}
+
+impl<E: Esc, A: Application> TransitionChecks for Checks<'_, E, A> {
+    fn check_mailbox(&mut self) -> Result<(), AlStatusCode> {
+        if self.no_valid_firmware {
+            return Err(AlStatusCode::NoValidFirmware);
+        }
+        match mailbox_matches(self.esc, self.layout.mbx_out, self.layout.mbx_in) {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(AlStatusCode::InvalidMailboxPreOp),
+            Err(e) => Err(self.pdi_failed(e)),
+        }
+    }
+
+    fn check_boot_mailbox(&mut self) -> Result<(), AlStatusCode> {
+        if !self.layout.has_boot() {
+            return Err(AlStatusCode::BootNotSupported);
+        }
+        match mailbox_matches(self.esc, self.layout.boot_out, self.layout.boot_in) {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(AlStatusCode::InvalidMailboxBoot),
+            Err(e) => Err(self.pdi_failed(e)),
+        }
+    }
+
+    fn check_process_data(&mut self) -> Result<(), AlStatusCode> {
+        let desc = self.app.description();
+        if let Some(m) = desc.modules {
+            m.check_configured(self.od)?;
+            // Every assigned PDO must belong to a slot that holds a module.
+            let view = object_view(desc, self.od);
+            for (assign, code) in [
+                (0x1C12u16, AlStatusCode::InvalidOutputConfig),
+                (0x1C13u16, AlStatusCode::InvalidInputConfig),
+            ] {
+                let n = self.od.get(assign, 0).unwrap_or(0).clamp(0, 255) as u8;
+                for k in 1..=n {
+                    let pdo = self.od.get(assign, k).unwrap_or(0) as u16;
+                    if !view.visible(pdo) {
+                        return Err(code);
+                    }
+                }
+            }
+        }
+        let pd = &desc.process_data;
+        let outputs = ProcessImage::build(self.od, Direction::Outputs, pd)
+            .map_err(|_| AlStatusCode::InvalidOutputConfig)?;
+        let inputs = ProcessImage::build(self.od, Direction::Inputs, pd)
+            .map_err(|_| AlStatusCode::InvalidInputConfig)?;
+        // Both directions must come from one PDO set.
+        if outputs.sets() & inputs.sets() == 0 {
+            return Err(AlStatusCode::InvalidInputConfig);
+        }
+        let sm2 = read_sm(self.esc, 2).map_err(|e| self.pdi_failed(e))?;
+        let sm3 = read_sm(self.esc, 3).map_err(|e| self.pdi_failed(e))?;
+        // With no PDO in a direction its SM is unused: disabled, or
+        // enabled with length 0 as SOEM leaves it (an ESC does not activate
+        // a SyncManager of length 0; SOES accepts it too).
+        let out_ok = if outputs.byte_len() == 0 {
+            !sm2.3 || sm2.1 == 0
+        } else {
+            sm2.3
+                && sm2.0 == self.layout.pd_out
+                && usize::from(sm2.1) == outputs.byte_len()
+                && sm2.2 & 0x0F == SM_CONTROL[2] & 0x0F
+        };
+        if !out_ok {
+            return Err(AlStatusCode::InvalidOutputConfig);
+        }
+        let in_ok = if inputs.byte_len() == 0 {
+            !sm3.3 || sm3.1 == 0
+        } else {
+            sm3.3
+                && sm3.0 == self.layout.pd_in
+                && usize::from(sm3.1) == inputs.byte_len()
+                && sm3.2 & 0x0F == SM_CONTROL[3] & 0x0F
+        };
+        if !in_ok {
+            return Err(AlStatusCode::InvalidInputConfig);
+        }
+        self.sync_mode = Some(self.check_dc()?);
+        self.images = Some((outputs, inputs));
+        Ok(())
+    }
+
+    fn check_outputs(&mut self) -> Result<(), AlStatusCode> {
+        // SAFE-OP -> OP needs valid outputs: an expired SyncManager watchdog
+        // is re-armed only by fresh outputs from the master.
+        let time = self
+            .esc
+            .read_u16(reg::WATCHDOG_TIME_PD)
+            .map_err(|e| self.pdi_failed(e))?;
+        let status = self
+            .esc
+            .read_u16(reg::WATCHDOG_STATUS_PD)
+            .map_err(|e| self.pdi_failed(e))?;
+        if time != 0 && status & 1 == 0 {
+            return Err(AlStatusCode::SmWatchdog);
+        }
+        Ok(())
+    }
+
+    fn accept(&mut self, from: AlState, to: AlState) -> Result<(), AlStatusCode> {
+        let (rx_sets, tx_sets) = self
+            .images
+            .as_ref()
+            .map_or((u32::MAX, u32::MAX), |(o, i)| (o.sets(), i.sets()));
+        let change = StateChange {
+            from,
+            to,
+            rx_sets,
+            tx_sets,
+            now_ns: self.now_ns,
+        };
+        self.app.state_change(self.od, &change)
+    }
+}
+
+impl<E: Esc, A: Application> Slave<E, A> {
+    pub(super) fn al_control(&mut self, control: u16) -> Result<(), EscError> {
+        let before = self.al;
+        let mut checks = Checks {
+            esc: &mut self.esc,
+            app: &mut self.app,
+            od: A::Values::view_mut(&mut self.store),
+            layout: self.layout,
+            images: None,
+            now_ns: self.now_ns,
+            pdi_error: None,
+            sync_mode: None,
+            no_valid_firmware: self.no_valid_firmware,
+        };
+        let after = al::transition(before, control, &mut checks);
+        if let Some(e) = checks.pdi_error {
+            // The check could not read the ESC: fail safe (see poll_with).
+            return Err(e);
+        }
+        if after.error && !before.error && before.state == AlState::PreOp && (control & 0x0F) == 4 {
+            self.emergencies.transition_refused(after.code.code());
+        }
+        if let Some((o, i)) = checks.images.take() {
+            self.outputs = o;
+            self.inputs = i;
+        }
+        // The synchronisation the check found counts only if SAFE-OP was
+        // reached (the application may still have refused it).
+        if let Some(m) = checks.sync_mode
+            && after.state == AlState::SafeOp
+            && before.state == AlState::PreOp
+        {
+            self.sync_mode = m;
+            self.outputs_since_sync0 = true;
+            self.sm_event_missed = 0;
+            self.dc_outputs = None;
+            let cycle = if m == SyncMode::DcSync0 {
+                i64::from(self.esc.read_u32(reg::DC_SYNC0_CYCLE_TIME)?)
+            } else {
+                0
+            };
+            self.publish_sync(cycle);
+        }
+        if matches!(after.state, AlState::Init | AlState::PreOp | AlState::Boot)
+            && before.state != after.state
+        {
+            self.reset_sync();
+        }
+        if after.state != AlState::Op && before.state == AlState::Op {
+            self.safe_outputs();
+        }
+        if after.state == AlState::Op && before.state != AlState::Op {
+            // Outputs count from the first SM2 write in OP on (what the
+            // master sent in SAFE-OP was never applied).
+            self.outputs_applied = false;
+        }
+        if matches!(after.state, AlState::Init | AlState::Boot) && before.state != after.state {
+            self.pending = None;
+            self.last_sent = None;
+            self.mailbox = MailboxServer::new();
+        }
+        self.al = after;
+        self.esc.write_u16(reg::AL_STATUS_CODE, after.code.code())?;
+        self.esc.write_u16(reg::AL_STATUS, after.register())?;
+        Ok(())
+    }
+}
