@@ -1,11 +1,11 @@
 //! # ecat-slave: an EtherCAT SubDevice (slave) stack core
 //!
 //! A `#![no_std]`, heap-free EtherCAT slave core that names no device:
-//! what a firmware links. The PDI trait through which it reaches an
-//! EtherCAT Slave Controller ([`esc::Esc`]: a chip over SPI, or the
-//! software ESC of the `ecat-sim` crate, which also holds the lines of
-//! software slaves and the raw-socket runner), the AL
-//! state machine ([`al`]), SyncManager and PDI watchdogs, the mailbox
+//! what a firmware links. It reaches its EtherCAT Slave Controller through
+//! the PDI trait [`Esc`] (a chip over SPI with `ecat-esc-spi`, or the
+//! software ESC of `ecat-sim`, which also holds lines of software slaves
+//! and the raw-socket runner). It holds the AL state machine ([`al`]) and
+//! the handling of the SyncManager and PDI watchdogs, the mailbox
 //! ([`mailbox`]) with CoE ([`coe`]: SDO, complete access, SDO Information,
 //! Emergency) and FoE firmware update ([`foe`], [`firmware`]), the PDO
 //! engine ([`pdo`]), the object dictionary engine ([`od`]), the SII encoder
@@ -41,7 +41,7 @@ pub mod firmware;
 pub mod foe;
 pub mod hal;
 pub mod led;
-pub mod limits;
+mod limits;
 pub mod mailbox;
 pub mod od;
 pub mod params;
@@ -51,3 +51,18 @@ pub mod sii;
 #[doc(hidden)]
 pub mod testing;
 pub mod wire;
+
+// What most users name, at the crate root (ethercrab-style): a device is
+// a description and an application, run by `Slave` on an `Esc`.
+pub use al::{AlState, AlStatusCode};
+#[doc(alias = "SubDevice")]
+#[doc(alias = "firmware loop")]
+pub use device::Slave;
+pub use device::{Application, DeviceDescription, Tick};
+#[doc(alias = "ESC")]
+#[doc(alias = "PDI")]
+pub use esc::{Esc, EscError};
+#[doc(alias = "object dictionary")]
+pub use od::{Dictionary, Object, Od};
+#[doc(alias = "abort code")]
+pub use wire::coe::SdoAbortCode;

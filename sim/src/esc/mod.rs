@@ -9,8 +9,8 @@
 //! access that wraps past 0xFFFF or is refused by a SyncManager leaves memory
 //! untouched and does not count in the working counter.
 //!
-//! One file per part of the chip, each an `impl SoftEsc` block:
-//! [`frame`](self) processing and addressing (`frame.rs`), ECAT access to
+//! One file per part of the chip, each an `impl SoftEsc` block: frame
+//! processing and addressing (`frame.rs`), ECAT access to
 //! physical memory with the SyncManager rules (`physical.rs`), the
 //! SyncManagers (`sm.rs`) and FMMUs (`fmmu.rs`), register side effects
 //! (`registers.rs`), the SII interface (`sii.rs`), the watchdogs
