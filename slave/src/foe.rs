@@ -67,7 +67,7 @@
 //! the device's policy refuses it (`0x800A` "no rights" would say the
 //! password is wrong, `0x800D` that the image does not fit the device).
 
-use core::fmt::Write as _;
+use crate::text::Text;
 
 use crate::firmware::{
     DeviceIdentity, EfwError, EfwValidator, ImageStore, Slot, StoreError, begin_download,
@@ -153,9 +153,6 @@ pub const INFO_FILE_NAME: &[u8] = b"info.txt";
 
 /// Capacity of the generated info file.
 pub const INFO_FILE_CAPACITY: usize = 192;
-
-/// Longest error text sent (longer texts are cut).
-const ERROR_TEXT_CAPACITY: usize = 96;
 
 /// What the FoE server needs from the device for one request.
 pub struct FoeContext<'a> {
@@ -586,15 +583,11 @@ impl FoeServer {
     }
 
     fn fail_efw(&mut self, out: &mut [u8], e: EfwError) -> Option<usize> {
-        let mut text: heapless::String<ERROR_TEXT_CAPACITY> = heapless::String::new();
-        let _ = write!(text, "{e}");
-        self.fail(out, e.foe_code(), &text)
+        self.fail(out, e.foe_code(), e.text().as_str())
     }
 
     fn fail_store(&mut self, out: &mut [u8], e: StoreError) -> Option<usize> {
-        let mut text: heapless::String<ERROR_TEXT_CAPACITY> = heapless::String::new();
-        let _ = write!(text, "{e}");
-        self.fail(out, e.foe_code(), &text)
+        self.fail(out, e.foe_code(), e.text())
     }
 }
 
@@ -639,14 +632,20 @@ fn progress(validator: &EfwValidator) -> (u16, u16) {
 
 /// The info file: identity and running version, one `key=value` per line.
 fn info_file(ctx: &FoeContext<'_>) -> heapless::Vec<u8, INFO_FILE_CAPACITY> {
-    let mut text: heapless::String<INFO_FILE_CAPACITY> = heapless::String::new();
+    let mut text: Text<INFO_FILE_CAPACITY> = Text::new();
     let id = &ctx.identity;
-    let _ = write!(
-        text,
-        "vendor_id=0x{:08X}\nproduct_code=0x{:08X}\nrevision=0x{:08X}\nversion={}\n",
-        id.vendor_id, id.product_code, id.revision, ctx.version
-    );
-    text.into_bytes()
+    for (key, value) in [
+        ("vendor_id=0x", id.vendor_id),
+        ("\nproduct_code=0x", id.product_code),
+        ("\nrevision=0x", id.revision),
+    ] {
+        text.push_str(key)
+            .push_hex_digits(u64::from(value), 8, true);
+    }
+    text.push_str("\nversion=")
+        .push_str(ctx.version)
+        .push_str("\n");
+    heapless::Vec::from_slice(text.as_bytes()).unwrap_or_default()
 }
 
 /// Why a DATA packet of a download is not taken.

@@ -20,7 +20,7 @@
 //!
 //! Layers: `device` → `mailbox` → `foe`, `coe` → `params`, `pdo` →
 //! `od` → `led`, `firmware` → `al` → `esc` → `sii` → `hal` → `wire`,
-//! `limits`
+//! `limits`, `text`
 #![cfg_attr(not(any(test, feature = "std", feature = "testing")), no_std)]
 #![forbid(unsafe_code)]
 #![cfg_attr(
@@ -50,6 +50,7 @@ pub mod sii;
 #[cfg(any(test, feature = "testing"))]
 #[doc(hidden)]
 pub mod testing;
+pub mod text;
 pub mod wire;
 
 // What most users name, at the crate root (ethercrab-style): a device is

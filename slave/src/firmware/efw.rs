@@ -3,6 +3,7 @@
 //! docs](super#efw-image-format-project-defined-version-1)).
 
 use super::{Crc32, DeviceIdentity, FirmwareVersion, ImageInfo, VERSION_LEN, crc32};
+use crate::text::Text;
 use crate::wire::foe::FoeErrorCode;
 
 /// Magic bytes, the last one being the format version.
@@ -82,20 +83,16 @@ fn set_bytes(buf: &mut [u8], f: Field, value: &[u8]) {
 /// Why an `.efw` image was refused. Each variant maps to the FoE error code
 /// sent to the master ([`EfwError::foe_code`]); the `Display` text goes
 /// into the FoE error text.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, thiserror::Error)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum EfwError {
     /// The file does not start with `ECATFW\0`.
-    #[error("not an .efw image (bad magic)")]
     BadMagic,
     /// The format version byte is not [`EFW_FORMAT_VERSION`].
-    #[error("unsupported .efw format version {0}")]
     UnsupportedFormat(u8),
     /// `header_len` is below [`EFW_HEADER_LEN`] or above
     /// [`EFW_MAX_HEADER_LEN`].
-    #[error("bad .efw header length {0}")]
     BadHeaderLen(u16),
     /// The header CRC does not match the header bytes.
-    #[error("header CRC {expected:#010x}, computed {computed:#010x}")]
     HeaderCrc {
         /// CRC stored in the header.
         expected: u32,
@@ -103,7 +100,6 @@ pub enum EfwError {
         computed: u32,
     },
     /// The image is for another vendor.
-    #[error("image vendor {found:#x}, device vendor {expected:#x}")]
     WrongVendor {
         /// The device's vendor ID.
         expected: u32,
@@ -111,7 +107,6 @@ pub enum EfwError {
         found: u32,
     },
     /// The image is for another product.
-    #[error("image product {found:#x}, device product {expected:#x}")]
     WrongProduct {
         /// The device's product code.
         expected: u32,
@@ -119,7 +114,6 @@ pub enum EfwError {
         found: u32,
     },
     /// The device revision is outside the image's supported range.
-    #[error("device revision {revision:#x} not in {min:#x}..={max:#x}")]
     RevisionOutOfRange {
         /// The device's revision.
         revision: u32,
@@ -129,7 +123,6 @@ pub enum EfwError {
         max: u32,
     },
     /// The payload does not fit an image slot.
-    #[error("payload of {len} bytes exceeds slot capacity {capacity}")]
     TooLarge {
         /// Payload length.
         len: usize,
@@ -137,7 +130,6 @@ pub enum EfwError {
         capacity: usize,
     },
     /// The transfer ended before the announced end of the image.
-    #[error("image truncated: {received} of {expected} bytes")]
     Truncated {
         /// Image length announced by the header (or the minimum header
         /// length if the header itself is incomplete).
@@ -146,13 +138,11 @@ pub enum EfwError {
         received: usize,
     },
     /// More bytes arrived than the header announces.
-    #[error("image longer than the {expected} bytes announced")]
     Oversized {
         /// Image length announced by the header.
         expected: usize,
     },
     /// The payload CRC does not match the header.
-    #[error("payload CRC {expected:#010x}, computed {computed:#010x}")]
     PayloadCrc {
         /// CRC stored in the header.
         expected: u32,
@@ -160,28 +150,22 @@ pub enum EfwError {
         computed: u32,
     },
     /// [`pack`]/emit: the output buffer is too small.
-    #[error("output buffer too small")]
     BufferTooSmall,
     /// The image carries no firmware (payload length 0): installing it
     /// would replace working firmware with nothing.
-    #[error("image has an empty payload")]
     EmptyPayload,
     /// The device requires signed images (it has a public key) and the
     /// image carries no signature.
-    #[error("image not signed; this device accepts only signed images")]
     Unsigned,
     /// The image's Ed25519 signature does not verify with the device's
     /// public key (another key, or the image was changed after signing).
-    #[error("image signature does not verify with the device's key")]
     BadSignature,
     /// The device has a public key but was built without the
     /// `signed-images` feature: no image can be verified, none is accepted.
-    #[error("this device requires signed images but cannot check signatures")]
     SignatureUnsupported,
     /// Anti-rollback: the image's version is older than the device's floor
     /// (or cannot be compared with it), and the owner did not allow a
     /// downgrade.
-    #[error("version {version} is older than the minimum {floor}: downgrade refused")]
     Rollback {
         /// The image's version.
         version: FirmwareVersion,
@@ -190,7 +174,91 @@ pub enum EfwError {
     },
 }
 
+/// Longest error text (what the FoE error reply has room for).
+pub const ERROR_TEXT_LEN: usize = 96;
+
+impl core::fmt::Display for EfwError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.text().as_str())
+    }
+}
+
+impl core::error::Error for EfwError {}
+
 impl EfwError {
+    /// The text of the error, as the FoE error reply carries it and
+    /// `Display` prints it (built without `core::fmt`, see [`crate::text`]).
+    pub fn text(&self) -> Text<ERROR_TEXT_LEN> {
+        let mut t = Text::new();
+        match *self {
+            Self::BadMagic => t.push_str("not an .efw image (bad magic)"),
+            Self::UnsupportedFormat(v) => t
+                .push_str("unsupported .efw format version ")
+                .push_dec(u64::from(v)),
+            Self::BadHeaderLen(n) => t.push_str("bad .efw header length ").push_dec(u64::from(n)),
+            Self::HeaderCrc { expected, computed } => t
+                .push_str("header CRC ")
+                .push_hex(u64::from(expected), 8, false)
+                .push_str(", computed ")
+                .push_hex(u64::from(computed), 8, false),
+            Self::WrongVendor { expected, found } => t
+                .push_str("image vendor ")
+                .push_hex(u64::from(found), 0, false)
+                .push_str(", device vendor ")
+                .push_hex(u64::from(expected), 0, false),
+            Self::WrongProduct { expected, found } => t
+                .push_str("image product ")
+                .push_hex(u64::from(found), 0, false)
+                .push_str(", device product ")
+                .push_hex(u64::from(expected), 0, false),
+            Self::RevisionOutOfRange { revision, min, max } => t
+                .push_str("device revision ")
+                .push_hex(u64::from(revision), 0, false)
+                .push_str(" not in ")
+                .push_hex(u64::from(min), 0, false)
+                .push_str("..=")
+                .push_hex(u64::from(max), 0, false),
+            Self::TooLarge { len, capacity } => t
+                .push_str("payload of ")
+                .push_dec(len as u64)
+                .push_str(" bytes exceeds slot capacity ")
+                .push_dec(capacity as u64),
+            Self::Truncated { expected, received } => t
+                .push_str("image truncated: ")
+                .push_dec(received as u64)
+                .push_str(" of ")
+                .push_dec(expected as u64)
+                .push_str(" bytes"),
+            Self::Oversized { expected } => t
+                .push_str("image longer than the ")
+                .push_dec(expected as u64)
+                .push_str(" bytes announced"),
+            Self::PayloadCrc { expected, computed } => t
+                .push_str("payload CRC ")
+                .push_hex(u64::from(expected), 8, false)
+                .push_str(", computed ")
+                .push_hex(u64::from(computed), 8, false),
+            Self::BufferTooSmall => t.push_str("output buffer too small"),
+            Self::EmptyPayload => t.push_str("image has an empty payload"),
+            Self::Unsigned => {
+                t.push_str("image not signed; this device accepts only signed images")
+            }
+            Self::BadSignature => {
+                t.push_str("image signature does not verify with the device's key")
+            }
+            Self::SignatureUnsupported => {
+                t.push_str("this device requires signed images but cannot check signatures")
+            }
+            Self::Rollback { version, floor } => t
+                .push_str("version ")
+                .push_str(version.as_str())
+                .push_str(" is older than the minimum ")
+                .push_str(floor.as_str())
+                .push_str(": downgrade refused"),
+        };
+        t
+    }
+
     /// The FoE error code reported for this error (ETG.1000.6 §5.8 and the
     /// SSC extensions, see [`FoeErrorCode`]):
     ///

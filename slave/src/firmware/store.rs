@@ -41,34 +41,49 @@ impl Slot {
 }
 
 /// Failures of the image store and of the bootloader operations on it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, thiserror::Error)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum StoreError {
     /// Offset and length run past the end of a slot.
-    #[error("access beyond the end of the slot")]
     OutOfBounds,
     /// Power was lost during the operation (simulated by [`MemStore`]).
-    #[error("power lost during write")]
     PowerLost,
     /// The flash or file could not be accessed.
-    #[error("flash access failed")]
     Io,
     /// Neither boot-state copy is valid (a blank device).
-    #[error("no valid boot state")]
     NoState,
     /// A written image does not read back with its CRC.
-    #[error("image verify failed after writing")]
     VerifyFailed,
     /// A write was aimed at the active (running) slot.
-    #[error("refusing to write the active slot")]
     ActiveSlot,
     /// A new image runs on trial and is not yet confirmed; its slot cannot
     /// be replaced until [`confirm_boot`](super::confirm_boot) or
     /// [`reject_boot`](super::reject_boot).
-    #[error("trial image not yet confirmed")]
     TrialRunning,
 }
 
+impl core::fmt::Display for StoreError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.text())
+    }
+}
+
+impl core::error::Error for StoreError {}
+
 impl StoreError {
+    /// The text of the error (the FoE error reply carries it; `Display`
+    /// prints it).
+    pub const fn text(&self) -> &'static str {
+        match self {
+            Self::OutOfBounds => "access beyond the end of the slot",
+            Self::PowerLost => "power lost during write",
+            Self::Io => "flash access failed",
+            Self::NoState => "no valid boot state",
+            Self::VerifyFailed => "image verify failed after writing",
+            Self::ActiveSlot => "refusing to write the active slot",
+            Self::TrialRunning => "trial image not yet confirmed",
+        }
+    }
+
     /// The FoE error code reported when a download fails with this error:
     /// `0x8003` DiskFull for [`StoreError::OutOfBounds`], `0x8002`
     /// AccessDenied for [`StoreError::ActiveSlot`] and

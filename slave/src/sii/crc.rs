@@ -15,9 +15,9 @@ const CRC_8_SII: crc::Algorithm<u8> = crc::Algorithm {
     residue: 0x00,
 };
 
-/// The `crc` crate's engine for [`CRC_8_SII`] (256-byte table built at
-/// compile time).
-static SII_CRC: crc::Crc<u8> = crc::Crc::<u8>::new(&CRC_8_SII);
+/// The `crc` crate's engine for [`CRC_8_SII`], bit by bit (`NoTable`: 14
+/// bytes per image do not pay for a 256-byte table in flash).
+static SII_CRC: crc::Crc<u8, crc::NoTable> = crc::Crc::<u8, crc::NoTable>::new(&CRC_8_SII);
 
 /// CRC-8 as used for the SII checksum (ETG.2010 Table 2, word 0x07):
 /// polynomial x^8 + x^2 + x + 1 (0x07), initial value 0xFF, no reflection, no
