@@ -14,10 +14,11 @@ use crate::wire::mailbox::{
     MailboxType, next_counter,
 };
 
-/// The mailbox server of one slave.
+/// The mailbox server of one slave (`T`: the SDO transfer buffer, see
+/// [`crate::coe::sdo::SdoServer`]).
 #[derive(Debug, Default)]
-pub struct MailboxServer {
-    coe: CoeServer,
+pub struct MailboxServer<const T: usize = { crate::coe::sdo::SDO_BUFFER }> {
+    coe: CoeServer<T>,
     foe: FoeServer,
     /// Counter and content checksum of the last request processed, to drop
     /// repeats: a retransmission carries the same counter and the same
@@ -28,7 +29,7 @@ pub struct MailboxServer {
     tx_counter: u8,
 }
 
-impl MailboxServer {
+impl<const T: usize> MailboxServer<T> {
     /// A server in its initial state.
     pub fn new() -> Self {
         Self::default()

@@ -150,16 +150,17 @@ pub fn assign_set(od: &mut Od, pd: &ProcessData, set: usize) -> bool {
     true
 }
 
-/// The process image of one direction.
+/// The process image of one direction: at most `N` mapped entries
+/// (padding included; a firmware sizes it for its device).
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct ProcessImage {
-    entries: heapless::Vec<MappedEntry, MAX_MAPPED>,
+pub struct ProcessImage<const N: usize = MAX_MAPPED> {
+    entries: heapless::Vec<MappedEntry, N>,
     bits: u16,
     /// The PDO sets every assigned PDO belongs to (bit n: set n).
     sets: u32,
 }
 
-impl Default for ProcessImage {
+impl<const N: usize> Default for ProcessImage<N> {
     fn default() -> Self {
         ProcessImage {
             entries: heapless::Vec::new(),
@@ -169,7 +170,7 @@ impl Default for ProcessImage {
     }
 }
 
-impl ProcessImage {
+impl<const N: usize> ProcessImage<N> {
     /// Builds the image from the assignment and mapping objects in `store`;
     /// the assigned PDOs must share a PDO set of `pd` (when the device
     /// declares sets).
@@ -326,8 +327,8 @@ mod tests {
     fn the_default_set_gives_3_byte_images_and_unpacks_signed_values() {
         let mut s = store();
         let pd = &DEVICE.process_data;
-        let out = ProcessImage::build(&s, Direction::Outputs, pd).unwrap();
-        let inp = ProcessImage::build(&s, Direction::Inputs, pd).unwrap();
+        let out = <ProcessImage>::build(&s, Direction::Outputs, pd).unwrap();
+        let inp = <ProcessImage>::build(&s, Direction::Inputs, pd).unwrap();
         assert_eq!((out.byte_len(), inp.byte_len()), (3, 3));
         assert_eq!(out.sets(), 0b01);
         out.unpack(&mut s, &[1, 0xFE, 0xFF]);
@@ -345,12 +346,12 @@ mod tests {
         s.download(0x1C13, 2, &0x1A01u16.to_le_bytes(), AlState::PreOp)
             .unwrap();
         assert_eq!(
-            ProcessImage::build(&s, Direction::Inputs, &DEVICE.process_data),
+            <ProcessImage>::build(&s, Direction::Inputs, &DEVICE.process_data),
             Err(PdoError::MixedSets(0x1A00, 0x1A01))
         );
         s.set(0x1C12, 1, 0x1234);
         assert_eq!(
-            ProcessImage::build(&s, Direction::Outputs, &DEVICE.process_data),
+            <ProcessImage>::build(&s, Direction::Outputs, &DEVICE.process_data),
             Err(PdoError::UnknownPdo(0x1234))
         );
     }
@@ -363,7 +364,7 @@ mod tests {
             (s.get(0x1C12, 1), s.get(0x1C13, 1)),
             (Some(0x1601), Some(0x1A01))
         );
-        let out = ProcessImage::build(&s, Direction::Outputs, &DEVICE.process_data).unwrap();
+        let out = <ProcessImage>::build(&s, Direction::Outputs, &DEVICE.process_data).unwrap();
         assert_eq!((out.byte_len(), out.sets()), (4, 0b10));
         assert!(!assign_set(&mut s, &DEVICE.process_data, 2));
         assert_eq!(sets_of(&DEVICE.process_data, 0x1A00), 0b01);

@@ -18,8 +18,8 @@ fn bench(c: &mut Criterion) {
     for (name, set) in [("directional", 0usize), ("independent", 1)] {
         let mut store = pam_199_p_etc::store();
         assert!(assign_set(&mut store, pd, set));
-        let out = ProcessImage::build(&store, Direction::Outputs, pd).expect("outputs");
-        let inp = ProcessImage::build(&store, Direction::Inputs, pd).expect("inputs");
+        let out = <ProcessImage>::build(&store, Direction::Outputs, pd).expect("outputs");
+        let inp = <ProcessImage>::build(&store, Direction::Inputs, pd).expect("inputs");
         // Every mapped input flag set, values non-zero.
         for e in inp.entries() {
             if let Some(f) = e.flat {

@@ -109,8 +109,16 @@ mod device {
     use pam_199_p_etc::DEVICE;
 
     /// The whole firmware state: ESC handle, application, dictionary,
-    /// mailbox servers, process images.
-    pub type Firmware = Slave<Pdi, App>;
+    /// mailbox servers, process images, with buffers sized for the device
+    /// (`Slave`'s MBX, SDO, PDO and IMG: the largest mailbox, the largest
+    /// object an SDO transfer carries, the entries and bytes of one
+    /// direction's process image). `Slave::with_buffers` refuses sizes
+    /// smaller than the description needs at `fw_init`.
+    #[cfg(feature = "io8")]
+    pub type Firmware = Slave<Pdi, App, 512, 128, 16, 8>;
+    /// The whole firmware state (see the IO8's).
+    #[cfg(feature = "pam")]
+    pub type Firmware = Slave<Pdi, App, 1024, 256, 32, 32>;
 
     const LAYOUT: MemoryLayout = DEVICE.layout();
 
@@ -128,7 +136,7 @@ mod device {
     };
 
     pub fn new() -> Firmware {
-        Slave::new(pdi(), crate::board::new_app())
+        Slave::with_buffers(pdi(), crate::board::new_app())
     }
 }
 

@@ -46,14 +46,15 @@ pub trait ObjectAccess {
     ) -> Result<(), SdoAbortCode>;
 }
 
-/// The CoE server of one slave.
+/// The CoE server of one slave (`T`: the SDO transfer buffer, see
+/// [`sdo::SdoServer`]).
 #[derive(Debug, Default)]
-pub struct CoeServer {
-    sdo: sdo::SdoServer,
+pub struct CoeServer<const T: usize = { sdo::SDO_BUFFER }> {
+    sdo: sdo::SdoServer<T>,
     info: sdo_info::SdoInfoServer,
 }
 
-impl CoeServer {
+impl<const T: usize> CoeServer<T> {
     /// A server with no transfer in progress.
     pub fn new() -> Self {
         Self::default()

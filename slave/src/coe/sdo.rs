@@ -10,7 +10,9 @@ use super::ObjectAccess;
 use crate::wire::coe::{CoeService, DownloadKind, SdoAbortCode, SdoRequest, SdoResponse};
 use crate::wire::mailbox::MailboxErrorCode;
 
-/// Largest object (or complete-access image) a transfer can carry.
+/// Largest object (or complete-access image) a transfer can carry by
+/// default: the host's size. A firmware sizes its server for its device
+/// ([`SdoServer`]'s `T`, the third parameter of `device::Slave`).
 pub const SDO_BUFFER: usize = 1024;
 
 /// Transfer state of the SDO server.
@@ -73,23 +75,25 @@ impl SdoOutput {
     }
 }
 
-/// The SDO server.
+/// The SDO server, with a transfer buffer of `T` bytes: the largest
+/// object (or complete-access image) a normal or segmented transfer can
+/// carry; a bigger one is refused with 0x05040005 "out of memory".
 #[derive(Debug)]
-pub struct SdoServer {
+pub struct SdoServer<const T: usize = SDO_BUFFER> {
     state: SdoState,
-    buf: [u8; SDO_BUFFER],
+    buf: [u8; T],
 }
 
-impl Default for SdoServer {
+impl<const T: usize> Default for SdoServer<T> {
     fn default() -> Self {
         SdoServer {
             state: SdoState::Idle,
-            buf: [0; SDO_BUFFER],
+            buf: [0; T],
         }
     }
 }
 
-impl SdoServer {
+impl<const T: usize> SdoServer<T> {
     /// The transfer state.
     pub fn state(&self) -> SdoState {
         self.state
@@ -193,7 +197,7 @@ impl SdoServer {
                     data,
                 } => {
                     let total = complete_size as usize;
-                    if total > SDO_BUFFER {
+                    if total > T {
                         return Reply::Abort {
                             index,
                             sub,
@@ -510,7 +514,7 @@ mod tests {
 
     #[test]
     fn sdo_abort_travels_as_an_sdo_request_service_2() {
-        let (mut srv, mut od) = (SdoServer::default(), od());
+        let (mut srv, mut od) = (<SdoServer>::default(), od());
         let mut raw = [0u8; 16];
         let n = SdoRequest::InitiateUpload {
             index: 0x1234,
@@ -538,7 +542,7 @@ mod tests {
 
     #[test]
     fn upload_longer_than_the_mailbox_is_segmented_with_toggles() {
-        let (mut srv, mut od) = (SdoServer::default(), od());
+        let (mut srv, mut od) = (<SdoServer>::default(), od());
         let r = ask(
             &mut srv,
             &mut od,
@@ -583,7 +587,7 @@ mod tests {
 
     #[test]
     fn short_objects_upload_expedited() {
-        let (mut srv, mut od) = (SdoServer::default(), od());
+        let (mut srv, mut od) = (<SdoServer>::default(), od());
         let r = ask(
             &mut srv,
             &mut od,
@@ -602,7 +606,7 @@ mod tests {
 
     #[test]
     fn segmented_download_is_stored_only_when_complete() {
-        let (mut srv, mut od) = (SdoServer::default(), od());
+        let (mut srv, mut od) = (<SdoServer>::default(), od());
         let data = [7u8; 100];
         begin(&mut srv, &mut od, &data);
         ask(
@@ -635,7 +639,7 @@ mod tests {
 
     #[test]
     fn toggle_error_aborts_0503_0000_and_leaves_the_object() {
-        let (mut srv, mut od) = (SdoServer::default(), od());
+        let (mut srv, mut od) = (<SdoServer>::default(), od());
         let data = [9u8; 100];
         begin(&mut srv, &mut od, &data);
         let r = ask(
@@ -661,7 +665,7 @@ mod tests {
 
     #[test]
     fn a_new_request_during_a_segmented_transfer_aborts_0504_0000() {
-        let (mut srv, mut od) = (SdoServer::default(), od());
+        let (mut srv, mut od) = (<SdoServer>::default(), od());
         let data = [9u8; 100];
         begin(&mut srv, &mut od, &data);
         let r = ask(
@@ -701,7 +705,7 @@ mod tests {
 
     #[test]
     fn segments_without_a_transfer_abort_0504_0001() {
-        let (mut srv, mut od) = (SdoServer::default(), od());
+        let (mut srv, mut od) = (<SdoServer>::default(), od());
         let r = ask(
             &mut srv,
             &mut od,
@@ -719,7 +723,7 @@ mod tests {
 
     #[test]
     fn early_last_segment_aborts_with_length_mismatch() {
-        let (mut srv, mut od) = (SdoServer::default(), od());
+        let (mut srv, mut od) = (<SdoServer>::default(), od());
         let data = [9u8; 100];
         begin(&mut srv, &mut od, &data);
         let r = ask(
@@ -744,7 +748,7 @@ mod tests {
 
     #[test]
     fn garbage_requests_do_not_panic() {
-        let (mut srv, mut od) = (SdoServer::default(), od());
+        let (mut srv, mut od) = (<SdoServer>::default(), od());
         let mut out = [0u8; 16];
         for len in 0..12 {
             let req = [0xFFu8; 12];

@@ -6,8 +6,8 @@ use ecat_slave::pdo::{Direction, PdoError, ProcessImage, read_bits, write_bits};
 #[test]
 fn default_directional_images_are_5_and_14_bytes() {
     let s = crate::store();
-    let out = ProcessImage::build(&s, Direction::Outputs, &crate::DEVICE.process_data).unwrap();
-    let inp = ProcessImage::build(&s, Direction::Inputs, &crate::DEVICE.process_data).unwrap();
+    let out = <ProcessImage>::build(&s, Direction::Outputs, &crate::DEVICE.process_data).unwrap();
+    let inp = <ProcessImage>::build(&s, Direction::Inputs, &crate::DEVICE.process_data).unwrap();
     assert_eq!(out.byte_len(), 5);
     assert_eq!(inp.byte_len(), 14);
     assert_eq!(out.sets(), 0b01, "the directional set only");
@@ -16,7 +16,7 @@ fn default_directional_images_are_5_and_14_bytes() {
 #[test]
 fn outputs_unpack_into_enable_and_command_value() {
     let mut s = crate::store();
-    let out = ProcessImage::build(&s, Direction::Outputs, &crate::DEVICE.process_data).unwrap();
+    let out = <ProcessImage>::build(&s, Direction::Outputs, &crate::DEVICE.process_data).unwrap();
     let cmd: i32 = -5000;
     let mut data = [0u8; 5];
     data[0] = 1;
@@ -31,7 +31,7 @@ fn inputs_pack_ia_at_byte_10() {
     let mut s = crate::store();
     s.set(0x6000, 6, 750);
     s.set(0x6000, 1, 1);
-    let inp = ProcessImage::build(&s, Direction::Inputs, &crate::DEVICE.process_data).unwrap();
+    let inp = <ProcessImage>::build(&s, Direction::Inputs, &crate::DEVICE.process_data).unwrap();
     let mut buf = [0u8; 14];
     inp.pack(&s, &mut buf);
     assert_eq!(buf[0], 1);
@@ -45,7 +45,7 @@ fn mixed_set_assignment_is_refused() {
     s.download(0x1C13, 2, &0x1A03u16.to_le_bytes(), AlState::PreOp)
         .unwrap();
     assert_eq!(
-        ProcessImage::build(&s, Direction::Inputs, &crate::DEVICE.process_data),
+        <ProcessImage>::build(&s, Direction::Inputs, &crate::DEVICE.process_data),
         Err(PdoError::MixedSets(0x1A00, 0x1A03))
     );
 }
@@ -55,7 +55,7 @@ fn unknown_pdo_in_assignment_is_refused() {
     let mut s = crate::store();
     s.set(0x1C12, 1, 0x1234);
     assert_eq!(
-        ProcessImage::build(&s, Direction::Outputs, &crate::DEVICE.process_data),
+        <ProcessImage>::build(&s, Direction::Outputs, &crate::DEVICE.process_data),
         Err(PdoError::UnknownPdo(0x1234))
     );
 }

@@ -4,7 +4,9 @@
 
 use super::*;
 
-impl<E: Esc, A: Application> Slave<E, A> {
+impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usize, const IMG: usize>
+    Slave<E, A, MBX, SDO, PDO, IMG>
+{
     pub(super) fn mailbox_layout(&self) -> ((u16, u16), (u16, u16)) {
         if self.al.state == AlState::Boot {
             (self.layout.boot_out, self.layout.boot_in)
@@ -22,8 +24,8 @@ impl<E: Esc, A: Application> Slave<E, A> {
         }
         let (_, inp) = self.mailbox_layout();
         if let Some((len, buf)) = self.pending.take() {
-            let n = usize::from(inp.1).min(MAX_MAILBOX);
-            let mut frame = [0u8; MAX_MAILBOX];
+            let n = usize::from(inp.1).min(MBX);
+            let mut frame = [0u8; MBX];
             if let (Some(dst), Some(src)) = (frame.get_mut(..len), buf.get(..len)) {
                 dst.copy_from_slice(src);
             }
@@ -51,7 +53,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
             && let Some((_, frame)) = &self.last_sent
         {
             let (_, inp) = self.mailbox_layout();
-            let n = usize::from(inp.1).min(MAX_MAILBOX);
+            let n = usize::from(inp.1).min(MBX);
             let copy = *frame;
             if let Some(f) = copy.get(..n) {
                 self.esc.write(inp.0, f)?;
@@ -79,8 +81,8 @@ impl<E: Esc, A: Application> Slave<E, A> {
         if !self.sm_full(0)? {
             // Nothing new: continue a response that spans several mailboxes.
             let (_, inp) = self.mailbox_layout();
-            let max = usize::from(inp.1).min(MAX_MAILBOX);
-            let mut response = [0u8; MAX_MAILBOX];
+            let max = usize::from(inp.1).min(MBX);
+            let mut response = [0u8; MBX];
             let mut produced = response
                 .get_mut(..max)
                 .and_then(|r| self.mailbox.next_pending(r, view));
@@ -98,14 +100,14 @@ impl<E: Esc, A: Application> Slave<E, A> {
             return Ok(());
         }
         let (out, inp) = self.mailbox_layout();
-        let mut request = [0u8; MAX_MAILBOX];
-        let n = usize::from(out.1).min(MAX_MAILBOX);
+        let mut request = [0u8; MBX];
+        let n = usize::from(out.1).min(MBX);
         let Some(req) = request.get_mut(..n) else {
             return Ok(());
         };
         self.esc.read(out.0, req)?;
-        let mut response = [0u8; MAX_MAILBOX];
-        let max = usize::from(inp.1).min(MAX_MAILBOX);
+        let mut response = [0u8; MBX];
+        let max = usize::from(inp.1).min(MBX);
         let state = self.al.state;
         let version = self.firmware_version();
         let desc = self.app.description();

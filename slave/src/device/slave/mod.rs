@@ -66,19 +66,48 @@ pub enum SyncMode {
 const MAX_CHANGES: usize = complete::MAX_ENTRIES;
 
 /// A device's firmware on an ESC reached through the PDI.
-pub struct Slave<E: Esc, A: Application> {
+///
+/// The last four parameters size its buffers (a firmware sizes them for
+/// its device; the defaults are the host's, large enough for any device
+/// the core accepts):
+///
+/// * `MBX`: bytes of a mailbox message: the largest of the device's
+///   standard and bootstrap mailboxes ([`MailboxConfig`](super::MailboxConfig));
+///   two such buffers live in the object (the response waiting for SM1 and
+///   the last one sent, for the repeat service) and two on the stack while
+///   a request is served.
+/// * `SDO`: the SDO transfer buffer: the largest object (or complete-access
+///   image) a normal or segmented transfer carries; bigger ones are
+///   refused with 0x05040005.
+/// * `PDO`: the most entries (padding included) one direction's PDOs may
+///   map; an assignment with more is refused at PRE-OP→SAFE-OP (0x001D /
+///   0x001E).
+/// * `IMG`: the largest process image of one direction in bytes; a bigger
+///   one is refused at PRE-OP→SAFE-OP the same way.
+///
+/// [`Slave::new`] stops with a panic when the description needs more
+/// (a mailbox larger than `MBX`, a default assignment beyond `PDO`/`IMG`):
+/// a programming error of the firmware, as a too small value storage is.
+pub struct Slave<
+    E: Esc,
+    A: Application,
+    const MBX: usize = MAX_MAILBOX,
+    const SDO: usize = { crate::coe::sdo::SDO_BUFFER },
+    const PDO: usize = { crate::pdo::MAX_MAPPED },
+    const IMG: usize = MAX_IMAGE,
+> {
     esc: E,
     app: A,
     layout: MemoryLayout,
     store: ObjectStore<A::Values>,
     al: AlStatus,
-    outputs: ProcessImage,
-    inputs: ProcessImage,
-    mailbox: MailboxServer,
+    outputs: ProcessImage<PDO>,
+    inputs: ProcessImage<PDO>,
+    mailbox: MailboxServer<SDO>,
     /// A response waiting for SM1 to become free.
-    pending: Option<(usize, [u8; MAX_MAILBOX])>,
+    pending: Option<(usize, [u8; MBX])>,
     /// The last response written to SM1, for the repeat service.
-    last_sent: Option<(usize, [u8; MAX_MAILBOX])>,
+    last_sent: Option<(usize, [u8; MBX])>,
     emergencies: Emergencies,
     emergencies_enabled: bool,
     pdi_failures: u32,
@@ -102,7 +131,7 @@ pub struct Slave<E: Esc, A: Application> {
     outputs_since_sync0: bool,
     /// DC mode: outputs received (length, bytes), applied at the next
     /// SYNC0.
-    dc_outputs: Option<(usize, [u8; MAX_IMAGE])>,
+    dc_outputs: Option<(usize, [u8; IMG])>,
     /// The bootloader started no image ([`Slave::set_no_valid_firmware`]).
     no_valid_firmware: bool,
     /// Outputs from SM2 were applied to the dictionary since OP was
@@ -112,7 +141,9 @@ pub struct Slave<E: Esc, A: Application> {
     sm_watchdog_armed: bool,
 }
 
-impl<E: Esc, A: Application> core::fmt::Debug for Slave<E, A> {
+impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usize, const IMG: usize>
+    core::fmt::Debug for Slave<E, A, MBX, SDO, PDO, IMG>
+{
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Slave")
             .field("device", &self.app.description().names.type_name)
@@ -122,28 +153,65 @@ impl<E: Esc, A: Application> core::fmt::Debug for Slave<E, A> {
 }
 
 impl<E: Esc, A: Application> Slave<E, A> {
+    /// The firmware in its power-on state on `esc`, running `app`, with
+    /// buffers large enough for any device ([`Slave::with_buffers`] sizes
+    /// them for one device).
+    ///
+    /// # Panics
+    ///
+    /// When the application's `Values` cannot hold its dictionary's entry
+    /// count ([`Application::Values`]): a programming error.
+    pub fn new(esc: E, app: A) -> Self {
+        Self::with_buffers(esc, app)
+    }
+}
+
+impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usize, const IMG: usize>
+    Slave<E, A, MBX, SDO, PDO, IMG>
+{
     /// The device's description.
     pub fn description(&self) -> &'static DeviceDescription {
         self.app.description()
     }
 
-    /// The firmware in its power-on state on `esc`, running `app`.
+    /// The firmware in its power-on state on `esc`, running `app`, with
+    /// the buffer sizes of its type (see [`Slave`]; [`Slave::new`] is the
+    /// same with the host's defaults).
     ///
     /// The application's `Values` must hold at least its dictionary's
     /// entry count ([`Application::Values`]).
     ///
     /// # Panics
     ///
-    /// When `Values` is too small: a programming error, stopped in every
-    /// build (for a static description the comparison is a constant and
-    /// costs nothing in the firmware).
-    pub fn new(esc: E, mut app: A) -> Self {
+    /// When `Values` or a buffer is too small for the description: a
+    /// programming error, stopped in every build (for a static description
+    /// the comparisons are constants and cost nothing in the firmware).
+    pub fn with_buffers(esc: E, mut app: A) -> Self {
         let desc = app.description();
         assert!(
             <A::Values as ValueStorage>::LEN >= desc.dictionary.entry_count(),
             "Application::Values must hold the dictionary's entry count"
         );
+        let mbx = desc.mailbox;
+        assert!(
+            usize::from(mbx.size) <= MBX && mbx.boot_size.is_none_or(|b| usize::from(b) <= MBX),
+            "Slave's MBX must hold the device's standard and bootstrap mailboxes"
+        );
         let mut store = ObjectStore::<A::Values>::new(desc.dictionary);
+        for dir in [Direction::Outputs, Direction::Inputs] {
+            let fits = match ProcessImage::<PDO>::build(
+                A::Values::view(&store),
+                dir,
+                &desc.process_data,
+            ) {
+                Ok(image) => image.byte_len() <= IMG,
+                Err(e) => e != crate::pdo::PdoError::TooLarge,
+            };
+            assert!(
+                fits,
+                "Slave's PDO and IMG must hold the device's default process image"
+            );
+        }
         app.power_on(A::Values::view_mut(&mut store));
         Slave {
             esc,
@@ -206,6 +274,16 @@ impl<E: Esc, A: Application> Slave<E, A> {
     /// Uses another memory layout (standard mailbox size); it must match
     /// the SII the ESC serves.
     pub fn set_layout(&mut self, layout: MemoryLayout) {
+        let lens = [
+            layout.mbx_out.1,
+            layout.mbx_in.1,
+            layout.boot_out.1,
+            layout.boot_in.1,
+        ];
+        assert!(
+            lens.iter().all(|&n| usize::from(n) <= MBX),
+            "Slave's MBX must hold the layout's mailboxes"
+        );
         self.layout = layout;
     }
 

@@ -3,7 +3,9 @@
 
 use super::*;
 
-impl<E: Esc, A: Application> Slave<E, A> {
+impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usize, const IMG: usize>
+    Slave<E, A, MBX, SDO, PDO, IMG>
+{
     /// Outputs to their safe state: every RxPDO-mappable entry back to
     /// zero, then the application switches its hardware outputs off.
     pub(super) fn safe_outputs(&mut self) {
@@ -24,7 +26,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
         if events & reg::al_event_sm(2) != 0 {
             self.outputs_since_sync0 = true;
         }
-        let mut buf = [0u8; MAX_IMAGE];
+        let mut buf = [0u8; IMG];
         if events & reg::al_event_sm(2) != 0 && self.outputs.byte_len() > 0 {
             let n = self.outputs.byte_len();
             if let Some(b) = buf.get_mut(..n) {
@@ -52,7 +54,7 @@ impl<E: Esc, A: Application> Slave<E, A> {
     pub(super) fn write_inputs(&mut self) -> Result<(), EscError> {
         let n = self.inputs.byte_len();
         if n > 0 {
-            let mut inb = [0u8; MAX_IMAGE];
+            let mut inb = [0u8; IMG];
             if let Some(b) = inb.get_mut(..n) {
                 self.inputs.pack(A::Values::view(&self.store), b);
                 match self.esc.write(self.layout.pd_in, b) {

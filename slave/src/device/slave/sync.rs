@@ -3,7 +3,9 @@
 
 use super::*;
 
-impl<E: Esc, A: Application> Slave<E, A> {
+impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usize, const IMG: usize>
+    Slave<E, A, MBX, SDO, PDO, IMG>
+{
     /// A SYNC0 event: acknowledged by reading 0x098E (one PDI read);
     /// counted, and in DC mode a cycle without new outputs since the last
     /// SYNC0 counts as an SM event missed.

@@ -33,12 +33,12 @@ pub(super) fn mailbox_matches<E: Esc>(
 }
 
 /// What the checks need to see while the AL state machine runs.
-pub(super) struct Checks<'a, E: Esc, A: Application> {
+pub(super) struct Checks<'a, E: Esc, A: Application, const PDO: usize, const IMG: usize> {
     pub(super) esc: &'a mut E,
     pub(super) app: &'a mut A,
     pub(super) od: &'a mut Od,
     pub(super) layout: MemoryLayout,
-    pub(super) images: Option<(ProcessImage, ProcessImage)>,
+    pub(super) images: Option<(ProcessImage<PDO>, ProcessImage<PDO>)>,
     pub(super) now_ns: u64,
     /// A PDI access that failed during a check: the check refuses with
     /// 0x0001 and the firmware goes to its fail-safe state (never "assume
@@ -50,7 +50,7 @@ pub(super) struct Checks<'a, E: Esc, A: Application> {
     pub(super) no_valid_firmware: bool,
 }
 
-impl<E: Esc, A: Application> Checks<'_, E, A> {
+impl<E: Esc, A: Application, const PDO: usize, const IMG: usize> Checks<'_, E, A, PDO, IMG> {
     /// Records a failed PDI access; the refusal code of a check that could
     /// not read the ESC.
     fn pdi_failed(&mut self, e: EscError) -> AlStatusCode {
@@ -59,7 +59,7 @@ impl<E: Esc, A: Application> Checks<'_, E, A> {
     }
 }
 
-impl<E: Esc, A: Application> Checks<'_, E, A> {
+impl<E: Esc, A: Application, const PDO: usize, const IMG: usize> Checks<'_, E, A, PDO, IMG> {
     /// The DC SYNC configuration the master left in the activation
     /// register (0x0981) and the SYNC0 cycle time (0x09A0): no SYNC means
     /// free run; cyclic operation with SYNC0 means DC mode if the cycle
@@ -105,7 +105,9 @@ impl<E: Esc, A: Application> Checks<'_, E, A> {
     }
 }
 
-impl<E: Esc, A: Application> TransitionChecks for Checks<'_, E, A> {
+impl<E: Esc, A: Application, const PDO: usize, const IMG: usize> TransitionChecks
+    for Checks<'_, E, A, PDO, IMG>
+{
     fn check_mailbox(&mut self) -> Result<(), AlStatusCode> {
         if self.no_valid_firmware {
             return Err(AlStatusCode::NoValidFirmware);
@@ -148,10 +150,16 @@ impl<E: Esc, A: Application> TransitionChecks for Checks<'_, E, A> {
             }
         }
         let pd = &desc.process_data;
-        let outputs = ProcessImage::build(self.od, Direction::Outputs, pd)
-            .map_err(|_| AlStatusCode::InvalidOutputConfig)?;
-        let inputs = ProcessImage::build(self.od, Direction::Inputs, pd)
-            .map_err(|_| AlStatusCode::InvalidInputConfig)?;
+        // An image beyond this firmware's buffers is refused as any image
+        // the device cannot serve.
+        let outputs = ProcessImage::<PDO>::build(self.od, Direction::Outputs, pd)
+            .ok()
+            .filter(|i| i.byte_len() <= IMG)
+            .ok_or(AlStatusCode::InvalidOutputConfig)?;
+        let inputs = ProcessImage::<PDO>::build(self.od, Direction::Inputs, pd)
+            .ok()
+            .filter(|i| i.byte_len() <= IMG)
+            .ok_or(AlStatusCode::InvalidInputConfig)?;
         // Both directions must come from one PDO set.
         if outputs.sets() & inputs.sets() == 0 {
             return Err(AlStatusCode::InvalidInputConfig);
@@ -221,10 +229,12 @@ impl<E: Esc, A: Application> TransitionChecks for Checks<'_, E, A> {
     }
 }
 
-impl<E: Esc, A: Application> Slave<E, A> {
+impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usize, const IMG: usize>
+    Slave<E, A, MBX, SDO, PDO, IMG>
+{
     pub(super) fn al_control(&mut self, control: u16) -> Result<(), EscError> {
         let before = self.al;
-        let mut checks = Checks {
+        let mut checks = Checks::<E, A, PDO, IMG> {
             esc: &mut self.esc,
             app: &mut self.app,
             od: A::Values::view_mut(&mut self.store),
