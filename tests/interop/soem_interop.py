@@ -735,8 +735,23 @@ IO8_VENDOR = 0x0000_0ABE
 IO8_PRODUCT = 0x0000_0008
 
 
+def open_board(iface):
+    """open_master for the board: SOEM's discovery (BRD with its
+    compiled-in 20 ms timeout) is tried again, up to 5 times, when a
+    loaded machine kept the bridge from answering in time; the log says
+    so."""
+    for attempt in range(5):
+        m, n = open_master(iface)
+        if n >= 1:
+            return m, n
+        log(f"      config_init returned {n} (attempt {attempt + 1}), again")
+        m.close()
+        time.sleep(0.2)
+    return m, n
+
+
 def board(iface, esi, sii_path, good_efw, bad_efw, boot_out, boot_in):
-    m, n = open_master(iface)
+    m, n = open_board(iface)
     check(n == 1, f"SOEM config_init found {n} slave(s) (1 expected)")
     s = m.slaves[0]
     log(f"      vendor {s.man:#010x} product {s.id:#010x} revision {s.rev} name {s.name!r}")
@@ -829,7 +844,7 @@ def board(iface, esi, sii_path, good_efw, bad_efw, boot_out, boot_in):
     m.close()
 
     # --- FoE in BOOT, as SOEM's firmware-update example does it
-    m, n = open_master(iface)
+    m, n = open_board(iface)
     s = m.slaves[0]
     m.state = pysoem.INIT_STATE
     m.write_state()
@@ -853,7 +868,7 @@ def board(iface, esi, sii_path, good_efw, bad_efw, boot_out, boot_in):
 
 
 def board_after_restart(iface, version):
-    m, n = open_master(iface)
+    m, n = open_board(iface)
     check(n == 1, f"after the restart SOEM finds {n} slave(s)")
     s = m.slaves[0]
     set_sm_watchdog(m, LONG_WATCHDOG_MS)
