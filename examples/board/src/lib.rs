@@ -177,7 +177,9 @@ impl<S: SpiDevice, Q: InputPin, B: Board, N: NvStorage> Node<S, Q, B, N> {
     /// Returns the decision; a store that cannot be read keeps the device
     /// in the bootloader (INIT and BOOT only).
     pub fn boot(&mut self, images: &mut dyn ImageStore, version: &str) -> BootDecision {
-        if images.read_state().is_err_and(|e| e == firmware::StoreError::NoState)
+        if images
+            .read_state()
+            .is_err_and(|e| e == firmware::StoreError::NoState)
             && let Some(v) = FirmwareVersion::new(version)
         {
             let _ = firmware::provision(images, v, FACTORY_MARKER);
@@ -185,11 +187,12 @@ impl<S: SpiDevice, Q: InputPin, B: Board, N: NvStorage> Node<S, Q, B, N> {
         let decision = firmware::power_on(images);
         let _ = firmware::confirm_boot(images);
         let v = decision.version;
-        self.slave.set_firmware_version(if v == FirmwareVersion::EMPTY {
-            version
-        } else {
-            v.as_str()
-        });
+        self.slave
+            .set_firmware_version(if v == FirmwareVersion::EMPTY {
+                version
+            } else {
+                v.as_str()
+            });
         self.slave.set_no_valid_firmware(decision.slot.is_none());
         decision
     }

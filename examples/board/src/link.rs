@@ -481,7 +481,11 @@ impl<S: Serial> NorFlash for LinkFlash<'_, S> {
     const ERASE_SIZE: usize = FLASH_SECTOR as usize;
 
     fn erase(&mut self, from: u32, to: u32) -> Result<(), LinkError> {
-        if from % FLASH_SECTOR != 0 || to % FLASH_SECTOR != 0 || to < from || to > self.capacity {
+        if !from.is_multiple_of(FLASH_SECTOR)
+            || !to.is_multiple_of(FLASH_SECTOR)
+            || to < from
+            || to > self.capacity
+        {
             return Err(LinkError::TooLong);
         }
         let count = u16::try_from((to - from) / FLASH_SECTOR).map_err(|_| LinkError::TooLong)?;
@@ -763,7 +767,11 @@ mod tests {
         link.borrow_mut().serial.answer = wrong;
         let mut b = [0u8; 1];
         assert_eq!(flash.read(0, &mut b), Err(LinkError::Framing));
-        assert_eq!(link.borrow().stats().errors, 2, "checked requests never reach the line");
+        assert_eq!(
+            link.borrow().stats().errors,
+            2,
+            "checked requests never reach the line"
+        );
     }
 
     #[test]
@@ -805,10 +813,7 @@ mod tests {
                 10
             ))
         );
-        assert_eq!(
-            Request::parse(&spi[..8]),
-            Err(ParseError::Incomplete(10))
-        );
+        assert_eq!(Request::parse(&spi[..8]), Err(ParseError::Incomplete(10)));
         assert_eq!(
             Request::parse(&[SPI, 3, 0, 2, 0, 2, 0]),
             Err(ParseError::BadLength),

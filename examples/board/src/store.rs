@@ -22,6 +22,12 @@ use embedded_storage::nor_flash::NorFlash;
 /// each region ends on one.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FlashLayout {
+    /// The erase unit the regions are aligned to: the flash's
+    /// `ERASE_SIZE` when its sectors are uniform; on a flash with sectors
+    /// of several sizes (the STM32F4's 16, 64 and 128 KiB, whose driver
+    /// erases every sector a range touches) the smallest sector, with each
+    /// region placed on whole sectors of its own.
+    pub erase_unit: u32,
     /// Image slots A and B.
     pub slots: [u32; 2],
     /// Length of an image slot: the largest image the device accepts.
@@ -37,9 +43,13 @@ pub struct FlashLayout {
 }
 
 impl FlashLayout {
-    /// Whether the regions fit a flash of `capacity` bytes erased in units
-    /// of `erase` bytes, do not overlap, and hold what goes into them.
-    pub const fn is_valid(&self, capacity: u32, erase: u32) -> bool {
+    /// Whether the regions fit a flash of `capacity` bytes, are aligned to
+    /// the erase unit, do not overlap, and hold what goes into them.
+    // A const fn cannot call `get`; `i` and `j` stay below the length of
+    // the fixed array they index.
+    #[allow(clippy::indexing_slicing)]
+    pub const fn is_valid(&self, capacity: u32) -> bool {
+        let erase = self.erase_unit;
         let regions = [
             (self.slots[0], self.slot_len),
             (self.slots[1], self.slot_len),
@@ -77,10 +87,11 @@ impl FlashLayout {
     }
 }
 
-fn slot_index(slot: Slot) -> usize {
+/// The start of image slot `slot` in `layout`.
+fn slot_start(layout: &FlashLayout, slot: Slot) -> u32 {
     match slot {
-        Slot::A => 0,
-        Slot::B => 1,
+        Slot::A => layout.slots[0],
+        Slot::B => layout.slots[1],
     }
 }
 
@@ -104,8 +115,7 @@ impl<F: NorFlash> NorImageStore<F> {
     pub fn new(flash: F, layout: FlashLayout) -> Option<Self> {
         let () = Self::BYTEWISE;
         let capacity = u32::try_from(flash.capacity()).ok()?;
-        let erase = u32::try_from(F::ERASE_SIZE).ok()?;
-        layout.is_valid(capacity, erase).then(|| NorImageStore {
+        layout.is_valid(capacity).then(|| NorImageStore {
             flash: RefCell::new(flash),
             layout,
         })
@@ -122,7 +132,7 @@ impl<F: NorFlash> NorImageStore<F> {
             return Err(StoreError::OutOfBounds);
         }
         let offset = u32::try_from(offset).map_err(|_| StoreError::OutOfBounds)?;
-        self.layout.slots[slot_index(slot)]
+        slot_start(&self.layout, slot)
             .checked_add(offset)
             .ok_or(StoreError::OutOfBounds)
     }
@@ -143,7 +153,7 @@ impl<F: NorFlash> ImageStore for NorImageStore<F> {
     }
 
     fn erase(&mut self, slot: Slot) -> Result<(), StoreError> {
-        let start = self.layout.slots[slot_index(slot)];
+        let start = slot_start(&self.layout, slot);
         let end = start
             .checked_add(self.layout.slot_len)
             .ok_or(StoreError::OutOfBounds)?;
@@ -280,7 +290,9 @@ impl<F: NorFlash> NvStorage for NorNv<F> {
             self.flash
                 .erase(at, end)
                 .map_err(|_| NvError::Interrupted)?;
-            self.flash.write(at, slot).map_err(|_| NvError::Interrupted)?;
+            self.flash
+                .write(at, slot)
+                .map_err(|_| NvError::Interrupted)?;
         }
         self.writes = self.writes.wrapping_add(1);
         Ok(())
@@ -367,6 +379,7 @@ mod tests {
     }
 
     const LAYOUT: FlashLayout = FlashLayout {
+        erase_unit: 4096,
         slots: [0, 0x4000],
         slot_len: 0x4000,
         state: [0x8000, 0x9000],
@@ -377,18 +390,18 @@ mod tests {
 
     #[test]
     fn overlapping_or_misaligned_layouts_are_refused() {
-        assert!(LAYOUT.is_valid(0xC000, 4096));
-        assert!(!LAYOUT.is_valid(0xB000, 4096), "params beyond the flash");
+        assert!(LAYOUT.is_valid(0xC000));
+        assert!(!LAYOUT.is_valid(0xB000), "params beyond the flash");
         let overlap = FlashLayout {
             state: [0x3000, 0x9000],
             ..LAYOUT
         };
-        assert!(!overlap.is_valid(0xC000, 4096));
+        assert!(!overlap.is_valid(0xC000));
         let odd = FlashLayout {
             slot_len: 0x3F00,
             ..LAYOUT
         };
-        assert!(!odd.is_valid(0xC000, 4096));
+        assert!(!odd.is_valid(0xC000));
         assert!(NorImageStore::new(RamNor::new(0x8000), LAYOUT).is_none());
     }
 

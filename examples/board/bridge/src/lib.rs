@@ -197,7 +197,7 @@ impl FlashImage {
 
     /// Erases `count` sectors from `addr`; the status byte.
     pub fn erase(&mut self, addr: u32, count: u16) -> u8 {
-        if addr % FLASH_SECTOR != 0 {
+        if !addr.is_multiple_of(FLASH_SECTOR) {
             return UNALIGNED;
         }
         let len = usize::from(count) * FLASH_SECTOR as usize;

@@ -25,7 +25,10 @@ use ecat_slave::host::raw::is_request;
 
 /// Command line.
 #[derive(Parser, Debug)]
-#[command(version, about = "The host side of the emulated board (QEMU mps2-an386)")]
+#[command(
+    version,
+    about = "The host side of the emulated board (QEMU mps2-an386)"
+)]
 struct Args {
     /// Network interface the master is on.
     #[arg(long)]
@@ -62,7 +65,12 @@ fn notify(shared: &mut Shared) {
     }
 }
 
-fn frames(iface: &str, shared: &Mutex<Shared>, stop: &AtomicBool, start: Instant) -> Result<u64, String> {
+fn frames(
+    iface: &str,
+    shared: &Mutex<Shared>,
+    stop: &AtomicBool,
+    start: Instant,
+) -> Result<u64, String> {
     let nic = pnet_datalink::interfaces()
         .into_iter()
         .find(|i| i.name == iface)
@@ -75,7 +83,11 @@ fn frames(iface: &str, shared: &Mutex<Shared>, stop: &AtomicBool, start: Instant
     let (mut tx, mut rx) = match pnet_datalink::channel(&nic, cfg) {
         Ok(pnet_datalink::Channel::Ethernet(tx, rx)) => (tx, rx),
         Ok(_) => return Err(format!("{iface}: not an Ethernet channel")),
-        Err(e) => return Err(format!("raw socket on {iface}: {e} (needs root or CAP_NET_RAW)")),
+        Err(e) => {
+            return Err(format!(
+                "raw socket on {iface}: {e} (needs root or CAP_NET_RAW)"
+            ));
+        }
     };
     let mut answered = 0u64;
     let mut buf = Vec::with_capacity(1600);
@@ -97,7 +109,12 @@ fn frames(iface: &str, shared: &Mutex<Shared>, stop: &AtomicBool, start: Instant
                 answered += 1;
             }
             Ok(_) => {}
-            Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted) => {
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+                ) =>
+            {
                 // The ESC's watchdogs run on their own clock, frames or not.
                 let mut s = lock(shared);
                 s.chip.esc_mut().update_watchdogs(now_ns(start));
@@ -126,7 +143,14 @@ fn serve(
         match conn.read(&mut chunk) {
             Ok(0) => break,
             Ok(n) => inbox.extend_from_slice(&chunk[..n]),
-            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut | ErrorKind::Interrupted) => continue,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    ErrorKind::WouldBlock | ErrorKind::TimedOut | ErrorKind::Interrupted
+                ) =>
+            {
+                continue;
+            }
             Err(_) => break,
         }
         loop {

@@ -23,9 +23,9 @@ mod hw;
 
 use core::cell::RefCell;
 
+use board_example::Node;
 use board_example::link::{FLASH_SECTOR, Link, LinkFlash, LinkIrq, LinkSpi};
 use board_example::store::{FlashLayout, NorImageStore, NorNv};
-use board_example::Node;
 use cortex_m_rt::{entry, exception};
 use hw::Uart;
 
@@ -36,6 +36,7 @@ const FIRMWARE_VERSION: &str = "10";
 /// The bridge's flash: two image slots of 128 KiB, two boot-record
 /// copies and two parameter slots in sectors of their own.
 const LAYOUT: FlashLayout = FlashLayout {
+    erase_unit: FLASH_SECTOR,
     slots: [0, 0x2_0000],
     slot_len: 0x2_0000,
     state: [0x4_0000, 0x4_0000 + FLASH_SECTOR],
@@ -45,7 +46,7 @@ const LAYOUT: FlashLayout = FlashLayout {
 };
 /// Flash the firmware uses.
 const FLASH_SIZE: u32 = 0x4_0000 + 4 * FLASH_SECTOR;
-const _: () = assert!(LAYOUT.is_valid(FLASH_SIZE, FLASH_SECTOR));
+const _: () = assert!(LAYOUT.is_valid(FLASH_SIZE));
 
 /// The IO8's outputs looped back to its inputs.
 #[derive(Debug, Default)]
@@ -78,11 +79,10 @@ fn main() -> ! {
         halt("flash layout")
     };
     let board = LoopbackBoard::default();
-    let (mut node, chip) =
-        match Node::start(LinkSpi::new(&link), LinkIrq::new(&link), board, nv) {
-            Ok(x) => x,
-            Err(_) => halt("no LAN9252 on the link"),
-        };
+    let (mut node, chip) = match Node::start(LinkSpi::new(&link), LinkIrq::new(&link), board, nv) {
+        Ok(x) => x,
+        Err(_) => halt("no LAN9252 on the link"),
+    };
     let decision = node.boot(&mut images, FIRMWARE_VERSION);
     console.write_str("board-qemu: IO8 on LAN9252 rev ");
     console.write_u32(u32::from(chip.revision));
@@ -101,12 +101,10 @@ fn main() -> ! {
         #[cfg(feature = "measure")]
         measure::after(&mut console, _ran.unwrap_or(false));
         // Sleep until the next interrupt unless a notice already waits.
-        let waiting = link
-            .try_borrow_mut()
-            .map_or(true, |mut l| {
-                l.serial_mut().arm_rx_interrupt();
-                l.serial_mut().rx_waiting()
-            });
+        let waiting = link.try_borrow_mut().map_or(true, |mut l| {
+            l.serial_mut().arm_rx_interrupt();
+            l.serial_mut().rx_waiting()
+        });
         if !waiting {
             cortex_m::asm::wfi();
         }
