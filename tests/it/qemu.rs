@@ -63,7 +63,10 @@ fn build_firmware() -> PathBuf {
         .env_remove("RUSTFLAGS")
         .status()
         .expect("cargo runs");
-    assert!(status.success(), "building examples/board/qemu for {TARGET} failed");
+    assert!(
+        status.success(),
+        "building examples/board/qemu for {TARGET} failed"
+    );
     target_dir.join(TARGET).join("release/board-qemu")
 }
 
@@ -84,7 +87,14 @@ impl Drop for Killed {
 /// line and returns it.
 fn boot_qemu(elf: &Path, socket: &Path, console: &Path) -> (Killed, String) {
     let child = Command::new("qemu-system-arm")
-        .args(["-machine", "mps2-an386", "-display", "none", "-monitor", "none"])
+        .args([
+            "-machine",
+            "mps2-an386",
+            "-display",
+            "none",
+            "-monitor",
+            "none",
+        ])
         .arg("-serial")
         .arg(format!("unix:{}", socket.display()))
         .arg("-serial")
@@ -99,7 +109,10 @@ fn boot_qemu(elf: &Path, socket: &Path, console: &Path) -> (Killed, String) {
     let start = Instant::now();
     while start.elapsed() < Duration::from_secs(60) {
         let text = std::fs::read_to_string(console).unwrap_or_default();
-        if let Some(line) = text.lines().find(|l| l.contains("board-qemu:") && l.contains("firmware")) {
+        if let Some(line) = text
+            .lines()
+            .find(|l| l.contains("board-qemu:") && l.contains("firmware"))
+        {
             return (qemu, line.to_string());
         }
         std::thread::sleep(Duration::from_millis(50));
@@ -112,11 +125,17 @@ fn boot_qemu(elf: &Path, socket: &Path, console: &Path) -> (Killed, String) {
 
 #[test]
 fn soem_brings_the_board_firmware_in_qemu_to_op_and_updates_it_over_foe() {
-    if Command::new("qemu-system-arm").arg("--version").output().is_err() {
+    if Command::new("qemu-system-arm")
+        .arg("--version")
+        .output()
+        .is_err()
+    {
         return skip("qemu-system-arm is not installed (Debian: apt-get install qemu-system-arm)");
     }
     if !has_target() {
-        return skip("the Rust target thumbv7em-none-eabihf is missing (rustup target add thumbv7em-none-eabihf)");
+        return skip(
+            "the Rust target thumbv7em-none-eabihf is missing (rustup target add thumbv7em-none-eabihf)",
+        );
     }
     let Some(py) = pysoem_python() else {
         return skip(
@@ -165,7 +184,11 @@ fn soem_brings_the_board_firmware_in_qemu_to_op_and_updates_it_over_foe() {
     let boot_in = format!("{:x}:{:x}", layout.boot_in.0, layout.boot_in.1);
     let log = "soem-qemu.log";
     let _ = std::fs::remove_file(
-        Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../target/interop-logs")).join(log),
+        Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../target/interop-logs"
+        ))
+        .join(log),
     );
 
     let socket = file("uart0.sock");
@@ -187,14 +210,21 @@ fn soem_brings_the_board_firmware_in_qemu_to_op_and_updates_it_over_foe() {
     while !socket.exists() && start.elapsed() < Duration::from_secs(30) {
         std::thread::sleep(Duration::from_millis(20));
     }
-    assert!(socket.exists(), "board-bridge did not open {}", socket.display());
+    assert!(
+        socket.exists(),
+        "board-bridge did not open {}",
+        socket.display()
+    );
     crate::common::wait_for_runner(&host_if);
 
     // Run 1: the factory firmware, every check up to the FoE download.
     let t1 = Instant::now();
     let (qemu, boot1) = boot_qemu(&elf, &socket, &file("console-1.log"));
     keep_log(log, &format!("=== board-qemu on mps2-an386 ===\n{boot1}\n"));
-    assert!(boot1.contains("firmware 10 from slot A"), "factory boot: {boot1}");
+    assert!(
+        boot1.contains("firmware 10 from slot A"),
+        "factory boot: {boot1}"
+    );
     let (ok, out) = run_python(
         &py,
         &[
@@ -211,13 +241,19 @@ fn soem_brings_the_board_firmware_in_qemu_to_op_and_updates_it_over_foe() {
     keep_log(log, &format!("--- SOEM board ---\n{out}"));
     eprintln!("--- SOEM board ---\n{out}");
     drop(qemu);
-    assert!(ok, "SOEM board phase against the firmware in QEMU failed (log above)");
+    assert!(
+        ok,
+        "SOEM board phase against the firmware in QEMU failed (log above)"
+    );
 
     // Run 2: QEMU restarted on the same bridge (a board reset; the flash
     // file is kept): the bootloader starts the downloaded image.
     let (qemu, boot2) = boot_qemu(&elf, &socket, &file("console-2.log"));
     keep_log(log, &format!("--- QEMU restarted ---\n{boot2}\n"));
-    assert!(boot2.contains("firmware 11 from slot B"), "boot after the update: {boot2}");
+    assert!(
+        boot2.contains("firmware 11 from slot B"),
+        "boot after the update: {boot2}"
+    );
     crate::common::wait_for_runner(&host_if);
     let (ok, out) = run_python(&py, &["board_after_restart", &host_if, "11"]);
     keep_log(log, &format!("--- SOEM board_after_restart ---\n{out}"));
@@ -251,9 +287,13 @@ fn soem_brings_the_board_firmware_in_qemu_to_op_and_updates_it_over_foe() {
     );
     eprintln!("--- board-bridge ---\n{text}");
     assert!(
-        text.contains("QEMU run 2 ended") && text.contains(" 0 protocol errors, 0 refused accesses"),
+        text.contains("QEMU run 2 ended")
+            && text.contains(" 0 protocol errors, 0 refused accesses"),
         "two QEMU runs over a clean SPI wire: {text}"
     );
-    assert!(text.contains("stopped after"), "the bridge stopped cleanly: {text}");
+    assert!(
+        text.contains("stopped after"),
+        "the bridge stopped cleanly: {text}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
