@@ -48,12 +48,12 @@ fn target_dir() -> PathBuf {
         .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../target")))
 }
 
-/// Builds the QEMU firmware (release, its own target directory under
-/// target/) and returns the ELF. The crate's `.cargo/config.toml` (target,
+/// Builds the QEMU firmware (release, in target/board-firmware, where
+/// `.ci/run` builds both board binaries first) and returns the ELF. The crate's `.cargo/config.toml` (target,
 /// linker script) applies only when cargo runs inside its folder.
 fn build_firmware() -> PathBuf {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/board/qemu");
-    let target_dir = target_dir().join("qemu-firmware");
+    let target_dir = target_dir().join("board-firmware");
     let status = Command::new(env!("CARGO"))
         .current_dir(&dir)
         .args(["build", "-q", "--release", "--target", TARGET])
