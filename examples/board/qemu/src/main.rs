@@ -99,7 +99,11 @@ fn main() -> ! {
         measure::before(&link);
         let _ran = node.step_with(hw::now_ns(), Some(&mut images));
         #[cfg(feature = "measure")]
-        measure::after(&mut console, _ran.unwrap_or(false));
+        measure::after(
+            &link,
+            _ran.unwrap_or(false),
+            node.slave().al_status().state == ecat_slave::al::AlState::Op,
+        );
         // Sleep until the next interrupt unless a notice already waits.
         let waiting = link.try_borrow_mut().map_or(true, |mut l| {
             l.serial_mut().arm_rx_interrupt();
@@ -161,12 +165,78 @@ fn panic(_info: &core::panic::PanicInfo<'_>) -> ! {
     halt("panic")
 }
 
-/// Markers for the instruction counts (feature `measure`).
+/// Markers for the instruction counts (feature `measure`): empty
+/// functions that are never inlined, so that a QEMU TCG plugin counting
+/// executed instructions (`tools/insn-count.c`) sees where a firmware pass
+/// starts and ends, and of which kind it was: a pass in OP with the
+/// process data exchanged, a pass that served the mailbox, or an idle one
+/// (judged by the SPI transactions it made and the AL state). Their
+/// bodies differ (1 to 5 `nop`s) so that the linker does not fold them.
 #[cfg(feature = "measure")]
+#[allow(unsafe_code)] // `no_mangle`: the plugin finds the markers by name.
 mod measure {
-    pub fn before<S: board_example::link::Serial>(
-        _link: &core::cell::RefCell<board_example::link::Link<S>>,
-    ) {
+    use core::cell::RefCell;
+
+    use board_example::link::{Link, Serial};
+
+    use core::sync::atomic::{AtomicU32, Ordering};
+
+    /// SPI transactions before the pass.
+    static SPI_BEFORE: AtomicU32 = AtomicU32::new(0);
+
+    #[inline(never)]
+    #[unsafe(no_mangle)]
+    pub extern "C" fn measure_begin() {
+        for _ in 0..1 {
+            cortex_m::asm::nop();
+        }
     }
-    pub fn after(_console: &mut crate::Uart, _ran: bool) {}
+    #[inline(never)]
+    #[unsafe(no_mangle)]
+    pub extern "C" fn measure_end_idle() {
+        for _ in 0..2 {
+            cortex_m::asm::nop();
+        }
+    }
+    #[inline(never)]
+    #[unsafe(no_mangle)]
+    pub extern "C" fn measure_end_op() {
+        for _ in 0..3 {
+            cortex_m::asm::nop();
+        }
+    }
+    #[inline(never)]
+    #[unsafe(no_mangle)]
+    pub extern "C" fn measure_end_mailbox() {
+        for _ in 0..4 {
+            cortex_m::asm::nop();
+        }
+    }
+    #[inline(never)]
+    #[unsafe(no_mangle)]
+    pub extern "C" fn measure_end_other() {
+        for _ in 0..5 {
+            cortex_m::asm::nop();
+        }
+    }
+
+    fn spi<S: Serial>(link: &RefCell<Link<S>>) -> u32 {
+        link.try_borrow().map_or(0, |l| l.stats().spi)
+    }
+
+    pub fn before<S: Serial>(link: &RefCell<Link<S>>) {
+        SPI_BEFORE.store(spi(link), Ordering::Relaxed);
+        measure_begin();
+    }
+
+    pub fn after<S: Serial>(link: &RefCell<Link<S>>, ran: bool, op: bool) {
+        let n = spi(link).wrapping_sub(SPI_BEFORE.load(Ordering::Relaxed));
+        match (ran, op, n) {
+            (false, _, _) => {}
+            (true, false, 0..=3) | (true, true, 0..=9) => measure_end_idle(),
+            (true, true, 10..=15) => measure_end_op(),
+            (true, _, 16..) => measure_end_mailbox(),
+            _ => measure_end_other(),
+        }
+    }
 }
