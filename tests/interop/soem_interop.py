@@ -884,6 +884,11 @@ def board(iface, esi, sii_path, good_efw, bad_efw, boot_out, boot_in):
     check(r > 0, "good image written")
     st, code = request_state(m, s, pysoem.INIT_STATE)
     check(st == 0x01, f"BOOT->INIT (image committed for the next boot): {st:#06x} code {code:#06x}")
+    # The commit is a boot-record write over the emulated flash that may
+    # finish after INIT shows; the test resets the board (kills QEMU)
+    # next, and a reset before the write ends boots the old image, as a
+    # power cut would. A second's grace.
+    time.sleep(1.0)
     m.close()
 
 
