@@ -21,6 +21,13 @@
 #   * core::mem::size_of of the firmware object's parts and what the object
 #     dictionary tables are made of (a small host program).
 #
+# Then the same firmware for a Cortex-M4 (thumbv7em-none-eabihf, linked
+# with arm-none-eabi-gcc against examples/firmware/cortex_m4.c, the board
+# functions as stubs that cancel out with the baseline): text, rodata,
+# data, bss and a static estimate of the stack of one fw_poll (call graph
+# of the Thumb-2 disassembly). Skipped with a note when the target or the
+# arm-none-eabi binutils are missing (.ci/run installs both).
+#
 # Needs the Rust toolchain, gcc and binutils (nm, size, objdump). Figures
 # are printed, not asserted: the script fails only when a build fails.
 # A harness run that does not reach every state prints a WARNING.
@@ -235,5 +242,86 @@ for dev in io8 pam; do
 done
 for dev in io8 pam; do
     [ "${RC[$dev]}" -eq 0 ] || echo "    WARNING: the $dev harness run did not complete (exit ${RC[$dev]})"
+done
+
+# ---------------------------------------------------------------------
+# Cortex-M4: the same crate, features and profile for thumbv7em-none-eabihf.
+ARM_TARGET=thumbv7em-none-eabihf
+ARM_DEVICES=(base io8 pam io8-lan9252)
+SYSROOT=$(rustc --print sysroot)
+echo
+if [ ! -d "$SYSROOT/lib/rustlib/$ARM_TARGET/lib" ]; then
+    echo "== Cortex-M4: skipped (rustup target add $ARM_TARGET)"
+    exit 0
+fi
+for tool in arm-none-eabi-gcc arm-none-eabi-size arm-none-eabi-objdump; do
+    if ! command -v "$tool" >/dev/null; then
+        echo "== Cortex-M4: skipped ($tool not found; Debian: gcc-arm-none-eabi binutils-arm-none-eabi)"
+        exit 0
+    fi
+done
+ARM_CFLAGS=(-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16 -Os -nostartfiles
+    -Wl,--gc-sections -Wl,-e,_start -Wl,-z,noexecstack)
+echo "== Cortex-M4 build ($ARM_TARGET, the same profile; linked with arm-none-eabi-gcc ${ARM_CFLAGS[*]} $FW/cortex_m4.c)"
+for dev in "${ARM_DEVICES[@]}"; do
+    features=()
+    [ -z "${FEATURES[$dev]}" ] || features=(--features "${FEATURES[$dev]}")
+    run cargo build --release --target "$ARM_TARGET" --manifest-path "$MANIFEST" "${features[@]}" ||
+        fail "cargo build of the $dev firmware for $ARM_TARGET failed"
+    run cp "$OUT/$ARM_TARGET/release/libecat_firmware.a" "$OUT/libfw-$dev-m4.a"
+    run arm-none-eabi-gcc "${ARM_CFLAGS[@]}" -o "$OUT/fw-$dev-m4.elf" "$FW/cortex_m4.c" \
+        "$OUT/libfw-$dev-m4.a" ||
+        fail "linking the $dev firmware for the Cortex-M4 failed"
+done
+msec() {
+    arm-none-eabi-size -A -d "$1" | awk -v s="$2" '$1 == s { n = $2 } END { print n + 0 }'
+}
+declare -A MTEXT MRO MDATA MBSS
+for dev in "${ARM_DEVICES[@]}"; do
+    bin=$OUT/fw-$dev-m4.elf
+    MTEXT[$dev]=$(msec "$bin" .text)
+    MRO[$dev]=$(($(msec "$bin" .rodata) + $(msec "$bin" .ARM.exidx)))
+    MDATA[$dev]=$(msec "$bin" .data)
+    MBSS[$dev]=$(msec "$bin" .bss)
+done
+echo
+echo "== Cortex-M4 sizes (bytes): firmware = device ELF - baseline (stubs + empty no_std staticlib)"
+echo "+ arm-none-eabi-size -A -d $OUT/fw-{base,io8,pam,io8-lan9252}-m4.elf"
+printf '    %-22s %8s %8s %6s %7s %12s %12s\n' "" text rodata data bss "flash total" "static RAM"
+mrow() { # label text ro data bss
+    printf '    %-22s %8d %8d %6d %7d %12d %12d\n' "$1" "$2" "$3" "$4" "$5" $(($2 + $3 + $4)) $(($4 + $5))
+}
+mrow "stubs alone (base)" "${MTEXT[base]}" "${MRO[base]}" "${MDATA[base]}" "${MBSS[base]}"
+for dev in io8 pam io8-lan9252; do
+    mrow "$dev firmware" $((MTEXT[$dev] - MTEXT[base])) $((MRO[$dev] - MRO[base])) \
+        $((MDATA[$dev] - MDATA[base])) $((MBSS[$dev] - MBSS[base]))
+done
+mrow "LAN9252 driver added" $((MTEXT[io8-lan9252] - MTEXT[io8])) $((MRO[io8-lan9252] - MRO[io8])) \
+    $((MDATA[io8-lan9252] - MDATA[io8])) $((MBSS[io8-lan9252] - MBSS[io8]))
+cat <<'EOF2'
+    text: Thumb-2 code. rodata: constants, the object dictionary's tables
+    (no .data.rel.ro without dynamic relocations) and .ARM.exidx. data/bss
+    as for x86-64. memcpy/memset and the other compiler builtins are
+    linked in here (no shared libc), so they count, unlike on x86-64.
+    Reference (issue): SOES with arm-none-eabi-gcc -Os on a Cortex-M4:
+    ~10.2 KB code with CoE, ~13.1 KB with FoE and EoE, ~1.7 KB static RAM.
+EOF2
+echo
+echo "== Cortex-M4 stack of one fw_poll (static estimate: call graph of the Thumb-2 disassembly;"
+echo "   frames from push / vpush / stmdb / sub sp; bl calls, b tail calls; indirect calls listed)"
+declare -A MSTACK
+for dev in io8 pam; do
+    echo "  $dev:"
+    run "$STACK_TOOL" --thumb "$OUT/fw-$dev-m4.elf" fw_poll fw_init | tee "$OUT/stack-$dev-m4.txt"
+    MSTACK[$dev]=$(awk '/^  fw_poll: [0-9]+ bytes on the worst path/ { print $2 }' "$OUT/stack-$dev-m4.txt")
+done
+echo
+echo "== Summary (bytes; firmware minus baseline; Cortex-M4, thumbv7em-none-eabihf)"
+for dev in io8 pam; do
+    printf '    %-4s text %6d  rodata %5d  data %4d  bss %5d  flash %6d  static RAM %5d  poll stack (static) %6s\n' \
+        "$dev" $((MTEXT[$dev] - MTEXT[base])) $((MRO[$dev] - MRO[base])) $((MDATA[$dev] - MDATA[base])) \
+        $((MBSS[$dev] - MBSS[base])) \
+        $((MTEXT[$dev] - MTEXT[base] + MRO[$dev] - MRO[base] + MDATA[$dev] - MDATA[base])) \
+        $((MDATA[$dev] - MDATA[base] + MBSS[$dev] - MBSS[base])) "${MSTACK[$dev]:-?}"
 done
 exit 0

@@ -21,6 +21,7 @@ mod layers;
 mod long_line;
 mod mixed_line;
 mod power_cut;
+mod qemu;
 mod safety;
 mod sdo;
 mod shared;

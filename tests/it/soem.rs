@@ -110,7 +110,7 @@ pub(crate) fn run_python(py: &str, args: &[&str]) -> (bool, String) {
 
 /// Appends to `target/interop-logs/<log>` (which `.ci/run` prints after
 /// the tests: cargo shows a passing test's output only with --nocapture).
-fn keep_log(log: &str, text: &str) {
+pub(crate) fn keep_log(log: &str, text: &str) {
     use std::io::Write as _;
     let dir = PathBuf::from(concat!(
         env!("CARGO_MANIFEST_DIR"),

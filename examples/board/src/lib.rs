@@ -20,38 +20,28 @@
 //! [`Node::start`] programs it), eight inputs and eight outputs on free
 //! GPIOs. The LAN9252 takes SPI mode 0 up to several MHz.
 //!
-//! ## Building for the board
+//! ## The firmware binaries
 //!
-//! This crate is the board-independent part. A board binary adds the HAL
-//! and the runtime (not built in CI, which has no ARM toolchain):
+//! This crate is the board-independent part, host-tested. Two
+//! `cortex-m-rt` binaries for `thumbv7em-none-eabihf` use it; they are
+//! not workspace members (their target and linker scripts are their own):
 //!
-//! ```text
-//! rustup target add thumbv7em-none-eabihf
-//! cargo new --bin nucleo-io8 && cd nucleo-io8
-//! cargo add board-example --path ../examples/board
-//! cargo add stm32f4xx-hal --features stm32f401 cortex-m-rt panic-halt
-//! cargo add embedded-hal-bus                 # ExclusiveDevice: SpiBus + CS pin -> SpiDevice
-//! # memory.x for the F401RE: FLASH 512K at 0x08000000, RAM 96K at 0x20000000
-//! cargo build --release --target thumbv7em-none-eabihf
-//! ```
+//! * `examples/board/nucleo-f446re/`: the NUCLEO-F446RE with a LAN9252
+//!   shield on `stm32f4xx-hal`, the IRQ on an EXTI line, parameters and
+//!   FoE images in the internal flash ([`store`]); flashed with probe-rs.
+//! * `examples/board/qemu/`: the same application and main loop on QEMU's
+//!   `mps2-an386` (Cortex-M4), with the SPI bus and the flash carried over
+//!   the emulated UART to a host bridge ([`link`]); CI brings it to OP
+//!   with SOEM.
 //!
-//! and its `main` (the shape of it; pin and clock names from
-//! `stm32f4xx-hal` 0.2x):
+//! Both do, in their `main`:
 //!
 //! ```text
-//! #[entry]
-//! fn main() -> ! {
-//!     let dp = pac::Peripherals::take().unwrap();
-//!     let clocks = dp.RCC.constrain().cfgr.sysclk(84.MHz()).freeze();
-//!     let (gpioa, gpioc) = (dp.GPIOA.split(), dp.GPIOC.split());
-//!     let bus = dp.SPI1.spi((gpioa.pa5, gpioa.pa6, gpioa.pa7), spi::MODE_0, 8.MHz(), &clocks);
-//!     let spi = ExclusiveDevice::new(bus, gpioc.pc7.into_push_pull_output(), delay).unwrap();
-//!     let irq = gpioa.pa10.into_pull_up_input();
-//!     let board = PinBoard::new(inputs, outputs);          // [ErasedPin<Input>; 8], [ErasedPin<Output>; 8]
-//!     let mut node = Node::start(spi, irq, board, FlashNv::new(dp.FLASH)).unwrap();
-//!     loop {
-//!         let _ = node.step(monotonic_ns());              // a 64-bit timer in ns
-//!     }
+//! let (mut node, _chip) = Node::start(spi, irq, board, nv)?;   // byte test, IRQ set up
+//! node.boot(&mut images, FIRMWARE_VERSION);                    // bootloader decision, 0x100A
+//! loop {
+//!     node.step_with(now_ns(), Some(&mut images));             // a pass if IRQ or 1 ms
+//!     wfi();                                                   // sleep until IRQ or tick
 //! }
 //! ```
 //!
@@ -65,10 +55,23 @@
 //! transaction instead of three.
 #![no_std]
 #![forbid(unsafe_code)]
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
+)]
+
+pub mod link;
+pub mod store;
 
 use ecat_esc_spi::lan9252::{ChipId, Lan9252Error, Lan9252Spi};
 use ecat_slave::device::{PollSchedule, Slave};
 use ecat_slave::esc::EscError;
+use ecat_slave::firmware::{self, BootDecision, FirmwareVersion, ImageStore};
 use ecat_slave::hal::{MemNv, NvStorage};
 use ecat_slave::params::STORAGE_SIZE;
 use embedded_hal::digital::{InputPin, OutputPin};
@@ -79,6 +82,9 @@ use io8_example::{Board, Io8};
 /// quiet: the application's timers (the IO8's input filter) and the
 /// firmware's watchdog checks run at least this often.
 pub const IDLE_POLL_NS: u64 = 1_000_000;
+
+/// Payload of the factory image [`Node::boot`] records in a blank store.
+pub const FACTORY_MARKER: &[u8] = b"factory firmware (runs from the MCU's own flash)";
 
 /// Eight input pins and eight output pins as the IO8's [`Board`]. A pin
 /// that cannot be read reads low; an output that cannot be set is skipped
@@ -159,12 +165,51 @@ impl<S: SpiDevice, Q: InputPin, B: Board, N: NvStorage> Node<S, Q, B, N> {
     pub fn step(&mut self, now_ns: u64) -> Result<bool, EscError> {
         // The IRQ pin: an unreadable pin counts as asserted (poll rather
         // than miss an event).
+        self.step_with(now_ns, None)
+    }
+
+    /// The bootloader's part of a power-on: decides which image slot runs
+    /// ([`firmware::power_on`]), confirms a trial image (this firmware's
+    /// start check is that it got this far) and sets 0x100A to its
+    /// version. A blank store is first given the running firmware as its
+    /// factory image (`version`, with a marker payload: the image the
+    /// microcontroller executes is its own flash, not the store's copy).
+    /// Returns the decision; a store that cannot be read keeps the device
+    /// in the bootloader (INIT and BOOT only).
+    pub fn boot(&mut self, images: &mut dyn ImageStore, version: &str) -> BootDecision {
+        if images
+            .read_state()
+            .is_err_and(|e| e == firmware::StoreError::NoState)
+            && let Some(v) = FirmwareVersion::new(version)
+        {
+            let _ = firmware::provision(images, v, FACTORY_MARKER);
+        }
+        let decision = firmware::power_on(images);
+        let _ = firmware::confirm_boot(images);
+        let v = decision.version;
+        self.slave
+            .set_firmware_version(if v == FirmwareVersion::EMPTY {
+                version
+            } else {
+                v.as_str()
+            });
+        self.slave.set_no_valid_firmware(decision.slot.is_none());
+        decision
+    }
+
+    /// [`Node::step`] with the FoE image store: FoE downloads in BOOT go
+    /// there, BOOT → INIT commits them for the next [`Node::boot`].
+    pub fn step_with(
+        &mut self,
+        now_ns: u64,
+        images: Option<&mut dyn ImageStore>,
+    ) -> Result<bool, EscError> {
         let asserted = self.irq.is_low().unwrap_or(true);
         if !self.schedule.due(asserted, now_ns) {
             return Ok(false);
         }
         self.passes = self.passes.wrapping_add(1);
-        self.slave.poll(now_ns).map(|()| true)
+        self.slave.poll_with(now_ns, images).map(|()| true)
     }
 
     /// Firmware passes so far (wrapping).

@@ -1,6 +1,16 @@
-//! Static worst-case stack estimate from an x86-64 disassembly.
+//! Static worst-case stack estimate from an x86-64 or Thumb-2 disassembly.
 //!
 //!     stack_estimate <linked-binary> <root-function>...
+//!     stack_estimate --thumb <linked-binary> <root-function>...
+//!
+//! `--thumb` reads a Cortex-M (Thumb-2) binary with `$OBJDUMP` (default
+//! `arm-none-eabi-objdump`): a frame is every `push`/`stmdb sp!` (4 bytes
+//! per register), `vpush` (4 per s-, 8 per d-register) and `sub sp` by an
+//! immediate; `bl` is a call, `b`/`b.w` into another function a tail
+//! call, `blx`/`bx` through a register other than `lr` an indirect call;
+//! function addresses in data and literal pools (Thumb bit set) are the
+//! address-taken ones. The return address is in `lr` and counted by the
+//! `push` that saves it. The x86-64 mode:
 //!
 //! Reads `objdump -d -C -w` of the binary (binutils) and, per function,
 //! its frame: the return address (8), every `push` (8 each) and every
@@ -44,8 +54,13 @@ struct Func {
     dynamic: bool,
 }
 
+/// The objdump of the binary's architecture (set by `--thumb`).
+static DEFAULT_OBJDUMP: std::sync::OnceLock<&str> = std::sync::OnceLock::new();
+
 fn objdump(args: &[&str]) -> String {
-    let out = Command::new("objdump")
+    let tool = std::env::var("OBJDUMP")
+        .unwrap_or_else(|_| DEFAULT_OBJDUMP.get().copied().unwrap_or("objdump").into());
+    let out = Command::new(tool)
         .args(args)
         .output()
         .unwrap_or_else(|e| {
@@ -314,6 +329,142 @@ fn parse(bin: &str) -> (BTreeMap<u64, Func>, BTreeSet<u64>) {
     (funcs, rust)
 }
 
+/// Registers in an ARM register list `{r4, r5, lr}` / `{d8-d10}`, and
+/// the bytes they take on the stack.
+fn reg_list_bytes(ops: &str) -> u64 {
+    let Some(a) = ops.find('{') else { return 0 };
+    let Some(b) = ops[a..].find('}') else { return 0 };
+    let mut bytes = 0;
+    for item in ops[a + 1..a + b].split(',') {
+        let item = item.trim();
+        let width = if item.starts_with('d') { 8 } else { 4 };
+        let count = match item.split_once('-') {
+            Some((x, y)) => {
+                let n = |r: &str| r.trim_start_matches(|c: char| c.is_alphabetic()).parse::<u64>().ok();
+                match (n(x), n(y)) {
+                    (Some(x), Some(y)) if y >= x => y - x + 1,
+                    _ => 1,
+                }
+            }
+            None => 1,
+        };
+        bytes += width * count;
+    }
+    bytes
+}
+
+/// The Thumb-2 (Cortex-M) parse: see the module docs.
+fn parse_thumb(bin: &str) -> (BTreeMap<u64, Func>, BTreeSet<u64>) {
+    let text = objdump(&["-d", "-C", "-w", "--no-show-raw-insn", bin]);
+    let data = data_bytes(bin);
+    let mut starts: BTreeMap<u64, String> = BTreeMap::new();
+    for line in text.lines() {
+        if let (Some(sp), true) = (line.find(" <"), line.ends_with(">:")) {
+            if let Some(a) = hex(&line[..sp]) {
+                starts.insert(a, line[sp + 2..line.len() - 2].to_string());
+            }
+        }
+    }
+    let owner = |a: u64| starts.range(..=a).next_back().map(|(s, _)| *s);
+    let mut taken: BTreeSet<u64> = BTreeSet::new();
+    let note = |v: u64, taken: &mut BTreeSet<u64>| {
+        if v & 1 == 1 && starts.contains_key(&(v & !1)) {
+            taken.insert(v & !1);
+        }
+    };
+    for (base, chunk) in &data {
+        for off in (0..chunk.len().saturating_sub(3)).step_by(4) {
+            let w = u32::from_le_bytes([chunk[off], chunk[off + 1], chunk[off + 2], chunk[off + 3]]);
+            let _ = base;
+            note(u64::from(w), &mut taken);
+        }
+    }
+    let mut funcs: BTreeMap<u64, Func> = BTreeMap::new();
+    let mut cur: Option<u64> = None;
+    for line in text.lines() {
+        if let (Some(sp), true) = (line.find(" <"), line.ends_with(">:")) {
+            let Some(a) = hex(&line[..sp]) else { continue };
+            funcs.insert(
+                a,
+                Func {
+                    name: line[sp + 2..line.len() - 2].to_string(),
+                    start: a,
+                    frame: 0,
+                    ..Func::default()
+                },
+            );
+            cur = Some(a);
+            continue;
+        }
+        let Some(c) = cur else { continue };
+        let Some(colon) = line.find(':') else { continue };
+        if hex(&line[..colon]).is_none() {
+            continue;
+        }
+        let ins = line[colon + 1..].trim();
+        let body = ins.split(';').next().unwrap_or("").split('@').next().unwrap_or("").trim();
+        let mut it = body.splitn(2, char::is_whitespace);
+        let mn = it.next().unwrap_or("");
+        let ops = it.next().unwrap_or("").trim();
+        let Some(f) = funcs.get_mut(&c) else { continue };
+        let mn_base = mn.split('.').next().unwrap_or(mn);
+        match mn_base {
+            ".word" => {
+                if let Some(v) = hex(ops) {
+                    note(v, &mut taken);
+                }
+            }
+            "push" | "vpush" => f.frame += reg_list_bytes(ops),
+            "stmdb" | "stmfd" if ops.starts_with("sp!") => f.frame += reg_list_bytes(ops),
+            "sub" | "subw" => {
+                let parts: Vec<&str> = ops.split(',').map(str::trim).collect();
+                if parts.first() == Some(&"sp") {
+                    match parts.last().and_then(|v| v.strip_prefix('#')) {
+                        Some(v) => {
+                            let n = v
+                                .strip_prefix("0x")
+                                .map_or_else(|| v.parse::<u64>().ok(), |h| u64::from_str_radix(h, 16).ok());
+                            f.frame += n.unwrap_or(0);
+                        }
+                        None => f.dynamic = true,
+                    }
+                }
+            }
+            "str" if ops.contains("[sp, #-") && ops.ends_with("]!") => f.frame += 4,
+            "bl" | "b" | "blx" | "bx" | "cbz" | "cbnz" | "beq" | "bne" | "bcs" | "bcc" | "bhi"
+            | "bls" | "bge" | "blt" | "bgt" | "ble" | "bmi" | "bpl" | "bhs" | "blo" => {
+                let is_call = mn_base == "bl" || mn_base == "blx";
+                let target = ops.split(',').next_back().unwrap_or("").trim();
+                match target.split_whitespace().next().and_then(hex) {
+                    Some(t) if target.contains('<') => {
+                        if let Some(o) = owner(t) {
+                            if o != c || (is_call && t == c) {
+                                if is_call {
+                                    f.calls.insert(o);
+                                } else {
+                                    f.tails.insert(o);
+                                }
+                            }
+                        }
+                    }
+                    _ if (mn_base == "blx" || mn_base == "bx") && target != "lr" => f.indirect += 1,
+                    _ => {}
+                }
+            }
+            _ => {}
+        }
+    }
+    let rust: BTreeSet<u64> = taken
+        .into_iter()
+        .filter(|a| {
+            funcs.get(a).is_some_and(|f| {
+                f.name.contains("::") || f.name.starts_with("_ZN") || f.name.starts_with("_R")
+            })
+        })
+        .collect();
+    (funcs, rust)
+}
+
 struct Walk<'a> {
     funcs: &'a BTreeMap<u64, Func>,
     /// Added at each function with indirect call sites (0: not followed).
@@ -409,12 +560,17 @@ fn short(name: &str, width: usize) -> String {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
+    let mut args: Vec<String> = std::env::args().collect();
+    let thumb = args.get(1).is_some_and(|a| a == "--thumb");
+    if thumb {
+        args.remove(1);
+        let _ = DEFAULT_OBJDUMP.set("arm-none-eabi-objdump");
+    }
     if args.len() < 3 {
-        eprintln!("usage: stack_estimate <binary> <root-function>...");
+        eprintln!("usage: stack_estimate [--thumb] <binary> <root-function>...");
         exit(2);
     }
-    let (funcs, taken) = parse(&args[1]);
+    let (funcs, taken) = if thumb { parse_thumb(&args[1]) } else { parse(&args[1]) };
     // The deepest address-taken Rust function (direct calls only): what one
     // unresolved indirect call can add at most, if it does not itself go
     // through another indirect call.
@@ -481,7 +637,7 @@ fn main() {
             .any(|a| funcs.get(a).is_some_and(|f| f.dynamic))
         {
             println!(
-                "      WARNING: a reachable function moves %rsp by a register amount (alloca)"
+                "      WARNING: a reachable function moves the stack pointer by a register amount (alloca)"
             );
         }
     }
