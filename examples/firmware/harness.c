@@ -239,7 +239,7 @@ int32_t nv_write(size_t offset, const uint8_t *data, size_t len)
 
 /* NOR-like flash: erase sets 0xFF, programming clears bits. */
 #define SLOT_SIZE 4096u
-#define STATE_MAX 64u
+#define STATE_MAX 128u /* >= STATE_RECORD_LEN (96 since boot records format 2) */
 static uint8_t flash[2][SLOT_SIZE];
 static uint8_t state_rec[2][STATE_MAX];
 static unsigned long flash_erases, flash_bytes;
