@@ -130,7 +130,10 @@ fn every_help_text_is_as_recorded() {
 #[test]
 fn scan_and_state_print_the_line_as_recorded() {
     check("scan", &["scan"]);
-    check("scan_json_line", &["--line", "pam,io8,dma22", "scan", "--json"]);
+    check(
+        "scan_json_line",
+        &["--line", "pam,io8,dma22", "scan", "--json"],
+    );
     let eni = [
         "--eni",
         "twin/testdata/machine.xml",
@@ -166,7 +169,15 @@ fn sdo_and_od_print_typed_values_as_recorded() {
     check("sdo_read_no_object", &["sdo", "read", "0x1234:00"]);
     check(
         "sdo_read_by_station",
-        &["--line", "pam,io8", "--station", "0x1001", "sdo", "read", "0x1008:00"],
+        &[
+            "--line",
+            "pam,io8",
+            "--station",
+            "0x1001",
+            "sdo",
+            "read",
+            "0x1008:00",
+        ],
     );
     check("od_dump", &["--device", "io8", "od", "dump"]);
     check("od_dump_json", &["--device", "io8", "od", "dump", "--json"]);
@@ -174,7 +185,15 @@ fn sdo_and_od_print_typed_values_as_recorded() {
 
 #[test]
 fn watch_prints_inputs_on_the_frame_clock_as_recorded() {
-    let watch = ["--device", "io8", "watch", "--cycles", "30", "--interval", "5"];
+    let watch = [
+        "--device",
+        "io8",
+        "watch",
+        "--cycles",
+        "30",
+        "--interval",
+        "5",
+    ];
     check("watch", &watch);
     check("watch_json", &[&watch[..], &["--json"]].concat());
 }
@@ -240,7 +259,10 @@ fn conformance_demo_and_hcs_print_as_recorded() {
         &["--device", "io8", "conformance", "--only", "esc,sii"],
     );
     check("demo", &["demo", "--cycles", "60"]);
-    check("demo_line", &["--line", "pam,io8", "demo", "--cycles", "30"]);
+    check(
+        "demo_line",
+        &["--line", "pam,io8", "demo", "--cycles", "30"],
+    );
     check(
         "hcs_read",
         &["--device", "dma22", "hcs", "read", "--module", "1", "0x00"],
@@ -257,34 +279,97 @@ fn usage_errors_name_the_argument_as_recorded() {
         ("usage_unknown_command", &["no-such-command"][..]),
         ("usage_no_address_sub", &["sdo", "read", "0x800D"]),
         ("usage_bad_subindex", &["sdo", "read", "0x8006:2G"]),
-        ("usage_slave_out_of_range", &["--slave", "3", "sdo", "read", "0x1000:00"]),
-        ("usage_two_slaves_no_choice", &["--line", "pam,io8", "sdo", "read", "0x1000:00"]),
-        ("usage_unknown_device_in_line", &["--line", "pam,nope", "scan"]),
+        (
+            "usage_slave_out_of_range",
+            &["--slave", "3", "sdo", "read", "0x1000:00"],
+        ),
+        (
+            "usage_two_slaves_no_choice",
+            &["--line", "pam,io8", "sdo", "read", "0x1000:00"],
+        ),
+        (
+            "usage_unknown_device_in_line",
+            &["--line", "pam,nope", "scan"],
+        ),
         ("usage_unknown_device", &["--device", "nope", "scan"]),
         ("usage_line_too_long", &["--line", "io8*65", "scan"]),
         ("usage_line_spec_too_long", &["--line", "pam*4097", "scan"]),
-        ("usage_line_and_device", &["--line", "pam", "--device", "io8", "scan"]),
-        ("usage_eni_and_line", &["--eni", "x.xml", "--line", "pam", "scan"]),
-        ("usage_esi_dir_without_eni", &["--esi-dir", "twin/testdata/esi", "scan"]),
-        ("usage_slave_and_station", &["--slave", "0", "--station", "0x1000", "scan"]),
-        ("usage_station_not_a_number", &["--station", "0x10000", "scan"]),
-        ("usage_no_such_station", &["--station", "0x1005", "sdo", "read", "0x1000:00"]),
-        ("usage_iface_and_line", &["--iface", "nosuchif0", "--line", "pam", "scan"]),
-        ("usage_eni_demo", &["--eni", "twin/testdata/machine.xml", "--esi-dir", "twin/testdata/esi", "demo"]),
-        ("usage_eni_no_esi_dir", &["--eni", "twin/testdata/machine.xml", "scan"]),
-        ("usage_demo_slaves_and_line", &["--line", "pam,io8", "demo", "--slaves", "2"]),
+        (
+            "usage_line_and_device",
+            &["--line", "pam", "--device", "io8", "scan"],
+        ),
+        (
+            "usage_eni_and_line",
+            &["--eni", "x.xml", "--line", "pam", "scan"],
+        ),
+        (
+            "usage_esi_dir_without_eni",
+            &["--esi-dir", "twin/testdata/esi", "scan"],
+        ),
+        (
+            "usage_slave_and_station",
+            &["--slave", "0", "--station", "0x1000", "scan"],
+        ),
+        (
+            "usage_station_not_a_number",
+            &["--station", "0x10000", "scan"],
+        ),
+        (
+            "usage_no_such_station",
+            &["--station", "0x1005", "sdo", "read", "0x1000:00"],
+        ),
+        (
+            "usage_iface_and_line",
+            &["--iface", "nosuchif0", "--line", "pam", "scan"],
+        ),
+        (
+            "usage_eni_demo",
+            &[
+                "--eni",
+                "twin/testdata/machine.xml",
+                "--esi-dir",
+                "twin/testdata/esi",
+                "demo",
+            ],
+        ),
+        (
+            "usage_eni_no_esi_dir",
+            &["--eni", "twin/testdata/machine.xml", "scan"],
+        ),
+        (
+            "usage_demo_slaves_and_line",
+            &["--line", "pam,io8", "demo", "--slaves", "2"],
+        ),
         ("usage_demo_current", &["demo", "--current", "5000"]),
         ("usage_demo_slaves", &["demo", "--slaves", "1025"]),
         ("usage_demo_long_line", &["demo", "--line", "io8*1025"]),
         ("usage_state_unknown", &["state", "run"]),
         ("usage_state_op_one_slave", &["--slave", "0", "state", "op"]),
         ("usage_watch_cycles", &["watch", "--cycles", "0"]),
-        ("usage_foe_password", &["foe", "read", "info.txt", "--password", "123456789"]),
-        ("usage_sdo_type", &["sdo", "read", "0x1000:00", "--type", "FLOAT"]),
-        ("usage_sdo_raw_and_json", &["sdo", "read", "0x1000:00", "--raw", "--json"]),
-        ("usage_conformance_only", &["conformance", "--only", "esc,nope"]),
-        ("usage_conformance_foe_without_file", &["conformance", "--only", "foe"]),
-        ("usage_hcs_words", &["--device", "dma22", "hcs", "read", "0x07", "--words", "9"]),
+        (
+            "usage_foe_password",
+            &["foe", "read", "info.txt", "--password", "123456789"],
+        ),
+        (
+            "usage_sdo_type",
+            &["sdo", "read", "0x1000:00", "--type", "FLOAT"],
+        ),
+        (
+            "usage_sdo_raw_and_json",
+            &["sdo", "read", "0x1000:00", "--raw", "--json"],
+        ),
+        (
+            "usage_conformance_only",
+            &["conformance", "--only", "esc,nope"],
+        ),
+        (
+            "usage_conformance_foe_without_file",
+            &["conformance", "--only", "foe"],
+        ),
+        (
+            "usage_hcs_words",
+            &["--device", "dma22", "hcs", "read", "0x07", "--words", "9"],
+        ),
     ] {
         check(name, args);
     }
