@@ -88,11 +88,18 @@ pub fn pam_line(n: usize) -> Chain {
 }
 
 /// Timeouts suited to the in-process link on a busy CI machine.
+///
+/// ethercrab measures them in real time while the slaves run on the
+/// simulated clock, so they only bound how long the machine may stall a
+/// frame: a PDU or an EEPROM read that takes seconds means a hung link,
+/// not a slow slave. With 100 ms for an EEPROM operation a bring-up failed
+/// now and then with two busy loops on a 2-core machine already loaded to
+/// 9 (`timeout: EEPROM`).
 pub fn timeouts() -> Timeouts {
     Timeouts {
         state_transition: Duration::from_secs(10),
-        pdu: Duration::from_millis(500),
-        eeprom: Duration::from_millis(100),
+        pdu: Duration::from_secs(3),
+        eeprom: Duration::from_secs(3),
         wait_loop_delay: Duration::from_micros(100),
         mailbox_echo: Duration::from_millis(500),
         mailbox_response: Duration::from_secs(2),
