@@ -29,7 +29,7 @@ use ecat_slave::od::{DataType, DefaultValue, Entry, Object, ObjectCode, PdoMappi
 use ecat_slave::sii::{SmType, protocols};
 
 use crate::esc_twin::InputRule;
-use crate::esi::{At, EsiDevice, EsiError};
+use crate::esi::{At, EsiDevice, EsiError, Warning};
 use crate::xml::hex_binary;
 use crate::{dictionary, leak};
 
@@ -103,6 +103,52 @@ fn leak_list(v: Vec<u16>) -> &'static [u16] {
     Box::leak(v.into_boxed_slice())
 }
 
+/// Ranges a device could not have (minimum above maximum, a default
+/// outside them or outside its type) are dropped with a warning: the
+/// entry is served without one, as a configurator would read it.
+fn drop_impossible_ranges(dev: &EsiDevice, objects: &mut [Object], warnings: &mut Vec<Warning>) {
+    use ecat_slave::od::dictionary::{natural_range, value_le};
+    for o in objects.iter_mut() {
+        let bad: Vec<usize> = o
+            .entries
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| {
+                let DefaultValue::Int(v) = e.default else {
+                    return false;
+                };
+                if e.data_type.is_bytes() || (e.min.is_none() && e.max.is_none()) {
+                    return false;
+                }
+                let t = &e.data_type;
+                let (lo, hi) = (e.min.unwrap_or(v), e.max.unwrap_or(v));
+                let (nlo, nhi) = natural_range(t, e.bit_len);
+                let natural = t.is_real() || (lo >= nlo && hi <= nhi);
+                !(value_le(t, lo, hi) && value_le(t, lo, v) && value_le(t, v, hi) && natural)
+            })
+            .map(|(k, _)| k)
+            .collect();
+        if bad.is_empty() {
+            continue;
+        }
+        let mut entries: Vec<Entry> = o.entries.iter().map(copy).collect();
+        for k in bad {
+            if let Some(e) = entries.get_mut(k) {
+                warnings.push(Warning {
+                    at: dev.at.clone(),
+                    message: format!(
+                        "{:#06x}:{:02x}: the range {:?}..{:?} does not hold the default {:?} or is empty: served without a range",
+                        o.index, e.sub, e.min, e.max, e.default
+                    ),
+                });
+                e.min = None;
+                e.max = None;
+            }
+        }
+        o.entries = Box::leak(entries.into_boxed_slice());
+    }
+}
+
 /// A copy of `e` (every field of an entry is `Copy`).
 fn copy(e: &Entry) -> Entry {
     Entry {
@@ -125,7 +171,7 @@ fn assigned(objects: &[Object], index: u16) -> Vec<u16> {
         .filter(|e| e.sub >= 1 && i64::from(e.sub) <= n)
         .filter_map(|e| match e.default {
             DefaultValue::Int(v) => u16::try_from(v).ok(),
-            DefaultValue::Str(_) => None,
+            DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
         })
         .collect()
 }
@@ -246,9 +292,6 @@ fn sm(dev: &EsiDevice, kind: SmType) -> Option<(u16, u16)> {
         .map(|s| (s.start, s.default_size))
 }
 
-/// An entry a PDO maps: subindex, name, type, output (else input).
-type MappedEntry = (u8, String, DataType, bool);
-
 fn record(index: u16, name: &str, entries: Vec<Entry>) -> Object {
     Object {
         index,
@@ -265,21 +308,76 @@ fn array(index: u16, name: &str, entries: Vec<Entry>) -> Object {
     }
 }
 
-/// The dictionary of a device with CoE whose ESI has none (only
-/// `<ChannelInfo>` or no profile): 0x1000 (the profile number), 0x1018,
-/// the PDO mapping objects of its PDOs, 0x1C00, 0x1C12/0x1C13 assigning
-/// the PDOs with a default SyncManager, and the objects the PDOs map (a
-/// VAR for subindex 0 alone, else a record), read-only inputs and
-/// writable outputs.
-fn synthesize(dev: &EsiDevice) -> Result<Vec<Object>, DescriptionBuildError> {
-    let profile = dev
-        .source
-        .path("Profile/ChannelInfo/ProfileNo")
-        .or_else(|| dev.source.path("Profile/ProfileNo"))
-        .and_then(|p| crate::xml::number(&p.text))
-        .unwrap_or(0);
-    let mut objects = vec![
-        Object {
+/// The type a PDO entry of CoE code `code` and `bits` bits has (a code
+/// that is no base type, or none: by its size).
+fn pdo_entry_type(code: u8, bits: u8) -> DataType {
+    match dictionary::data_type_of_code(code) {
+        Some(t) if t.is_bytes() || ecat_slave::od::dictionary::natural_bits(&t) == u16::from(bits) => t,
+        _ => match bits {
+            1 => DataType::Bool,
+            2..=7 => DataType::Bits(bits),
+            8 => DataType::UInt8,
+            16 => DataType::UInt16,
+            24 => DataType::UInt24,
+            32 => DataType::UInt32,
+            40 => DataType::UInt40,
+            48 => DataType::UInt48,
+            56 => DataType::UInt56,
+            64 => DataType::UInt64,
+            _ => DataType::OctetString,
+        },
+    }
+}
+
+/// An entry a PDO maps (`out`: an RxPDO's) as the device would describe
+/// it: read-only inputs, writable outputs, of the PDO entry's type and
+/// length.
+fn mapped_entry(sub: u8, name: &str, ty: DataType, bits: u8, out: bool) -> Entry {
+    let base = if out {
+        output(sub, leak(name), ty)
+    } else {
+        input(sub, leak(name), ty)
+    };
+    Entry {
+        bit_len: u16::from(bits),
+        default: if ty.is_bytes() {
+            DefaultValue::Bytes(&[])
+        } else {
+            DefaultValue::Int(0)
+        },
+        ..base
+    }
+}
+
+/// Completes the dictionary of a device with CoE from its PDOs, as the
+/// device must have it to run them (an ESI without a dictionary, only
+/// `<ChannelInfo>` or no profile, gets all of it): 0x1000 (the profile
+/// number), 0x1018, the PDO mapping objects, 0x1C00, 0x1C12/0x1C13
+/// assigning the PDOs with a default SyncManager, and the entries the PDOs
+/// map (a VAR for subindex 0 alone, else a record; read-only inputs and
+/// writable outputs). An entry the dictionary has but does not let map the
+/// way a PDO maps it is made mappable. What is added is named in
+/// `warnings` when the ESI has a dictionary.
+fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warning>) {
+    let has_dictionary = !objects.is_empty();
+    let mut note = |at: &At, message: String| {
+        if has_dictionary {
+            warnings.push(Warning {
+                at: at.clone(),
+                message,
+            });
+        }
+    };
+    let has = |objects: &[Object], i: u16| objects.iter().any(|o| o.index == i);
+    if !has(objects, 0x1000) {
+        let profile = dev
+            .source
+            .path("Profile/ChannelInfo/ProfileNo")
+            .or_else(|| dev.source.path("Profile/ProfileNo"))
+            .and_then(|p| crate::xml::number(&p.text))
+            .unwrap_or(0);
+        note(&dev.at, "no object 0x1000: made from the profile number".into());
+        objects.push(Object {
             index: 0x1000,
             name: "Device type",
             code: ObjectCode::Var,
@@ -289,104 +387,148 @@ fn synthesize(dev: &EsiDevice) -> Result<Vec<Object>, DescriptionBuildError> {
                 PdoMapping::None,
                 profile,
             )])),
-        },
-        record(
+        });
+    }
+    if !has(objects, 0x1018) {
+        note(&dev.at, "no object 0x1018: made from the identity".into());
+        objects.push(record(
             0x1018,
             "Identity",
             vec![
                 sub0(4),
                 constant(1, "Vendor ID", DataType::UInt32, i64::from(dev.vendor_id)),
-                constant(
-                    2,
-                    "Product code",
-                    DataType::UInt32,
-                    i64::from(dev.product_code),
-                ),
+                constant(2, "Product code", DataType::UInt32, i64::from(dev.product_code)),
                 constant(3, "Revision", DataType::UInt32, i64::from(dev.revision)),
                 constant(4, "Serial number", DataType::UInt32, 0),
             ],
-        ),
-    ];
-    // Mapped objects: (index) -> [(sub, name, type, output)].
-    let mut mapped: std::collections::BTreeMap<u16, (String, Vec<MappedEntry>)> =
+        ));
+    }
+    // Mapped objects missing: index -> (name, [(sub, name, type, bits, out)]).
+    type Missing = Vec<(u8, String, DataType, u8, bool)>;
+    let mut missing: std::collections::BTreeMap<u16, (String, Missing)> =
         std::collections::BTreeMap::new();
     for (pdos, out) in [(&dev.rx_pdos, true), (&dev.tx_pdos, false)] {
         for p in pdos.iter() {
-            let mut entries = vec![sub0(u8::try_from(p.entries.len()).unwrap_or(u8::MAX))];
-            for (k, e) in p.entries.iter().enumerate() {
-                let sub = u8::try_from(k + 1).unwrap_or(u8::MAX);
-                let value = u32::from(e.index) << 16 | u32::from(e.sub) << 8 | u32::from(e.bit_len);
-                entries.push(map(sub, ecat_slave::od::build::sub_name(sub), value));
-                if e.index == 0 {
-                    continue;
+            if !has(objects, p.index) {
+                let mut entries = vec![sub0(u8::try_from(p.entries.len()).unwrap_or(u8::MAX))];
+                for (k, e) in p.entries.iter().enumerate() {
+                    let sub = u8::try_from(k + 1).unwrap_or(u8::MAX);
+                    let value =
+                        u32::from(e.index) << 16 | u32::from(e.sub) << 8 | u32::from(e.bit_len);
+                    entries.push(map(sub, ecat_slave::od::build::sub_name(sub), value));
                 }
-                let ty = dictionary::data_type_of_code(e.data_type).ok_or_else(|| {
-                    DescriptionBuildError::UnsupportedEntryType {
-                        at: p.at.clone(),
-                        index: e.index,
-                        sub: e.sub,
-                        code: e.data_type,
+                note(&p.at, format!("PDO {:#06x} has no mapping object: made from the PDO", p.index));
+                objects.push(record(p.index, &p.name, entries));
+            }
+            let dir = if out { PdoMapping::Rx } else { PdoMapping::Tx };
+            for e in p.entries.iter().filter(|e| e.index != 0) {
+                let ty = pdo_entry_type(e.data_type, e.bit_len);
+                let Some(pos) = objects.iter().position(|o| o.index == e.index) else {
+                    let slot = missing
+                        .entry(e.index)
+                        .or_insert_with(|| (p.name.clone(), Vec::new()));
+                    if !slot.1.iter().any(|(s, ..)| *s == e.sub) {
+                        slot.1.push((e.sub, e.name.clone(), ty, e.bit_len, out));
                     }
-                })?;
-                let slot = mapped
-                    .entry(e.index)
-                    .or_insert_with(|| (p.name.clone(), Vec::new()));
-                if !slot.1.iter().any(|(s, ..)| *s == e.sub) {
-                    slot.1.push((e.sub, e.name.clone(), ty, out));
+                    continue;
+                };
+                let o = &objects[pos];
+                match o.entries.iter().position(|x| x.sub == e.sub) {
+                    Some(k) => {
+                        let x = &o.entries[k];
+                        if !x.pdo.allows(dir) && !x.gap {
+                            let pdo = if x.pdo == PdoMapping::None { dir } else { PdoMapping::RxTx };
+                            note(
+                                &p.at,
+                                format!(
+                                    "PDO {:#06x} maps {:#06x}:{:02x}, which the dictionary does not let map this way: made mappable",
+                                    p.index, e.index, e.sub
+                                ),
+                            );
+                            let mut entries: Vec<Entry> = o.entries.iter().map(copy).collect();
+                            if let Some(y) = entries.get_mut(k) {
+                                y.pdo = pdo;
+                            }
+                            objects[pos] = Object {
+                                entries: Box::leak(entries.into_boxed_slice()),
+                                ..objects[pos]
+                            };
+                        }
+                    }
+                    None if o.code != ObjectCode::Var => {
+                        note(
+                            &p.at,
+                            format!(
+                                "PDO {:#06x} maps {:#06x}:{:02x}, which object {:#06x} does not have: added",
+                                p.index, e.index, e.sub, e.index
+                            ),
+                        );
+                        let mut entries: Vec<Entry> = o.entries.iter().map(copy).collect();
+                        entries.push(mapped_entry(e.sub, &e.name, ty, e.bit_len, out));
+                        entries.sort_by_key(|x| x.sub);
+                        let highest = entries.iter().map(|x| x.sub).max().unwrap_or(0);
+                        if let Some(z) = entries.first_mut().filter(|z| z.sub == 0) {
+                            z.default = DefaultValue::Int(i64::from(highest));
+                        }
+                        objects[pos] = Object {
+                            entries: Box::leak(entries.into_boxed_slice()),
+                            ..objects[pos]
+                        };
+                    }
+                    None => note(
+                        &p.at,
+                        format!(
+                            "PDO {:#06x} maps {:#06x}:{:02x} of the variable {:#06x}",
+                            p.index, e.index, e.sub, e.index
+                        ),
+                    ),
                 }
             }
-            objects.push(record(p.index, &p.name, entries));
         }
     }
-    let sm_types: Vec<Entry> =
-        std::iter::once(sub0(u8::try_from(dev.sms.len()).unwrap_or(u8::MAX)))
-            .chain(dev.sms.iter().enumerate().map(|(i, s)| {
-                let sub = u8::try_from(i + 1).unwrap_or(u8::MAX);
-                let t = match s.kind {
-                    SmType::MailboxOut => 1,
-                    SmType::MailboxIn => 2,
-                    SmType::ProcessOut => 3,
-                    SmType::ProcessIn => 4,
-                    _ => 0,
-                };
-                constant(
-                    sub,
-                    ecat_slave::od::build::sub_name(sub),
-                    DataType::UInt8,
-                    t,
-                )
-            }))
-            .collect();
-    objects.push(array(0x1C00, "Sync manager type", sm_types));
+    if !has(objects, 0x1C00) {
+        let sm_types: Vec<Entry> =
+            std::iter::once(sub0(u8::try_from(dev.sms.len()).unwrap_or(u8::MAX)))
+                .chain(dev.sms.iter().enumerate().map(|(i, s)| {
+                    let sub = u8::try_from(i + 1).unwrap_or(u8::MAX);
+                    let t = match s.kind {
+                        SmType::MailboxOut => 1,
+                        SmType::MailboxIn => 2,
+                        SmType::ProcessOut => 3,
+                        SmType::ProcessIn => 4,
+                        _ => 0,
+                    };
+                    constant(sub, ecat_slave::od::build::sub_name(sub), DataType::UInt8, t)
+                }))
+                .collect();
+        note(&dev.at, "no object 0x1C00: made from the SyncManagers".into());
+        objects.push(array(0x1C00, "Sync manager type", sm_types));
+    }
     for (index, name, pdos) in [
         (0x1C12u16, "RxPDO assign", &dev.rx_pdos),
         (0x1C13u16, "TxPDO assign", &dev.tx_pdos),
     ] {
-        let def: Vec<u16> = pdos
-            .iter()
-            .filter(|p| p.sm.is_some())
-            .map(|p| p.index)
-            .collect();
+        if has(objects, index) {
+            continue;
+        }
+        let def: Vec<u16> = pdos.iter().filter(|p| p.sm.is_some()).map(|p| p.index).collect();
         let cap = u8::try_from(pdos.len().max(1)).unwrap_or(u8::MAX);
-        let mut entries = vec![assign_count(
-            u8::try_from(def.len()).unwrap_or(u8::MAX),
-            cap,
-        )];
+        let mut entries = vec![assign_count(u8::try_from(def.len()).unwrap_or(u8::MAX), cap)];
         for k in 1..=cap {
             let pdo = def.get(usize::from(k) - 1).copied().unwrap_or(0);
             entries.push(assign(k, pdo));
         }
+        note(&dev.at, format!("no object {index:#06x}: made from the PDOs' Sm"));
         objects.push(array(index, name, entries));
     }
-    for (index, (pdo_name, mut subs)) in mapped {
+    for (index, (pdo_name, mut subs)) in missing {
         subs.sort_by_key(|s| s.0);
-        let make = |(sub, name, ty, out): &MappedEntry| {
-            let n = leak(name);
-            if *out {
-                output(*sub, n, *ty)
-            } else {
-                input(*sub, n, *ty)
-            }
+        note(
+            &dev.at,
+            format!("PDO entries map {index:#06x}, which the dictionary does not have: made from the PDO entries"),
+        );
+        let make = |(sub, name, ty, bits, out): &(u8, String, DataType, u8, bool)| {
+            mapped_entry(*sub, name, *ty, *bits, *out)
         };
         match subs.as_slice() {
             [only] if only.0 == 0 => objects.push(Object {
@@ -405,7 +547,6 @@ fn synthesize(dev: &EsiDevice) -> Result<Vec<Object>, DescriptionBuildError> {
         }
     }
     objects.sort_by_key(|o| o.index);
-    Ok(objects)
 }
 
 fn modular_error(e: &crate::xml::Element, problem: impl Into<String>) -> DescriptionBuildError {
@@ -433,7 +574,8 @@ fn modular(
     dev: &EsiDevice,
     slots_el: &crate::xml::Element,
     objects: &mut Vec<Object>,
-) -> Result<ecat_slave::od::modules::ModularLayout, DescriptionBuildError> {
+    warnings: &mut Vec<Warning>,
+) -> Result<Option<ecat_slave::od::modules::ModularLayout>, DescriptionBuildError> {
     use ecat_slave::od::modules::{ModularLayout, ModuleType, SlotRange};
     let num = |e: &crate::xml::Element, name: &str| -> Result<u16, DescriptionBuildError> {
         let v = e
@@ -450,10 +592,15 @@ fn modular(
     if slots == 0 {
         return Err(modular_error(slots_el, "no <Slot>"));
     }
-    let modules_el = dev
-        .modules
-        .as_ref()
-        .ok_or_else(|| modular_error(slots_el, "the file has no <Modules>"))?;
+    let Some(modules_el) = dev.modules.as_ref() else {
+        // Modules described in another file (a module library) that was
+        // not given: the device runs with its slots empty.
+        warnings.push(Warning::new(
+            slots_el,
+            "the file has no <Modules> (a module library in another file?): the slots stay empty",
+        ));
+        return Ok(None);
+    };
     let mut types = Vec::new();
     let mut module_objects: Vec<Object> = Vec::new();
     for m in modules_el.children_named("Module") {
@@ -483,7 +630,8 @@ fn modular(
             tx: leak_list(pdo_list("TxPdo")?),
         });
         if let Some(d) = m.path("Profile/Dictionary") {
-            let (parsed, _) = dictionary::parse(d)?;
+            let (parsed, _, mut w) = dictionary::parse(d)?;
+            warnings.append(&mut w);
             for p in parsed {
                 if !module_objects.iter().any(|o| o.index == p.object.index) {
                     module_objects.push(p.object);
@@ -559,13 +707,13 @@ fn modular(
         }
     }
     objects.sort_by_key(|o| o.index);
-    Ok(ModularLayout {
+    Ok(Some(ModularLayout {
         slots,
         index_distance: distance,
         pdo_increment,
         ranges: Box::leak(ranges.into_boxed_slice()),
         modules: Box::leak(types.into_boxed_slice()),
-    })
+    }))
 }
 
 /// The module idents of a modular device's slots: each `Slot`'s default
@@ -587,8 +735,16 @@ pub fn default_modules(dev: &EsiDevice) -> Vec<u32> {
         .collect()
 }
 
+/// A description, its memory layout and what the loader left out or
+/// assumed building it.
+pub type Described = (
+    &'static DeviceDescription,
+    MemoryLayout,
+    &'static [Warning],
+);
+
 /// Descriptions built so far, one per distinct device.
-static DESCRIPTIONS: crate::Cache<(&'static DeviceDescription, MemoryLayout)> = crate::Cache::new();
+static DESCRIPTIONS: crate::Cache<Described> = crate::Cache::new();
 
 /// The twin's description and memory layout for `dev`. Built and leaked
 /// once per distinct device: describing an equal device again returns the
@@ -596,13 +752,18 @@ static DESCRIPTIONS: crate::Cache<(&'static DeviceDescription, MemoryLayout)> = 
 pub fn describe(
     dev: &EsiDevice,
 ) -> Result<(&'static DeviceDescription, MemoryLayout), DescriptionBuildError> {
+    describe_with_warnings(dev).map(|(d, l, _)| (d, l))
+}
+
+/// [`describe`] with the warnings: what of the ESI the twin leaves out or
+/// assumes (the load's [`EsiDevice::warnings`] included), each naming the
+/// element and line.
+pub fn describe_with_warnings(dev: &EsiDevice) -> Result<Described, DescriptionBuildError> {
     DESCRIPTIONS.get_or_build(dev, build_description)
 }
 
 /// [`describe`] without the cache.
-fn build_description(
-    dev: &EsiDevice,
-) -> Result<(&'static DeviceDescription, MemoryLayout), DescriptionBuildError> {
+fn build_description(dev: &EsiDevice) -> Result<Described, DescriptionBuildError> {
     let label = dev.label();
     // ETG.2000 requires it; the SII General category of a CoE device
     // carries it.
@@ -613,13 +774,52 @@ fn build_description(
         }
         .into());
     }
-    let (parsed, enums) = match dev.source.path("Profile/Dictionary") {
+    let mut warnings = dev.warnings.clone();
+    let (mut parsed, enums): (Vec<Object>, _) = match dev.source.path("Profile/Dictionary") {
         Some(dict_el) => {
-            let (parsed, enums) = dictionary::parse(dict_el)?;
+            let (parsed, enums, mut w) = dictionary::parse(dict_el)?;
+            warnings.append(&mut w);
             (parsed.into_iter().map(|p| p.object).collect(), enums)
         }
-        None => (synthesize(dev)?, Vec::new()),
+        None => (Vec::new(), Vec::new()),
     };
+    complete(dev, &mut parsed, &mut warnings);
+    drop_impossible_ranges(dev, &mut parsed, &mut warnings);
+    // Writable strings beyond the store's string slots are served
+    // read-only (the core keeps STRING_SLOTS of them).
+    let mut strings = 0usize;
+    for o in parsed.iter_mut() {
+        let mut changed = None;
+        for (k, e) in o.entries.iter().enumerate() {
+            if let DefaultValue::Str(t) = e.default {
+                let slot = t.len() <= ecat_slave::od::STRING_CAPACITY;
+                if e.access.writable() && (!slot || strings >= ecat_slave::od::STRING_SLOTS) {
+                    changed.get_or_insert_with(Vec::new).push(k);
+                }
+                if slot {
+                    strings += 1;
+                }
+            }
+        }
+        if let Some(ks) = changed {
+            warnings.push(Warning {
+                at: dev.at.clone(),
+                message: format!(
+                    "object {:#06x}: a writable string beyond the twin's {} string slots of {} bytes is served read-only",
+                    o.index,
+                    ecat_slave::od::STRING_SLOTS,
+                    ecat_slave::od::STRING_CAPACITY
+                ),
+            });
+            let mut entries: Vec<Entry> = o.entries.iter().map(copy).collect();
+            for k in ks {
+                if let Some(e) = entries.get_mut(k) {
+                    e.access = ecat_slave::od::Access::Ro;
+                }
+            }
+            o.entries = Box::leak(entries.into_boxed_slice());
+        }
+    }
     let mut objects: Vec<Object> = Vec::with_capacity(parsed.len());
     for o in parsed {
         if o.index == 0x1018 {
@@ -647,10 +847,10 @@ fn build_description(
         }
     }
     let modular = match dev.source.child("Slots") {
-        Some(slots) => Some(modular(dev, slots, &mut objects)?),
+        Some(slots) => modular(dev, slots, &mut objects, &mut warnings)?,
         None => None,
     };
-    let entries: usize = objects.iter().map(|o| o.entries.len()).sum();
+    let entries = ecat_slave::od::dictionary::value_slots(&objects);
     if entries > TWIN_ENTRIES {
         return Err(DescriptionBuildError::TooManyEntries {
             device: label,
@@ -755,7 +955,7 @@ fn build_description(
             device: dev.label(),
             source,
         })?;
-    Ok((desc, layout))
+    Ok((desc, layout, Box::leak(warnings.into_boxed_slice())))
 }
 
 /// The generic behaviour of a twin with a mailbox: outputs are stored by
@@ -780,7 +980,7 @@ impl EsiApp {
         let mut outs: Vec<(usize, DataType)> = Vec::new();
         for o in desc.dictionary.objects() {
             for e in o.entries {
-                let numeric = e.data_type != DataType::VisibleString && !e.gap;
+                let numeric = !e.data_type.is_bytes() && !e.gap;
                 match e.pdo {
                     PdoMapping::Tx if numeric => ins.push((flat, e.data_type, e.bit_len)),
                     PdoMapping::Rx if numeric => outs.push((flat, e.data_type)),

@@ -151,16 +151,26 @@ pub enum TwinError {
     Description(#[from] coe_twin::DescriptionBuildError),
 }
 
-/// Reads and parses one ESI file.
+/// Reads and parses one ESI file (in the encoding its byte order mark or
+/// XML declaration names, [`xml::decode`]).
 pub fn load_esi(path: &Path) -> Result<EsiFile, TwinError> {
-    let text = std::fs::read_to_string(path).map_err(|source| TwinError::Io {
+    let bytes = std::fs::read(path).map_err(|source| TwinError::Io {
         path: path.display().to_string(),
         source,
     })?;
-    EsiFile::parse(&text).map_err(|source| TwinError::Esi {
+    EsiFile::parse_bytes(&bytes).map_err(|source| TwinError::Esi {
         path: path.display().to_string(),
         source,
     })
+}
+
+/// What the twin of `dev` leaves out of its ESI or assumes, each naming
+/// the element and line (empty for a device the twin models completely).
+pub fn warnings(dev: &EsiDevice) -> Result<Vec<esi::Warning>, TwinError> {
+    if !dev.has_mailbox() {
+        return Ok(dev.warnings.clone());
+    }
+    Ok(coe_twin::describe_with_warnings(dev)?.2.to_vec())
 }
 
 /// The twin of an ESC-only `dev` (no mailbox) with station alias `alias`

@@ -245,7 +245,7 @@ const fn int_default(o: &Object, sub: u8) -> Option<i64> {
         if e.sub == sub {
             return match e.default {
                 DefaultValue::Int(v) => Some(v),
-                DefaultValue::Str(_) => None,
+                DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
             };
         }
         es = tail;
@@ -410,11 +410,7 @@ impl DeviceDescription {
                                     found = true;
                                     let ok = !t.gap
                                         && t.bit_len == mbits
-                                        && matches!(
-                                            (t.pdo, want),
-                                            (PdoMapping::Rx, PdoMapping::Rx)
-                                                | (PdoMapping::Tx, PdoMapping::Tx)
-                                        );
+                                        && t.pdo.allows(want);
                                     if !ok {
                                         return Err(DescriptionError::BadMapping {
                                             pdo,
