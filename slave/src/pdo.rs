@@ -35,10 +35,27 @@ pub struct ProcessData {
     pub sets: &'static [PdoSet],
 }
 
-/// Most mapped entries (padding included) of one direction.
+/// Most mapped entries (padding included) of one direction: 48 in a
+/// firmware build; a host build (feature `std`), which simulates devices
+/// described by any vendor's ESI (twins of 8-channel time-stamp terminals
+/// map 280), allows 320.
+#[cfg(not(feature = "std"))]
 pub const MAX_MAPPED: usize = 48;
-/// Largest process image of one direction in bytes.
+/// Most mapped entries (padding included) of one direction (see the
+/// firmware build's value).
+#[cfg(feature = "std")]
+pub const MAX_MAPPED: usize = 320;
+/// Largest process image of one direction in bytes: 128 in a firmware
+/// build, 512 in a host build (feature `std`, twins of large devices).
+#[cfg(not(feature = "std"))]
 pub const MAX_IMAGE: usize = 128;
+/// Largest process image of one direction in bytes (see the firmware
+/// build's value).
+#[cfg(feature = "std")]
+pub const MAX_IMAGE: usize = 512;
+/// Bytes the default memory layout leaves for the outputs before the
+/// inputs (`MemoryLayout::new`), the same in every build.
+pub const DEFAULT_OUTPUT_AREA: usize = 128;
 
 /// Which process image: outputs (RxPDOs, 0x1C12) or inputs (TxPDOs, 0x1C13).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -103,6 +103,57 @@ fn leak_list(v: Vec<u16>) -> &'static [u16] {
     Box::leak(v.into_boxed_slice())
 }
 
+/// The default assignment `index` (0x1C12/0x1C13) as the core reads it:
+/// subindex 0 the number of PDOs, then the PDOs, without empty (0) places
+/// and without PDOs the twin leaves out; a warning when that changes it.
+fn normalize_assignment(
+    dev: &EsiDevice,
+    objects: &mut [Object],
+    index: u16,
+    left_out: &[u16],
+    warnings: &mut Vec<Warning>,
+) {
+    let Some(o) = objects.iter_mut().find(|o| o.index == index) else {
+        return;
+    };
+    if o.code == ObjectCode::Var {
+        return;
+    }
+    let mut list = assigned(std::slice::from_ref(o), index);
+    list.retain(|p| !left_out.contains(p));
+    let count = match o.entries.first().map(|e| e.default) {
+        Some(DefaultValue::Int(n)) => n,
+        _ => 0,
+    };
+    let now: Vec<i64> = o
+        .entries
+        .iter()
+        .filter(|e| e.sub >= 1 && i64::from(e.sub) <= count)
+        .map(|e| match e.default {
+            DefaultValue::Int(v) => v,
+            _ => -1,
+        })
+        .collect();
+    let want: Vec<i64> = list.iter().map(|p| i64::from(*p)).collect();
+    if now == want {
+        return;
+    }
+    warnings.push(Warning {
+        at: dev.at.clone(),
+        message: format!(
+            "{index:#06x} defaults to {now:x?}: {want:x?} assumed (no empty places, no PDO the twin leaves out)"
+        ),
+    });
+    let mut entries: Vec<Entry> = o.entries.iter().map(copy).collect();
+    for e in entries.iter_mut() {
+        match e.sub {
+            0 => e.default = DefaultValue::Int(want.len() as i64),
+            s => e.default = DefaultValue::Int(want.get(usize::from(s) - 1).copied().unwrap_or(0)),
+        }
+    }
+    o.entries = Box::leak(entries.into_boxed_slice());
+}
+
 /// Ranges a device could not have (minimum above maximum, a default
 /// outside them or outside its type) are dropped with a warning: the
 /// entry is served without one, as a configurator would read it.
@@ -117,7 +168,7 @@ fn drop_impossible_ranges(dev: &EsiDevice, objects: &mut [Object], warnings: &mu
                 let DefaultValue::Int(v) = e.default else {
                     return false;
                 };
-                if e.data_type.is_bytes() || (e.min.is_none() && e.max.is_none()) {
+                if e.data_type.is_bytes() || matches!(e.data_type, DataType::Enum(_)) {
                     return false;
                 }
                 let t = &e.data_type;
@@ -137,12 +188,19 @@ fn drop_impossible_ranges(dev: &EsiDevice, objects: &mut [Object], warnings: &mu
                 warnings.push(Warning {
                     at: dev.at.clone(),
                     message: format!(
-                        "{:#06x}:{:02x}: the range {:?}..{:?} does not hold the default {:?} or is empty: served without a range",
+                        "{:#06x}:{:02x}: the range {:?}..{:?} of its type does not hold the default {:?} or is empty: served without a range, the default cut to its type",
                         o.index, e.sub, e.min, e.max, e.default
                     ),
                 });
                 e.min = None;
                 e.max = None;
+                // A default outside its type: its bits in the type's size.
+                if let DefaultValue::Int(v) = e.default {
+                    let (lo, hi) = ecat_slave::od::dictionary::natural_range(&e.data_type, e.bit_len);
+                    if !e.data_type.is_real() && (v < lo || v > hi) {
+                        e.default = DefaultValue::Int(ecat_slave::od::store::from_raw(e, v as u64 & u64::MAX.checked_shr(64 - u32::from(e.bit_len.clamp(1, 64))).unwrap_or(u64::MAX)));
+                    }
+                }
             }
         }
         o.entries = Box::leak(entries.into_boxed_slice());
@@ -170,14 +228,18 @@ fn assigned(objects: &[Object], index: u16) -> Vec<u16> {
         .iter()
         .filter(|e| e.sub >= 1 && i64::from(e.sub) <= n)
         .filter_map(|e| match e.default {
-            DefaultValue::Int(v) => u16::try_from(v).ok(),
+            DefaultValue::Int(v) => u16::try_from(v).ok().filter(|v| *v != 0),
             DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
         })
         .collect()
 }
 
 /// The PDO sets of the device.
-fn pdo_sets(dev: &EsiDevice, objects: &[Object]) -> Result<&'static [PdoSet], EsiError> {
+fn pdo_sets(
+    dev: &EsiDevice,
+    objects: &[Object],
+    left_out: &[u16],
+) -> Result<&'static [PdoSet], EsiError> {
     let alt = dev
         .source
         .path("VendorSpecific/TwinCAT")
@@ -218,8 +280,14 @@ fn pdo_sets(dev: &EsiDevice, objects: &[Object]) -> Result<&'static [PdoSet], Es
             });
         }
     } else {
-        let rx = assigned(objects, 0x1C12);
-        let tx = assigned(objects, 0x1C13);
+        let mut rx = assigned(objects, 0x1C12);
+        let mut tx = assigned(objects, 0x1C13);
+        rx.retain(|p| !left_out.contains(p));
+        tx.retain(|p| !left_out.contains(p));
+        let mut dev = dev.clone();
+        dev.rx_pdos.retain(|p| !left_out.contains(&p.index));
+        dev.tx_pdos.retain(|p| !left_out.contains(&p.index));
+        let dev = &dev;
         if !rx.is_empty() || !tx.is_empty() {
             sets.push(PdoSet {
                 name: "Default",
@@ -234,6 +302,21 @@ fn pdo_sets(dev: &EsiDevice, objects: &[Object]) -> Result<&'static [PdoSet], Es
                 tx: leak_list(stx),
             });
         }
+    }
+    // The first set is what 0x1C12/0x1C13 hold at power-on (ETG.1000.6:
+    // the device's default assignment); an AlternativeSmMapping marked
+    // default that says otherwise comes after it.
+    let (rx, tx) = (assigned(objects, 0x1C12), assigned(objects, 0x1C13));
+    let first_ok = sets.first().is_none_or(|s| s.rx == rx.as_slice() && s.tx == tx.as_slice());
+    if !first_ok && (!rx.is_empty() || !tx.is_empty()) {
+        sets.insert(
+            0,
+            PdoSet {
+                name: "Default",
+                rx: leak_list(rx),
+                tx: leak_list(tx),
+            },
+        );
     }
     Ok(Box::leak(sets.into_boxed_slice()))
 }
@@ -358,7 +441,9 @@ fn mapped_entry(sub: u8, name: &str, ty: DataType, bits: u8, out: bool) -> Entry
 /// writable outputs). An entry the dictionary has but does not let map the
 /// way a PDO maps it is made mappable. What is added is named in
 /// `warnings` when the ESI has a dictionary.
-fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warning>) {
+fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warning>) -> Vec<u16> {
+    let mut conflicting: Vec<u16> = Vec::new();
+    let mut outside: Vec<Warning> = Vec::new();
     let has_dictionary = !objects.is_empty();
     let mut note = |at: &At, message: String| {
         if has_dictionary {
@@ -407,8 +492,23 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
     type Missing = Vec<(u8, String, DataType, u8, bool)>;
     let mut missing: std::collections::BTreeMap<u16, (String, Missing)> =
         std::collections::BTreeMap::new();
-    for (pdos, out) in [(&dev.rx_pdos, true), (&dev.tx_pdos, false)] {
+    for (pdos, range) in [(&dev.rx_pdos, 0x1600..=0x17FFu16), (&dev.tx_pdos, 0x1A00..=0x1BFF)] {
         for p in pdos.iter() {
+            if !range.contains(&p.index) {
+                // An RxPdo 0x1A00 (the EL9800's first revisions): no
+                // mapping object of its direction can hold it.
+                outside.push(Warning {
+                    at: p.at.clone(),
+                    message: format!(
+                        "PDO {:#06x} is outside its direction's mapping objects ({:#06x}..{:#06x}): left out of the PDO sets",
+                        p.index,
+                        range.start(),
+                        range.end()
+                    ),
+                });
+                conflicting.push(p.index);
+                continue;
+            }
             if !has(objects, p.index) {
                 let mut entries = vec![sub0(u8::try_from(p.entries.len()).unwrap_or(u8::MAX))];
                 for (k, e) in p.entries.iter().enumerate() {
@@ -419,14 +519,117 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
                 }
                 note(&p.at, format!("PDO {:#06x} has no mapping object: made from the PDO", p.index));
                 objects.push(record(p.index, &p.name, entries));
+                continue;
             }
-            let dir = if out { PdoMapping::Rx } else { PdoMapping::Tx };
+            // The mapping object's defaults must be the PDO's entries
+            // (what the SII and the master see): where the dictionary says
+            // otherwise, the PDO wins.
+            let want: Vec<i64> = p
+                .entries
+                .iter()
+                .map(|e| i64::from(u32::from(e.index) << 16 | u32::from(e.sub) << 8 | u32::from(e.bit_len)))
+                .collect();
+            let Some(pos) = objects.iter().position(|o| o.index == p.index) else {
+                continue;
+            };
+            let o = &objects[pos];
+            let count = match o.entries.first().map(|e| e.default) {
+                Some(DefaultValue::Int(n)) => n,
+                _ => 0,
+            };
+            let have: Vec<i64> = o
+                .entries
+                .iter()
+                .filter(|e| e.sub >= 1 && i64::from(e.sub) <= count)
+                .map(|e| match e.default {
+                    DefaultValue::Int(v) => v,
+                    _ => -1,
+                })
+                .collect();
+            if have == want || o.code == ObjectCode::Var {
+                continue;
+            }
+            note(
+                &p.at,
+                format!(
+                    "PDO {:#06x}: the mapping object's defaults differ from the PDO's entries: the PDO's taken",
+                    p.index
+                ),
+            );
+            let n = u8::try_from(want.len()).unwrap_or(u8::MAX);
+            let mut entries: Vec<Entry> = o.entries.iter().map(copy).collect();
+            for (k, v) in want.iter().enumerate() {
+                let sub = u8::try_from(k + 1).unwrap_or(u8::MAX);
+                match entries.iter_mut().find(|e| e.sub == sub) {
+                    Some(e) => e.default = DefaultValue::Int(*v),
+                    None => entries.push(map(sub, ecat_slave::od::build::sub_name(sub), *v as u32)),
+                }
+            }
+            entries.sort_by_key(|e| e.sub);
+            if entries.first().is_some_and(|z| !z.access.writable()) {
+                entries.retain(|e| e.sub <= n);
+            }
+            let highest = entries.iter().map(|e| e.sub).max().unwrap_or(0);
+            if let Some(z) = entries.first_mut().filter(|z| z.sub == 0) {
+                z.default = DefaultValue::Int(i64::from(if z.access.writable() { n } else { highest }));
+            }
+            objects[pos] = Object {
+                entries: Box::leak(entries.into_boxed_slice()),
+                ..objects[pos]
+            };
+        }
+    }
+    // What the PDOs map: the ESI's PDOs, and the defaults of the
+    // dictionary's own mapping objects (which may map more).
+    let mut wanted: Vec<(At, u16, bool, crate::esi::EsiPdoEntry)> = Vec::new();
+    for (pdos, out) in [(&dev.rx_pdos, true), (&dev.tx_pdos, false)] {
+        // The default PDOs (with an Sm) first: they win a conflict.
+        let ordered = pdos
+            .iter()
+            .filter(|p| p.sm.is_some())
+            .chain(pdos.iter().filter(|p| p.sm.is_none()));
+        for p in ordered {
             for e in p.entries.iter().filter(|e| e.index != 0) {
+                wanted.push((p.at.clone(), p.index, out, e.clone()));
+            }
+        }
+    }
+    for o in objects.iter() {
+        let out = (0x1600..=0x17FF).contains(&o.index);
+        if !out && !(0x1A00..=0x1BFF).contains(&o.index) {
+            continue;
+        }
+        let n = match o.entries.first().map(|e| e.default) {
+            Some(DefaultValue::Int(n)) => n,
+            _ => 0,
+        };
+        for e in o.entries.iter().filter(|e| e.sub >= 1 && i64::from(e.sub) <= n) {
+            let DefaultValue::Int(v) = e.default else {
+                continue;
+            };
+            let (index, sub, bits) = ((v >> 16) as u16, (v >> 8) as u8, v as u8);
+            if index == 0 || wanted.iter().any(|(_, p, _, x)| *p == o.index && x.index == index && x.sub == sub) {
+                continue;
+            }
+            let name = format!("SubIndex {sub:03}");
+            let entry = crate::esi::EsiPdoEntry { index, sub, bit_len: bits, name, data_type: 0 };
+            wanted.push((dev.at.clone(), o.index, out, entry));
+        }
+    }
+    {
+        {
+            let at = &dev.at;
+            for (p_at, p_index, out, e) in &wanted {
+                let (out, e) = (*out, e);
+                let p_name = String::new();
+                let p = (p_at, *p_index, &p_name);
+                let _ = at;
+                let dir = if out { PdoMapping::Rx } else { PdoMapping::Tx };
                 let ty = pdo_entry_type(e.data_type, e.bit_len);
                 let Some(pos) = objects.iter().position(|o| o.index == e.index) else {
                     let slot = missing
                         .entry(e.index)
-                        .or_insert_with(|| (p.name.clone(), Vec::new()));
+                        .or_insert_with(|| (format!("{:#06x}", e.index), Vec::new()));
                     if !slot.1.iter().any(|(s, ..)| *s == e.sub) {
                         slot.1.push((e.sub, e.name.clone(), ty, e.bit_len, out));
                     }
@@ -434,15 +637,30 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
                 };
                 let o = &objects[pos];
                 match o.entries.iter().position(|x| x.sub == e.sub) {
+                    Some(k) if o.entries[k].bit_len != u16::from(e.bit_len) && !o.entries[k].gap => {
+                        // One object, one size: a PDO that maps it with
+                        // another length (Beckhoff's alternative PDOs of a
+                        // wider time stamp) cannot be assigned.
+                        note(
+                            p.0,
+                            format!(
+                                "PDO {:#06x} maps {:#06x}:{:02x} with {} bits, the dictionary has {}: the PDO is left out of the PDO sets",
+                                p.1, e.index, e.sub, e.bit_len, o.entries[k].bit_len
+                            ),
+                        );
+                        if !conflicting.contains(&p.1) {
+                            conflicting.push(p.1);
+                        }
+                    }
                     Some(k) => {
                         let x = &o.entries[k];
                         if !x.pdo.allows(dir) && !x.gap {
                             let pdo = if x.pdo == PdoMapping::None { dir } else { PdoMapping::RxTx };
                             note(
-                                &p.at,
+                                p.0,
                                 format!(
                                     "PDO {:#06x} maps {:#06x}:{:02x}, which the dictionary does not let map this way: made mappable",
-                                    p.index, e.index, e.sub
+                                    p.1, e.index, e.sub
                                 ),
                             );
                             let mut entries: Vec<Entry> = o.entries.iter().map(copy).collect();
@@ -457,10 +675,10 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
                     }
                     None if o.code != ObjectCode::Var => {
                         note(
-                            &p.at,
+                            p.0,
                             format!(
                                 "PDO {:#06x} maps {:#06x}:{:02x}, which object {:#06x} does not have: added",
-                                p.index, e.index, e.sub, e.index
+                                p.1, e.index, e.sub, e.index
                             ),
                         );
                         let mut entries: Vec<Entry> = o.entries.iter().map(copy).collect();
@@ -476,10 +694,10 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
                         };
                     }
                     None => note(
-                        &p.at,
+                        p.0,
                         format!(
                             "PDO {:#06x} maps {:#06x}:{:02x} of the variable {:#06x}",
-                            p.index, e.index, e.sub, e.index
+                            p.1, e.index, e.sub, e.index
                         ),
                     ),
                 }
@@ -547,6 +765,8 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
         }
     }
     objects.sort_by_key(|o| o.index);
+    warnings.append(&mut outside);
+    conflicting
 }
 
 fn modular_error(e: &crate::xml::Element, problem: impl Into<String>) -> DescriptionBuildError {
@@ -783,8 +1003,16 @@ fn build_description(dev: &EsiDevice) -> Result<Described, DescriptionBuildError
         }
         None => (Vec::new(), Vec::new()),
     };
-    complete(dev, &mut parsed, &mut warnings);
+    let left_out = complete(dev, &mut parsed, &mut warnings);
+    for index in [0x1C12u16, 0x1C13] {
+        normalize_assignment(dev, &mut parsed, index, &left_out, &mut warnings);
+    }
     drop_impossible_ranges(dev, &mut parsed, &mut warnings);
+    if let Ok(d) = std::env::var("TWIN_DEBUG") {
+        for o in parsed.iter().filter(|o| format!("{:04x}", o.index) == d) {
+            eprintln!("DEBUG {o:?}");
+        }
+    }
     // Writable strings beyond the store's string slots are served
     // read-only (the core keeps STRING_SLOTS of them).
     let mut strings = 0usize;
@@ -857,7 +1085,7 @@ fn build_description(dev: &EsiDevice) -> Result<Described, DescriptionBuildError
             entries,
         });
     }
-    let sets = pdo_sets(dev, &objects)?;
+    let sets = pdo_sets(dev, &objects, &left_out)?;
     let (mbx_out, mbx_in) = match (sm(dev, SmType::MailboxOut), sm(dev, SmType::MailboxIn)) {
         (Some(o), Some(i)) => (o, i),
         _ => return Err(DescriptionBuildError::NoMailboxSm(label)),

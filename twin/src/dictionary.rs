@@ -498,11 +498,14 @@ fn sub_infos<'a>(obj_info: Option<&'a Element>, names: &[String]) -> Vec<Option<
         let by_name = items.iter().enumerate().find(|(i, it)| {
             !used.get(*i).copied().unwrap_or(true) && it.text_at("Name") == Some(n)
         });
+        // By position only where the Info names no entry there (an Info
+        // that leaves entries out must not shift its defaults onto
+        // others).
         let pick = match by_name {
             Some((i, it)) => Some((i, *it)),
             None => items
                 .get(k)
-                .filter(|_| !used.get(k).copied().unwrap_or(true))
+                .filter(|it| !used.get(k).copied().unwrap_or(true) && it.child("Name").is_none())
                 .map(|it| (k, *it)),
         };
         match pick {
@@ -703,7 +706,9 @@ fn parse_object(
                 if e.sub == 0 {
                     // Subindex 0 holds the highest subindex (a PDO
                     // assignment or module list: at most that).
-                    let list = matches!(index, 0x1C12 | 0x1C13 | 0xF030);
+                    // (A writable subindex 0: the number of entries in
+                    // use, as the core reads it.)
+                    let list = matches!(index, 0x1C12 | 0x1C13 | 0xF030) || e.access.writable();
                     let want = i64::from(highest);
                     let ok = matches!(e.default, DefaultValue::Int(v) if v == want || (list && (0..=want).contains(&v)));
                     if !ok {

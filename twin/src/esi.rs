@@ -1004,6 +1004,15 @@ impl EsiFile {
             .collect();
         let types: std::collections::BTreeSet<&str> =
             matching.iter().map(|d| d.type_name.as_str()).collect();
+        if matching.is_empty()
+            && let Some((_, e)) = self.refused.iter().find(|(label, _)| {
+                let ty = label.split(" rev ").next().unwrap_or("");
+                type_name.is_none_or(|t| ty.eq_ignore_ascii_case(t.trim()))
+            })
+        {
+            // The device asked for is in the file but does not load.
+            return Err(e.clone());
+        }
         match (matching.is_empty(), types.len()) {
             (true, _) => Err(EsiError::NoSuchDevice {
                 wanted: format!(

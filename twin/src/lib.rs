@@ -210,12 +210,11 @@ pub fn twin_with_modules(
     let (desc, layout) = coe_twin::describe(dev)?;
     let modules = modules.map_or_else(|| coe_twin::default_modules(dev), <[u32]>::to_vec);
     let mut slave = coe_twin::slave(desc, layout, rule, modules);
+    // The EEPROM a real device ships with is written from its ESI (or is
+    // the ESI's `<Eeprom><Data>`): the twin serves that image, so a master
+    // reads what the ESI says, whatever the firmware's description adds.
     let esc = LineSlave::esc_mut(&mut slave);
-    if dev.eeprom_data.is_some() {
-        esc.program_sii(&sii::image(dev, alias)?);
-    } else if let Some(a) = alias {
-        esc.program_sii_alias(a);
-    }
+    esc.program_sii(&sii::image(dev, alias)?);
     esc.power_on();
     Ok(Box::new(slave))
 }

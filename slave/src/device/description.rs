@@ -194,7 +194,8 @@ impl MemoryLayout {
     /// Standard mailboxes of `size` bytes at 0x1000 and right after, the
     /// bootstrap mailboxes (if any) of `boot` bytes at 0x1000 and right
     /// after, process data after the standard mailboxes: outputs, then
-    /// inputs [`MAX_IMAGE`] bytes later. `None` for a size outside
+    /// inputs [`DEFAULT_OUTPUT_AREA`](crate::pdo::DEFAULT_OUTPUT_AREA)
+    /// bytes later. `None` for a size outside
     /// 16..=[`MAX_MAILBOX`].
     pub const fn new(size: u16, boot: Option<u16>) -> Option<Self> {
         if size < 16 || size as usize > MAX_MAILBOX {
@@ -213,7 +214,7 @@ impl MemoryLayout {
             boot_out: (out, boot),
             boot_in: (out + boot, boot),
             pd_out,
-            pd_in: pd_out + MAX_IMAGE as u16,
+            pd_in: pd_out + crate::pdo::DEFAULT_OUTPUT_AREA as u16,
         })
     }
 

@@ -58,6 +58,18 @@ pub enum EsiCmd {
         #[arg(long)]
         esi: Option<PathBuf>,
     },
+    /// Every device of every ESI file of a folder as a twin on the virtual
+    /// bus: loads, builds SII and dictionary, brings it to OP with
+    /// ethercrab, compares its SII and its SDO Information with the ESI.
+    /// Prints a table (file, type, revision, result, reason) and the pass
+    /// rate; exit 1 when a device fails.
+    Corpus {
+        /// The folder of ESI files.
+        dir: PathBuf,
+        /// Also write a JUnit XML report here.
+        #[arg(long, value_name = "FILE")]
+        junit: Option<PathBuf>,
+    },
 }
 
 /// A hex dump: offset, 16 bytes.
@@ -182,7 +194,10 @@ async fn write(w: &Where, file: &Path, force: bool) -> Result<(), Failure> {
 
 /// Runs an `esi` command.
 pub async fn esi(w: &Where, op: EsiCmd) -> Result<(), Failure> {
-    let EsiCmd::Check { esi } = op;
+    let esi = match op {
+        EsiCmd::Check { esi } => esi,
+        EsiCmd::Corpus { dir, junit } => return corpus(&dir, junit.as_deref()),
+    };
     let given = match &esi {
         Some(p) => Some(
             String::from_utf8(
@@ -234,6 +249,34 @@ pub async fn esi(w: &Where, op: EsiCmd) -> Result<(), Failure> {
         mismatches.len(),
         sel.label()
     )))
+}
+
+/// `esi corpus DIR`: the table, the JUnit report, exit 1 on a failure.
+fn corpus(dir: &Path, junit: Option<&Path>) -> Result<(), Failure> {
+    let mut n = 0usize;
+    let rows = master_test::corpus::run_dir_with(dir, |r| {
+        n += 1;
+        eprintln!(
+            "[{n}] {} {} {:#010x}: {}",
+            r.file,
+            r.type_name,
+            r.revision,
+            r.outcome.word()
+        );
+    })
+        .map_err(|e| input(format!("cannot read {}: {e}", dir.display())))?;
+    if let Some(j) = junit {
+        std::fs::write(j, master_test::corpus::junit(&rows))
+            .map_err(|e| input(format!("cannot write {}: {e}", j.display())))?;
+    }
+    outln!("{}", master_test::corpus::table(&rows).trim_end());
+    if rows
+        .iter()
+        .all(|r| r.outcome == master_test::corpus::Outcome::Pass)
+    {
+        return Ok(());
+    }
+    Err(Failure::Mismatch(master_test::corpus::summary(&rows)))
 }
 
 #[cfg(test)]
