@@ -266,17 +266,18 @@ fn check_selected(
             Some(num_attr(e, "DefaultSize").unwrap_or(0)),
             s.length,
         );
+        // A virtual SyncManager may leave ControlByte and Enable out.
         d.hex(
             format!("SM{i} control byte"),
-            num_attr(e, "ControlByte"),
+            Some(num_attr(e, "ControlByte").unwrap_or(0)),
             s.control,
         );
         // ETG.2010 SyncM enable byte: bit 0 enable, 2 virtual, 3 OpOnly.
-        let enable = num_attr(e, "Enable").map(|v| {
-            v & 1
+        let enable = Some(
+            num_attr(e, "Enable").unwrap_or(0) & 1
                 | i64::from(e.attr("Virtual").is_some_and(xml_true)) << 2
-                | i64::from(e.attr("OpOnly").is_some_and(xml_true)) << 3
-        });
+                | i64::from(e.attr("OpOnly").is_some_and(xml_true)) << 3,
+        );
         d.hex(format!("SM{i} enable"), enable, s.enable);
         d.cmp(
             format!("SM{i} type"),
@@ -351,8 +352,12 @@ fn check_selected(
                     p.flags & bit != 0,
                 );
             }
+            // A padding entry of no bits maps nothing (the SII has none).
             let esi_entries: Vec<(i64, i64, i64)> = e
                 .children_named("Entry")
+                .filter(|x| {
+                    num(x.child("Index")) != Some(0) || num(x.child("BitLen")) != Some(0)
+                })
                 .map(|x| {
                     (
                         num(x.child("Index")).unwrap_or(-1),
@@ -408,9 +413,14 @@ fn check_selected(
         config.unwrap_or_else(|| crate::esi::hex_binary(&r.config_data())),
         crate::esi::hex_binary(&r.config_data()),
     );
+    // No BootStrap: no bootstrap mailbox (zeros in the SII).
+    let boot = match bytes_at("BootStrap") {
+        b if b == "missing" => "0000000000000000".to_string(),
+        b => b,
+    };
     d.cmp(
         "Eeprom BootStrap (SII bootstrap mailbox)",
-        bytes_at("BootStrap"),
+        boot,
         crate::esi::hex_binary(&bootstrap_bytes(&r.bootstrap_mailbox())),
     );
     d.hex(

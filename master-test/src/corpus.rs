@@ -24,6 +24,10 @@ use crate::link::Clock;
 use crate::mailbox::{MailboxClient, MailboxGeometry};
 use crate::sdo_info::{entry_description, object_description, od_list};
 
+/// The longest one device may take (a hung exchange ends the device, not
+/// the run).
+pub const DEVICE_TIME_LIMIT: std::time::Duration = std::time::Duration::from_secs(120);
+
 /// How far a device got.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Outcome {
@@ -39,6 +43,10 @@ pub enum Outcome {
     Sii,
     /// Its SDO Information differs from the ESI's dictionary.
     SdoInfo,
+    /// Not an EtherCAT device: `Invisible` and without a product code
+    /// (Beckhoff's end caps, shield and power terminals have no ESC), so
+    /// there is nothing on the wire to simulate. Not counted in the rate.
+    Passive,
 }
 
 impl Outcome {
@@ -51,6 +59,7 @@ impl Outcome {
             Outcome::Op => "op",
             Outcome::Sii => "sii",
             Outcome::SdoInfo => "sdo-info",
+            Outcome::Passive => "passive",
         }
     }
 }
@@ -136,6 +145,13 @@ pub fn run_file(path: &Path) -> Vec<Row> {
 
 /// One device: twin, OP, SII, SDO Information.
 fn run_device(file: &str, text: &str, dev: &EsiDevice) -> (Outcome, String, usize) {
+    if dev.product_code == 0 && dev.source.attr("Invisible").is_some_and(|v| v == "1" || v == "true") {
+        return (
+            Outcome::Passive,
+            format!("{file}: line {}: Invisible, no product code: a terminal without an ESC", dev.at.line),
+            0,
+        );
+    }
     let warnings = match ecat_twin::warnings(dev) {
         Ok(w) => w,
         Err(e) => return (Outcome::Build, format!("{file}: {e}"), 0),
@@ -167,7 +183,7 @@ fn run_device(file: &str, text: &str, dev: &EsiDevice) -> (Outcome, String, usiz
     } else {
         None
     };
-    let result = smol::block_on(async {
+    let work = async {
         let bus = VirtualBus::with_chain(Chain::with_slaves(vec![twin]), Clock::simulated(), None)
             .map_err(|e| (Outcome::Op, e.to_string()))?;
         let md = &*bus.maindevice;
@@ -217,7 +233,18 @@ fn run_device(file: &str, text: &str, dev: &EsiDevice) -> (Outcome, String, usiz
             return Err((Outcome::Op, format!("AL state {:?} after OP", state)));
         }
         Ok(())
-    });
+    };
+    // A device that stops answering must not stop the run (wall-clock
+    // time only bounds the runner, it decides no result of a device that
+    // answers).
+    let limit = async {
+        smol::Timer::after(DEVICE_TIME_LIMIT).await;
+        Err((
+            Outcome::Op,
+            format!("no result within {} s", DEVICE_TIME_LIMIT.as_secs()),
+        ))
+    };
+    let result = smol::block_on(smol::future::or(work, limit));
     match result {
         Ok(()) => (Outcome::Pass, first, n),
         Err((o, why)) => (o, format!("{file}: {} rev {:#010x}: {why}", dev.type_name, dev.revision), n),
@@ -303,7 +330,8 @@ pub fn table(rows: &[Row]) -> String {
 /// `N of M devices pass (P %)`, with the count per outcome.
 pub fn summary(rows: &[Row]) -> String {
     let pass = rows.iter().filter(|r| r.outcome == Outcome::Pass).count();
-    let total = rows.len();
+    let passive = rows.iter().filter(|r| r.outcome == Outcome::Passive).count();
+    let total = rows.len() - passive;
     let pct = if total == 0 {
         0.0
     } else {
@@ -323,7 +351,12 @@ pub fn summary(rows: &[Row]) -> String {
         }
     }
     let warned = rows.iter().filter(|r| r.warnings > 0).count();
-    format!("{pass} of {total} devices pass ({pct:.1} %){per}; {warned} with loader warnings")
+    let passive = if passive > 0 {
+        format!(" ({passive} passive terminals without an ESC not counted)")
+    } else {
+        String::new()
+    };
+    format!("{pass} of {total} devices pass ({pct:.1} %){per}; {warned} with loader warnings{passive}")
 }
 
 fn xml_escape(s: &str) -> String {
@@ -335,7 +368,10 @@ fn xml_escape(s: &str) -> String {
 
 /// The rows as a JUnit XML report (one test case per device).
 pub fn junit(rows: &[Row]) -> String {
-    let failures = rows.iter().filter(|r| r.outcome != Outcome::Pass).count();
+    let failures = rows
+        .iter()
+        .filter(|r| !matches!(r.outcome, Outcome::Pass | Outcome::Passive))
+        .count();
     let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
     let _ = writeln!(
         out,
@@ -350,7 +386,9 @@ pub fn junit(rows: &[Row]) -> String {
             xml_escape(&r.type_name),
             r.revision
         );
-        if r.outcome == Outcome::Pass {
+        if r.outcome == Outcome::Passive {
+            let _ = writeln!(out, "><skipped message=\"{}\"/></testcase>", xml_escape(&r.reason));
+        } else if r.outcome == Outcome::Pass {
             out.push_str("/>\n");
         } else {
             let _ = writeln!(
