@@ -423,11 +423,13 @@ fn check_selected(
         boot,
         crate::esi::hex_binary(&bootstrap_bytes(&r.bootstrap_mailbox())),
     );
-    d.hex(
-        "Eeprom ByteSize",
-        text("ByteSize").and_then(hex_dec),
-        r.eeprom_size_bytes(),
-    );
+    // An EEPROM may be larger than the ESI's ByteSize (the image needs
+    // more than a 128-byte ByteSize says, EL9800): smaller is a mismatch.
+    let declared = text("ByteSize").and_then(hex_dec);
+    let size = i64::from(r.eeprom_size_bytes());
+    if declared.is_none_or(|b| size < b) {
+        d.hex("Eeprom ByteSize", declared, r.eeprom_size_bytes());
+    }
     Ok(d.0)
 }
 

@@ -308,7 +308,8 @@ fn pdo_sets(
     // default that says otherwise comes after it.
     let (rx, tx) = (assigned(objects, 0x1C12), assigned(objects, 0x1C13));
     let first_ok = sets.first().is_none_or(|s| s.rx == rx.as_slice() && s.tx == tx.as_slice());
-    if !first_ok && (!rx.is_empty() || !tx.is_empty()) {
+    let lists = objects.iter().any(|o| matches!(o.index, 0x1C12 | 0x1C13));
+    if !first_ok && lists {
         sets.insert(
             0,
             PdoSet {
@@ -342,12 +343,15 @@ pub fn alternative_sets(dev: &EsiDevice, rx: &[u16], tx: &[u16]) -> Vec<(Vec<u16
             if set.iter().any(|q| q.index == p.index || excludes(q, p)) {
                 continue;
             }
-            let bits: u32 = set
+            let same: Vec<&&crate::esi::EsiPdo> = set
                 .iter()
                 .filter(|q| is_rx(q.index) == is_rx(p.index))
-                .map(|q| q.bits())
-                .fold(0, u32::saturating_add);
-            if bits.saturating_add(p.bits()) <= limit {
+                .collect();
+            let bits: u32 = same.iter().map(|q| q.bits()).fold(0, u32::saturating_add);
+            let entries: usize = same.iter().map(|q| q.entries.len()).sum();
+            if bits.saturating_add(p.bits()) <= limit
+                && entries + p.entries.len() <= ecat_slave::pdo::MAX_MAPPED
+            {
                 set.push(p);
             }
         }
@@ -1445,18 +1449,15 @@ mod tests {
         assert_eq!((layout.pd_out, layout.pd_in), (0x1100, 0x1180));
         assert!(desc.dictionary.find(0x7000).is_some());
         assert!(desc.mailbox.coe.sdo_info && desc.mailbox.coe.pdo_assign);
-        // A PDO entry of a type twins do not serve.
-        let bad = dev_with(
+        // A REAL PDO entry: its object is a REAL output.
+        let real = dev_with(
             &pdo("RxPdo", 0x1600, Some(2), &[], 0x7000)
                 .replace("UINT", "REAL")
                 .replace("<BitLen>16", "<BitLen>32"),
         );
-        let e = describe(&bad).unwrap_err();
-        assert!(
-            e.to_string()
-                .contains("PDO entry 0x7000:01 has data type code 0x08"),
-            "{e}"
-        );
+        let (desc, _) = describe(&real).unwrap();
+        let (_, e) = desc.dictionary.find_entry(0x7000, 1).unwrap();
+        assert_eq!((e.data_type, e.bit_len, e.pdo), (DataType::Real32, 32, PdoMapping::Rx));
         // No GroupType (ETG.2000 requires one).
         let mut g = d.clone();
         g.group_type.clear();
@@ -1485,10 +1486,11 @@ mod tests {
             }],
             line: 0,
         });
-        let e = describe(&m).unwrap_err().to_string();
+        // Modules in a library not given: the slots stay empty, a warning.
+        let (_, _, w) = describe_with_warnings(&m).unwrap();
         assert!(
-            e.contains("<Slots> at line 0: the file has no <Modules>"),
-            "{e}"
+            w.iter().any(|w| w.to_string().starts_with("<Slots> at line 0: the file has no <Modules>")),
+            "{w:?}"
         );
         if let Some(slots) = m.source.children.last_mut() {
             slots.children.clear();

@@ -873,14 +873,16 @@ mod tests {
     fn dictionary_errors_name_the_element_and_line() {
         let line =
             |needle: &str, text: &str| text.lines().position(|l| l.contains(needle)).unwrap() + 1;
-        let t = DICT.replace("<Type>INT</Type>", "<Type>REAL</Type>");
-        let e = parsed(&t).unwrap_err().to_string();
+        // An object of an unknown type is left out with a warning.
+        let t = DICT.replace("<Type>INT</Type>", "<Type>FLOAT7</Type>");
+        let (objs, _, w) = parse(&xml::parse(&t).unwrap()).unwrap();
+        assert!(objs.iter().all(|o| o.object.index != 0x2000));
         assert_eq!(
-            e,
-            format!(
-                "<Type> at line {}: unknown data type 'REAL'",
-                line("REAL", &t)
-            )
+            w.iter().map(ToString::to_string).collect::<Vec<_>>(),
+            [format!(
+                "<Type> at line {}: object 0x2000 'Offset' has the unknown data type 'FLOAT7': left out",
+                line("FLOAT7", &t)
+            )]
         );
         let t = DICT.replace(
             "<Access>rw</Access><PdoMapping>T",
@@ -921,6 +923,79 @@ mod tests {
                 .to_string()
                 .contains("bad BitSize '999'")
         );
+    }
+
+    /// Types of ETG.1000.6 Table 64 the loader once refused, as a
+    /// synthetic dictionary (written for this test).
+    const TYPES: &str = r##"<Dictionary><DataTypes>
+    <DataType><Name>ARRAY [0..3] OF BYTE</Name><BaseType>BYTE</BaseType><BitSize>32</BitSize><ArrayInfo><LBound>0</LBound><Elements>4</Elements></ArrayInfo></DataType>
+    <DataType><Name>DT_Temperature</Name><BaseType>INT</BaseType><BitSize>16</BitSize></DataType>
+    <DataType><Name>DT0801EN03</Name><BaseType>USINT</BaseType><BitSize>3</BitSize><EnumInfo><Text>a</Text><Enum>0</Enum></EnumInfo></DataType>
+    <DataType><Name>DT_Mode</Name><BaseType>UINT</BaseType><BitSize>16</BitSize><EnumInfo><Text>a</Text><Enum>1</Enum></EnumInfo></DataType>
+    <DataType><Name>DT2000</Name><BitSize>112</BitSize>
+      <SubItem><SubIdx>0</SubIdx><Name>SubIndex 000</Name><Type>USINT</Type><BitSize>8</BitSize><BitOffs>0</BitOffs><Flags><Access>ro</Access></Flags></SubItem>
+      <SubItem><SubIdx>1</SubIdx><Name>Key</Name><Type>ARRAY [0..3] OF BYTE</Type><BitSize>32</BitSize><BitOffs>16</BitOffs><Flags><Access>ro</Access></Flags></SubItem>
+      <SubItem><SubIdx>2</SubIdx><Name>Mode</Name><Type>DT0801EN03</Type><BitSize>3</BitSize><BitOffs>48</BitOffs><Flags><Access>rw</Access><PdoMapping>tr</PdoMapping></Flags></SubItem>
+      <SubItem><SubIdx>4</SubIdx><Name>Filter</Name><Type>ARRAY [0..3] OF UINT</Type><BitSize>64</BitSize><BitOffs>51</BitOffs><Flags><Access>ro</Access></Flags></SubItem>
+    </DataType></DataTypes><Objects>
+    <Object><Index>#x2000</Index><Name>Rec</Name><Type>DT2000</Type><BitSize>112</BitSize><Info><SubItem><Name>SubIndex 000</Name><Info><DefaultData>01</DefaultData></Info></SubItem><SubItem><Name>Key</Name><Info><DefaultData>0A0B</DefaultData></Info></SubItem></Info></Object>
+    <Object><Index>#x2001</Index><Name>Gain</Name><Type>REAL</Type><BitSize>32</BitSize><Info><DefaultValue>-2.5</DefaultValue><MinValue>-10</MinValue><MaxValue>10</MaxValue></Info><Flags><Access>rw</Access><PdoMapping>r</PdoMapping></Flags></Object>
+    <Object><Index>#x2002</Index><Name>Temp</Name><Type>DT_Temperature</Type><BitSize>16</BitSize><Info><DefaultData>F6FF</DefaultData></Info><Flags><Access>ro</Access><PdoMapping>T</PdoMapping></Flags></Object>
+    <Object><Index>#x2003</Index><Name>Mode</Name><Type>DT_Mode</Type><BitSize>16</BitSize><Flags><Access>ro</Access></Flags></Object>
+    <Object><Index>#x2004</Index><Name>Buffer</Name><Type>ARRAY [0..16383] OF UINT</Type><BitSize>262144</BitSize><Flags><Access>rw</Access></Flags></Object>
+    <Object><Index>#x2005</Index><Name>Counts</Name><Type>UINT24</Type><BitSize>24</BitSize><Flags><Access>ro</Access></Flags></Object>
+    <Object><Index>#x1008</Index><Name>Name</Name><Type>STRING(20)</Type><BitSize>160</BitSize><Info><DefaultString>short</DefaultString></Info><Flags><Access>ro</Access></Flags></Object>
+    </Objects></Dictionary>"##;
+
+    #[test]
+    fn real_arrays_derived_types_enumerations_and_24_bit_integers_are_read() {
+        let (objs, enums, w) = parse(&xml::parse(TYPES).unwrap()).unwrap();
+        let o = |i: u16| &objs.iter().find(|o| o.object.index == i).unwrap().object;
+        let rec = o(0x2000);
+        assert_eq!(rec.entries[0].default, DefaultValue::Int(4), "subindex 0 = highest");
+        let key = &rec.entries[1];
+        assert_eq!((key.data_type, key.bit_len), (DataType::OctetString, 32));
+        assert_eq!(key.default, DefaultValue::Bytes(&[0x0A, 0x0B]));
+        let mode = &rec.entries[2];
+        assert_eq!(mode.pdo, PdoMapping::RxTx);
+        assert!(matches!(mode.data_type, DataType::Enum(e) if e.index == 0x0801 && e.bit_len == 3));
+        assert_eq!(enums.len(), 1, "only the enumeration with an index");
+        assert_eq!(rec.entries[3].data_type, DataType::Array(0x0006));
+        let gain = &o(0x2001).entries[0];
+        assert_eq!(gain.data_type, DataType::Real32);
+        assert_eq!(gain.default, DefaultValue::Int(i64::from((-2.5f32).to_bits())));
+        assert_eq!(gain.min, Some(i64::from((-10f32).to_bits())));
+        assert_eq!(o(0x2002).entries[0].data_type, DataType::Int16);
+        assert_eq!(o(0x2002).entries[0].default, DefaultValue::Int(-10));
+        assert_eq!(o(0x2003).entries[0].data_type, DataType::UInt16, "enum without index");
+        assert_eq!(o(0x2005).entries[0].data_type, DataType::UInt24);
+        let name = &o(0x1008).entries[0];
+        assert_eq!((name.bit_len, name.default), (160, DefaultValue::Str("short")));
+        assert!(objs.iter().all(|o| o.object.index != 0x2004), "left out");
+        assert!(w.iter().any(|w| w.message.contains("0x2004") && w.message.contains("262144 bits")), "{w:?}");
+        let dict = build(objs.into_iter().map(|p| p.object).collect(), enums);
+        assert_eq!(dict.validate(), Ok(()));
+        assert_eq!(dict.value_slots(), dict.entry_count() + 1 + 1, "two 4- and 8-byte areas");
+    }
+
+    #[test]
+    fn malformed_dictionaries_are_errors_or_warnings_never_panics() {
+        for cut in (0..TYPES.len()).step_by(97) {
+            let Some(text) = TYPES.get(..cut) else { continue };
+            if let Ok(e) = xml::parse(text) {
+                let _ = parse(&e);
+            }
+        }
+        for (from, to) in [
+            ("ARRAY [0..3] OF BYTE</Type>", "ARRAY [0..-9] OF BYTE</Type>"),
+            ("<BitSize>262144</BitSize>", "<BitSize>-5</BitSize>"),
+            ("<DefaultValue>-2.5</DefaultValue>", "<DefaultValue>pi</DefaultValue>"),
+            ("STRING(20)", "STRING(99999)"),
+            ("<PdoMapping>tr</PdoMapping>", "<PdoMapping>x</PdoMapping>"),
+        ] {
+            let t = TYPES.replace(from, to);
+            let _ = parse(&xml::parse(&t).unwrap());
+        }
     }
 
     #[test]

@@ -93,7 +93,7 @@ fn to_pdos<'a>(v: &'a [PdoParts<'a>]) -> Vec<SiiPdo<'a>> {
         .collect()
 }
 
-fn sii_pdos(pdos: &[EsiPdo], entry_names: bool) -> Vec<PdoParts<'_>> {
+fn sii_pdos(pdos: &[EsiPdo], entry_names: bool, pdo_names: bool) -> Vec<PdoParts<'_>> {
     pdos.iter()
         .map(|p| {
             let entries = p
@@ -107,7 +107,8 @@ fn sii_pdos(pdos: &[EsiPdo], entry_names: bool) -> Vec<PdoParts<'_>> {
                     bit_len: e.bit_len,
                 })
                 .collect();
-            (p.index, p.sm, p.name.as_str(), p.flags, entries)
+            let name = if pdo_names { p.name.as_str() } else { "" };
+            (p.index, p.sm, name, p.flags, entries)
         })
         .collect()
 }
@@ -141,6 +142,21 @@ pub fn image(dev: &EsiDevice, alias: Option<u16>) -> Result<Vec<u8>, SiiBuildErr
     Ok(out)
 }
 
+/// Bytes an SII image uses: up to the end of its last category (ETG.2010:
+/// categories from word 0x40, each a type word and a length in words, the
+/// last of type 0xFFFF).
+fn image_end(img: &[u8]) -> usize {
+    let mut w = 0x40usize;
+    while w * 2 + 4 <= img.len() {
+        let ty = word(img, w);
+        if ty == 0xFFFF {
+            return (w + 1) * 2;
+        }
+        w += 2 + usize::from(word(img, w + 1));
+    }
+    img.len()
+}
+
 /// The bootstrap mailbox of `Eeprom/BootStrap` (out offset, out size, in
 /// offset, in size, little-endian words); none without one.
 fn bootstrap(dev: &EsiDevice) -> SiiMailbox {
@@ -170,10 +186,12 @@ fn encode(dev: &EsiDevice) -> Result<Vec<u8>, SiiBuildError> {
     // An image that does not fit the emulated EEPROM with the names of
     // the PDO entries fits without them (what an EEPROM of a vendor's
     // device often leaves out too): the master names entries from the ESI.
-    encode_with(dev, true).or_else(|_| encode_with(dev, false))
+    encode_with(dev, true, true)
+        .or_else(|_| encode_with(dev, false, true))
+        .or_else(|_| encode_with(dev, false, false))
 }
 
-fn encode_with(dev: &EsiDevice, entry_names: bool) -> Result<Vec<u8>, SiiBuildError> {
+fn encode_with(dev: &EsiDevice, entry_names: bool, pdo_names: bool) -> Result<Vec<u8>, SiiBuildError> {
     let cd = &dev.config_data;
     // A loaded ESI's size fits (EsiFile::parse refuses larger ones).
     let kbit = dev.eeprom_kbit().unwrap_or(u16::MAX);
@@ -190,8 +208,8 @@ fn encode_with(dev: &EsiDevice, entry_names: bool) -> Result<Vec<u8>, SiiBuildEr
             sm_type: s.kind,
         })
         .collect();
-    let rx = sii_pdos(&dev.rx_pdos, entry_names);
-    let tx = sii_pdos(&dev.tx_pdos, entry_names);
+    let rx = sii_pdos(&dev.rx_pdos, entry_names, pdo_names);
+    let tx = sii_pdos(&dev.tx_pdos, entry_names, pdo_names);
     let rx_pdos = to_pdos(&rx);
     let tx_pdos = to_pdos(&tx);
     let cfg = SiiConfig {
@@ -240,9 +258,13 @@ fn encode_with(dev: &EsiDevice, entry_names: bool) -> Result<Vec<u8>, SiiBuildEr
         device: dev.label(),
         source,
     })?;
-    // SII word 0x3E: EEPROM size in kbit - 1 (ETG.2010).
+    // SII word 0x3E: EEPROM size in kbit - 1 (ETG.2010): the declared
+    // size, or the size the image needs when it is more (an EEPROM chip
+    // larger than the ESI's ByteSize).
+    let end = image_end(&out);
+    let needed = u16::try_from(end.div_ceil(128)).unwrap_or(u16::MAX);
     if let Some(w) = out.get_mut(0x7C..0x7E) {
-        w.copy_from_slice(&kbit.saturating_sub(1).to_le_bytes());
+        w.copy_from_slice(&kbit.max(needed).saturating_sub(1).to_le_bytes());
     }
     out.resize(EEPROM_BYTES.max(out.len()), 0xFF);
     Ok(out)

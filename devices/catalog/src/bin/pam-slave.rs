@@ -124,7 +124,7 @@ fn main() -> ExitCode {
     if cli.list
         && let Some(esi) = &cli.esi
     {
-        return match twins::list_esi(esi) {
+        return match device_catalog::twins::list_esi(esi) {
             Ok(lines) => {
                 println!("{}", lines.join("\n"));
                 ExitCode::SUCCESS
