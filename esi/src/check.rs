@@ -145,7 +145,8 @@ pub fn check_device(
     check_selected(esi, sii, |d| {
         let ty = d.child("Type");
         let n = |a: &str| ty.and_then(|t| num_attr(t, a));
-        n("ProductCode") == Some(i64::from(product_code)) && n("RevisionNo") == Some(i64::from(revision))
+        n("ProductCode") == Some(i64::from(product_code))
+            && n("RevisionNo") == Some(i64::from(revision))
     })
 }
 
@@ -355,9 +356,7 @@ fn check_selected(
             // A padding entry of no bits maps nothing (the SII has none).
             let esi_entries: Vec<(i64, i64, i64)> = e
                 .children_named("Entry")
-                .filter(|x| {
-                    num(x.child("Index")) != Some(0) || num(x.child("BitLen")) != Some(0)
-                })
+                .filter(|x| num(x.child("Index")) != Some(0) || num(x.child("BitLen")) != Some(0))
                 .map(|x| {
                     (
                         num(x.child("Index")).unwrap_or(-1),

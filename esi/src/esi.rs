@@ -136,7 +136,11 @@ pub fn type_name(e: &Entry) -> String {
                 &DataType::from_code(t.code()).unwrap_or(DataType::UInt8),
             )
             .max(1);
-            format!("ARRAY [0..{}] OF {}", i32::from(e.bit_len / n) - 1, t.etg_name())
+            format!(
+                "ARRAY [0..{}] OF {}",
+                i32::from(e.bit_len / n) - 1,
+                t.etg_name()
+            )
         }
         t => t.etg_name().to_string(),
     }
@@ -1019,7 +1023,10 @@ mod tests {
         match e.default {
             DefaultValue::Str(s) => assert_eq!(info.text_at("DefaultString"), Some(s), "{what}"),
             DefaultValue::Bytes(b) => {
-                let d = info.text_at("DefaultData").and_then(unhex).unwrap_or_default();
+                let d = info
+                    .text_at("DefaultData")
+                    .and_then(unhex)
+                    .unwrap_or_default();
                 assert!(d.starts_with(b), "{what}");
             }
             DefaultValue::Int(v) => {

@@ -146,10 +146,18 @@ pub fn run_file(path: &Path) -> Vec<Row> {
 
 /// One device: twin, OP, SII, SDO Information.
 fn run_device(file: &str, text: &str, dev: &EsiDevice) -> (Outcome, String, usize) {
-    if dev.product_code == 0 && dev.source.attr("Invisible").is_some_and(|v| v == "1" || v == "true") {
+    if dev.product_code == 0
+        && dev
+            .source
+            .attr("Invisible")
+            .is_some_and(|v| v == "1" || v == "true")
+    {
         return (
             Outcome::Passive,
-            format!("{file}: line {}: Invisible, no product code: a terminal without an ESC", dev.at.line),
+            format!(
+                "{file}: line {}: Invisible, no product code: a terminal without an ESC",
+                dev.at.line
+            ),
             0,
         );
     }
@@ -213,10 +221,28 @@ fn run_device(file: &str, text: &str, dev: &EsiDevice) -> (Outcome, String, usiz
                 .await
                 .map_err(|e| (Outcome::SdoInfo, e))?;
         }
-        let group = group
-            .into_op(md)
-            .await
-            .map_err(|e| (Outcome::Op, format!("into OP: {e}")))?;
+        // Where a transition stops: the AL status code the slave set.
+        let al_code = || async {
+            let code: Result<u16, _> = ethercrab::Command::fprd(station, 0x0134).receive(md).await;
+            code.map_or_else(|_| "?".to_string(), |c| format!("{c:#06x}"))
+        };
+        let group = match group.into_safe_op(md).await {
+            Ok(g) => g,
+            Err(e) => {
+                let code = al_code().await;
+                return Err((
+                    Outcome::Op,
+                    format!("into SAFE-OP: {e} (AL status code {code})"),
+                ));
+            }
+        };
+        let group = match group.into_op(md).await {
+            Ok(g) => g,
+            Err(e) => {
+                let code = al_code().await;
+                return Err((Outcome::Op, format!("into OP: {e} (AL status code {code})")));
+            }
+        };
         for _ in 0..4 {
             bus.clock.advance(std::time::Duration::from_millis(1));
             group
@@ -248,7 +274,14 @@ fn run_device(file: &str, text: &str, dev: &EsiDevice) -> (Outcome, String, usiz
     let result = smol::block_on(smol::future::or(work, limit));
     match result {
         Ok(()) => (Outcome::Pass, first, n),
-        Err((o, why)) => (o, format!("{file}: {} rev {:#010x}: {why}", dev.type_name, dev.revision), n),
+        Err((o, why)) => (
+            o,
+            format!(
+                "{file}: {} rev {:#010x}: {why}",
+                dev.type_name, dev.revision
+            ),
+            n,
+        ),
     }
 }
 
@@ -339,7 +372,10 @@ pub fn table(rows: &[Row]) -> String {
 /// `N of M devices pass (P %)`, with the count per outcome.
 pub fn summary(rows: &[Row]) -> String {
     let pass = rows.iter().filter(|r| r.outcome == Outcome::Pass).count();
-    let passive = rows.iter().filter(|r| r.outcome == Outcome::Passive).count();
+    let passive = rows
+        .iter()
+        .filter(|r| r.outcome == Outcome::Passive)
+        .count();
     let total = rows.len() - passive;
     let pct = if total == 0 {
         0.0
@@ -365,7 +401,9 @@ pub fn summary(rows: &[Row]) -> String {
     } else {
         String::new()
     };
-    format!("{pass} of {total} devices pass ({pct:.1} %){per}; {warned} with loader warnings{passive}")
+    format!(
+        "{pass} of {total} devices pass ({pct:.1} %){per}; {warned} with loader warnings{passive}"
+    )
 }
 
 fn xml_escape(s: &str) -> String {
@@ -396,7 +434,11 @@ pub fn junit(rows: &[Row]) -> String {
             r.revision
         );
         if r.outcome == Outcome::Passive {
-            let _ = writeln!(out, "><skipped message=\"{}\"/></testcase>", xml_escape(&r.reason));
+            let _ = writeln!(
+                out,
+                "><skipped message=\"{}\"/></testcase>",
+                xml_escape(&r.reason)
+            );
         } else if r.outcome == Outcome::Pass {
             out.push_str("/>\n");
         } else {
@@ -442,7 +484,10 @@ mod tests {
         let j = junit(&[row(Outcome::Pass), row(Outcome::Op)]);
         assert!(j.contains("tests=\"2\" failures=\"1\""), "{j}");
         assert!(j.contains("classname=\"a&amp;b.xml\" name=\"EL&lt;1&gt; rev 0x00000010\""));
-        assert!(j.contains("<failure type=\"op\" message=\"why &quot;so&quot;\"/>"), "{j}");
+        assert!(
+            j.contains("<failure type=\"op\" message=\"why &quot;so&quot;\"/>"),
+            "{j}"
+        );
         ecat_twin::xml::parse(&j).expect("well-formed");
     }
 

@@ -425,7 +425,10 @@ fn an_sm_smaller_than_its_pdos_is_a_warning_and_the_pdos_size_it() {
     let dev = f.device(Some("EL2828"), None).expect("EL2828");
     let line = line_of(&text, "DefaultSize=\"1\"");
     assert_eq!(
-        dev.warnings.iter().map(ToString::to_string).collect::<Vec<_>>(),
+        dev.warnings
+            .iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>(),
         [format!(
             "<Sm> at line {line}: SM0 DefaultSize 1 bytes is smaller than the 2 bytes of the PDOs assigned to it: 2 assumed"
         )]

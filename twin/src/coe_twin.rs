@@ -103,6 +103,24 @@ fn leak_list(v: Vec<u16>) -> &'static [u16] {
     Box::leak(v.into_boxed_slice())
 }
 
+/// The defaults of a list object (a PDO assignment or mapping): the
+/// values of subindices 1 to subindex 0's default (-1 for one that is no
+/// number).
+fn list_defaults(o: &Object) -> Vec<i64> {
+    let count = match o.entries.first().map(|e| e.default) {
+        Some(DefaultValue::Int(n)) => n,
+        _ => 0,
+    };
+    o.entries
+        .iter()
+        .filter(|e| e.sub >= 1 && i64::from(e.sub) <= count)
+        .map(|e| match e.default {
+            DefaultValue::Int(v) => v,
+            _ => -1,
+        })
+        .collect()
+}
+
 /// The default assignment `index` (0x1C12/0x1C13) as the core reads it:
 /// subindex 0 the number of PDOs, then the PDOs, without empty (0) places
 /// and without PDOs the twin leaves out; a warning when that changes it.
@@ -121,19 +139,7 @@ fn normalize_assignment(
     }
     let mut list = assigned(std::slice::from_ref(o), index);
     list.retain(|p| !left_out.contains(p));
-    let count = match o.entries.first().map(|e| e.default) {
-        Some(DefaultValue::Int(n)) => n,
-        _ => 0,
-    };
-    let now: Vec<i64> = o
-        .entries
-        .iter()
-        .filter(|e| e.sub >= 1 && i64::from(e.sub) <= count)
-        .map(|e| match e.default {
-            DefaultValue::Int(v) => v,
-            _ => -1,
-        })
-        .collect();
+    let now = list_defaults(o);
     let want: Vec<i64> = list.iter().map(|p| i64::from(*p)).collect();
     if now == want {
         return;
@@ -196,9 +202,16 @@ fn drop_impossible_ranges(dev: &EsiDevice, objects: &mut [Object], warnings: &mu
                 e.max = None;
                 // A default outside its type: its bits in the type's size.
                 if let DefaultValue::Int(v) = e.default {
-                    let (lo, hi) = ecat_slave::od::dictionary::natural_range(&e.data_type, e.bit_len);
+                    let (lo, hi) =
+                        ecat_slave::od::dictionary::natural_range(&e.data_type, e.bit_len);
                     if !e.data_type.is_real() && (v < lo || v > hi) {
-                        e.default = DefaultValue::Int(ecat_slave::od::store::from_raw(e, v as u64 & u64::MAX.checked_shr(64 - u32::from(e.bit_len.clamp(1, 64))).unwrap_or(u64::MAX)));
+                        e.default = DefaultValue::Int(ecat_slave::od::store::from_raw(
+                            e,
+                            v as u64
+                                & u64::MAX
+                                    .checked_shr(64 - u32::from(e.bit_len.clamp(1, 64)))
+                                    .unwrap_or(u64::MAX),
+                        ));
                     }
                 }
             }
@@ -307,7 +320,9 @@ fn pdo_sets(
     // the device's default assignment); an AlternativeSmMapping marked
     // default that says otherwise comes after it.
     let (rx, tx) = (assigned(objects, 0x1C12), assigned(objects, 0x1C13));
-    let first_ok = sets.first().is_none_or(|s| s.rx == rx.as_slice() && s.tx == tx.as_slice());
+    let first_ok = sets
+        .first()
+        .is_none_or(|s| s.rx == rx.as_slice() && s.tx == tx.as_slice());
     let lists = objects.iter().any(|o| matches!(o.index, 0x1C12 | 0x1C13));
     if !first_ok && lists {
         sets.insert(
@@ -399,7 +414,11 @@ fn array(index: u16, name: &str, entries: Vec<Entry>) -> Object {
 /// that is no base type, or none: by its size).
 fn pdo_entry_type(code: u8, bits: u8) -> DataType {
     match dictionary::data_type_of_code(code) {
-        Some(t) if t.is_bytes() || ecat_slave::od::dictionary::natural_bits(&t) == u16::from(bits) => t,
+        Some(t)
+            if t.is_bytes() || ecat_slave::od::dictionary::natural_bits(&t) == u16::from(bits) =>
+        {
+            t
+        }
         _ => match bits {
             1 => DataType::Bool,
             2..=7 => DataType::Bits(bits),
@@ -448,6 +467,7 @@ fn mapped_entry(sub: u8, name: &str, ty: DataType, bits: u8, out: bool) -> Entry
 fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warning>) -> Vec<u16> {
     let mut conflicting: Vec<u16> = Vec::new();
     let mut outside: Vec<Warning> = Vec::new();
+    let mut both: Vec<(u16, u8)> = Vec::new();
     let has_dictionary = !objects.is_empty();
     let mut note = |at: &At, message: String| {
         if has_dictionary {
@@ -465,7 +485,10 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
             .or_else(|| dev.source.path("Profile/ProfileNo"))
             .and_then(|p| crate::xml::number(&p.text))
             .unwrap_or(0);
-        note(&dev.at, "no object 0x1000: made from the profile number".into());
+        note(
+            &dev.at,
+            "no object 0x1000: made from the profile number".into(),
+        );
         objects.push(Object {
             index: 0x1000,
             name: "Device type",
@@ -486,7 +509,12 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
             vec![
                 sub0(4),
                 constant(1, "Vendor ID", DataType::UInt32, i64::from(dev.vendor_id)),
-                constant(2, "Product code", DataType::UInt32, i64::from(dev.product_code)),
+                constant(
+                    2,
+                    "Product code",
+                    DataType::UInt32,
+                    i64::from(dev.product_code),
+                ),
                 constant(3, "Revision", DataType::UInt32, i64::from(dev.revision)),
                 constant(4, "Serial number", DataType::UInt32, 0),
             ],
@@ -496,7 +524,10 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
     type Missing = Vec<(u8, String, DataType, u8, bool)>;
     let mut missing: std::collections::BTreeMap<u16, (String, Missing)> =
         std::collections::BTreeMap::new();
-    for (pdos, range) in [(&dev.rx_pdos, 0x1600..=0x17FFu16), (&dev.tx_pdos, 0x1A00..=0x1BFF)] {
+    for (pdos, range) in [
+        (&dev.rx_pdos, 0x1600..=0x17FFu16),
+        (&dev.tx_pdos, 0x1A00..=0x1BFF),
+    ] {
         for p in pdos.iter() {
             if !range.contains(&p.index) {
                 // An RxPdo 0x1A00 (the EL9800's first revisions): no
@@ -521,7 +552,13 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
                         u32::from(e.index) << 16 | u32::from(e.sub) << 8 | u32::from(e.bit_len);
                     entries.push(map(sub, ecat_slave::od::build::sub_name(sub), value));
                 }
-                note(&p.at, format!("PDO {:#06x} has no mapping object: made from the PDO", p.index));
+                note(
+                    &p.at,
+                    format!(
+                        "PDO {:#06x} has no mapping object: made from the PDO",
+                        p.index
+                    ),
+                );
                 objects.push(record(p.index, &p.name, entries));
                 continue;
             }
@@ -531,25 +568,17 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
             let want: Vec<i64> = p
                 .entries
                 .iter()
-                .map(|e| i64::from(u32::from(e.index) << 16 | u32::from(e.sub) << 8 | u32::from(e.bit_len)))
+                .map(|e| {
+                    i64::from(
+                        u32::from(e.index) << 16 | u32::from(e.sub) << 8 | u32::from(e.bit_len),
+                    )
+                })
                 .collect();
             let Some(pos) = objects.iter().position(|o| o.index == p.index) else {
                 continue;
             };
             let o = &objects[pos];
-            let count = match o.entries.first().map(|e| e.default) {
-                Some(DefaultValue::Int(n)) => n,
-                _ => 0,
-            };
-            let have: Vec<i64> = o
-                .entries
-                .iter()
-                .filter(|e| e.sub >= 1 && i64::from(e.sub) <= count)
-                .map(|e| match e.default {
-                    DefaultValue::Int(v) => v,
-                    _ => -1,
-                })
-                .collect();
+            let have = list_defaults(o);
             if have == want || o.code == ObjectCode::Var {
                 continue;
             }
@@ -575,7 +604,8 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
             }
             let highest = entries.iter().map(|e| e.sub).max().unwrap_or(0);
             if let Some(z) = entries.first_mut().filter(|z| z.sub == 0) {
-                z.default = DefaultValue::Int(i64::from(if z.access.writable() { n } else { highest }));
+                z.default =
+                    DefaultValue::Int(i64::from(if z.access.writable() { n } else { highest }));
             }
             objects[pos] = Object {
                 entries: Box::leak(entries.into_boxed_slice()),
@@ -607,16 +637,30 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
             Some(DefaultValue::Int(n)) => n,
             _ => 0,
         };
-        for e in o.entries.iter().filter(|e| e.sub >= 1 && i64::from(e.sub) <= n) {
+        for e in o
+            .entries
+            .iter()
+            .filter(|e| e.sub >= 1 && i64::from(e.sub) <= n)
+        {
             let DefaultValue::Int(v) = e.default else {
                 continue;
             };
             let (index, sub, bits) = ((v >> 16) as u16, (v >> 8) as u8, v as u8);
-            if index == 0 || wanted.iter().any(|(_, p, _, x)| *p == o.index && x.index == index && x.sub == sub) {
+            if index == 0
+                || wanted
+                    .iter()
+                    .any(|(_, p, _, x)| *p == o.index && x.index == index && x.sub == sub)
+            {
                 continue;
             }
             let name = format!("SubIndex {sub:03}");
-            let entry = crate::esi::EsiPdoEntry { index, sub, bit_len: bits, name, data_type: 0 };
+            let entry = crate::esi::EsiPdoEntry {
+                index,
+                sub,
+                bit_len: bits,
+                name,
+                data_type: 0,
+            };
             wanted.push((dev.at.clone(), o.index, out, entry));
         }
     }
@@ -634,14 +678,19 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
                     let slot = missing
                         .entry(e.index)
                         .or_insert_with(|| (format!("{:#06x}", e.index), Vec::new()));
-                    if !slot.1.iter().any(|(s, ..)| *s == e.sub) {
-                        slot.1.push((e.sub, e.name.clone(), ty, e.bit_len, out));
+                    match slot.1.iter_mut().find(|(s, ..)| *s == e.sub) {
+                        // Mapped both ways (an RxPDO and a TxPDO of it).
+                        Some(x) if x.4 != out => both.push((e.index, e.sub)),
+                        Some(_) => {}
+                        None => slot.1.push((e.sub, e.name.clone(), ty, e.bit_len, out)),
                     }
                     continue;
                 };
                 let o = &objects[pos];
                 match o.entries.iter().position(|x| x.sub == e.sub) {
-                    Some(k) if o.entries[k].bit_len != u16::from(e.bit_len) && !o.entries[k].gap => {
+                    Some(k)
+                        if o.entries[k].bit_len != u16::from(e.bit_len) && !o.entries[k].gap =>
+                    {
                         // One object, one size: a PDO that maps it with
                         // another length (Beckhoff's alternative PDOs of a
                         // wider time stamp) cannot be assigned.
@@ -659,7 +708,11 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
                     Some(k) => {
                         let x = &o.entries[k];
                         if !x.pdo.allows(dir) && !x.gap {
-                            let pdo = if x.pdo == PdoMapping::None { dir } else { PdoMapping::RxTx };
+                            let pdo = if x.pdo == PdoMapping::None {
+                                dir
+                            } else {
+                                PdoMapping::RxTx
+                            };
                             note(
                                 p.0,
                                 format!(
@@ -720,10 +773,18 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
                         SmType::ProcessIn => 4,
                         _ => 0,
                     };
-                    constant(sub, ecat_slave::od::build::sub_name(sub), DataType::UInt8, t)
+                    constant(
+                        sub,
+                        ecat_slave::od::build::sub_name(sub),
+                        DataType::UInt8,
+                        t,
+                    )
                 }))
                 .collect();
-        note(&dev.at, "no object 0x1C00: made from the SyncManagers".into());
+        note(
+            &dev.at,
+            "no object 0x1C00: made from the SyncManagers".into(),
+        );
         objects.push(array(0x1C00, "Sync manager type", sm_types));
     }
     for (index, name, pdos) in [
@@ -733,24 +794,45 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
         if has(objects, index) {
             continue;
         }
-        let def: Vec<u16> = pdos.iter().filter(|p| p.sm.is_some()).map(|p| p.index).collect();
+        let def: Vec<u16> = pdos
+            .iter()
+            .filter(|p| p.sm.is_some())
+            .map(|p| p.index)
+            .collect();
         let cap = u8::try_from(pdos.len().max(1)).unwrap_or(u8::MAX);
-        let mut entries = vec![assign_count(u8::try_from(def.len()).unwrap_or(u8::MAX), cap)];
+        let mut entries = vec![assign_count(
+            u8::try_from(def.len()).unwrap_or(u8::MAX),
+            cap,
+        )];
         for k in 1..=cap {
             let pdo = def.get(usize::from(k) - 1).copied().unwrap_or(0);
             entries.push(assign(k, pdo));
         }
-        note(&dev.at, format!("no object {index:#06x}: made from the PDOs' Sm"));
+        note(
+            &dev.at,
+            format!("no object {index:#06x}: made from the PDOs' Sm"),
+        );
         objects.push(array(index, name, entries));
     }
     for (index, (pdo_name, mut subs)) in missing {
         subs.sort_by_key(|s| s.0);
         note(
             &dev.at,
-            format!("PDO entries map {index:#06x}, which the dictionary does not have: made from the PDO entries"),
+            format!(
+                "PDO entries map {index:#06x}, which the dictionary does not have: made from the PDO entries"
+            ),
         );
         let make = |(sub, name, ty, bits, out): &(u8, String, DataType, u8, bool)| {
-            mapped_entry(*sub, name, *ty, *bits, *out)
+            let e = mapped_entry(*sub, name, *ty, *bits, *out);
+            if both.contains(&(index, *sub)) {
+                Entry {
+                    pdo: PdoMapping::RxTx,
+                    access: ecat_slave::od::Access::Rw,
+                    ..e
+                }
+            } else {
+                e
+            }
         };
         match subs.as_slice() {
             [only] if only.0 == 0 => objects.push(Object {
@@ -961,11 +1043,7 @@ pub fn default_modules(dev: &EsiDevice) -> Vec<u32> {
 
 /// A description, its memory layout and what the loader left out or
 /// assumed building it.
-pub type Described = (
-    &'static DeviceDescription,
-    MemoryLayout,
-    &'static [Warning],
-);
+pub type Described = (&'static DeviceDescription, MemoryLayout, &'static [Warning]);
 
 /// Descriptions built so far, one per distinct device.
 static DESCRIPTIONS: crate::Cache<Described> = crate::Cache::new();
@@ -1012,11 +1090,6 @@ fn build_description(dev: &EsiDevice) -> Result<Described, DescriptionBuildError
         normalize_assignment(dev, &mut parsed, index, &left_out, &mut warnings);
     }
     drop_impossible_ranges(dev, &mut parsed, &mut warnings);
-    if let Ok(d) = std::env::var("TWIN_DEBUG") {
-        for o in parsed.iter().filter(|o| format!("{:04x}", o.index) == d) {
-            eprintln!("DEBUG {o:?}");
-        }
-    }
     // Writable strings beyond the store's string slots are served
     // read-only (the core keeps STRING_SLOTS of them).
     let mut strings = 0usize;
@@ -1457,7 +1530,10 @@ mod tests {
         );
         let (desc, _) = describe(&real).unwrap();
         let (_, e) = desc.dictionary.find_entry(0x7000, 1).unwrap();
-        assert_eq!((e.data_type, e.bit_len, e.pdo), (DataType::Real32, 32, PdoMapping::Rx));
+        assert_eq!(
+            (e.data_type, e.bit_len, e.pdo),
+            (DataType::Real32, 32, PdoMapping::Rx)
+        );
         // No GroupType (ETG.2000 requires one).
         let mut g = d.clone();
         g.group_type.clear();
@@ -1489,7 +1565,9 @@ mod tests {
         // Modules in a library not given: the slots stay empty, a warning.
         let (_, _, w) = describe_with_warnings(&m).unwrap();
         assert!(
-            w.iter().any(|w| w.to_string().starts_with("<Slots> at line 0: the file has no <Modules>")),
+            w.iter().any(|w| w
+                .to_string()
+                .starts_with("<Slots> at line 0: the file has no <Modules>")),
             "{w:?}"
         );
         if let Some(slots) = m.source.children.last_mut() {

@@ -272,7 +272,9 @@ fn enum_index_of_name(name: &str) -> Option<u16> {
     if hex.len() != 4 || bits.is_empty() || !bits.bytes().all(|b| b.is_ascii_digit()) {
         return None;
     }
-    u16::from_str_radix(hex, 16).ok().filter(|i| (0x0800..=0x0FFF).contains(i))
+    u16::from_str_radix(hex, 16)
+        .ok()
+        .filter(|i| (0x0800..=0x0FFF).contains(i))
 }
 
 /// The unsigned type of `bits` bits (an enumeration without an index).
@@ -387,7 +389,11 @@ fn value_info(info: Option<&Element>, s: &Scalar) -> Result<ValueInfo, EsiError>
         };
         if s.ty.is_real() {
             // A float as text ("1.5", "-3e2"): its bit pattern.
-            let f: f64 = c.text.trim().parse().map_err(|_| bad(c, "value", &c.text))?;
+            let f: f64 = c
+                .text
+                .trim()
+                .parse()
+                .map_err(|_| bad(c, "value", &c.text))?;
             return Ok(Some(match s.ty {
                 DataType::Real32 => i64::from((f as f32).to_bits()),
                 _ => f.to_bits() as i64,
@@ -553,8 +559,16 @@ fn parse_object(
     let ty = type_el.text.trim();
     let (obj_access, obj_pdo, obj_backup, obj_setting) = flags(o.child("Flags"), Access::Ro)?;
     let info = o.child("Info");
-    let obj_bits = o.text_at("BitSize").and_then(crate::xml::number).unwrap_or(0);
-    if obj_bits > MAX_ENTRY_BITS && !types.defs.get(ty).is_some_and(|(d, _)| matches!(d, TypeDef::Record(_))) {
+    let obj_bits = o
+        .text_at("BitSize")
+        .and_then(crate::xml::number)
+        .unwrap_or(0);
+    if obj_bits > MAX_ENTRY_BITS
+        && !types
+            .defs
+            .get(ty)
+            .is_some_and(|(d, _)| matches!(d, TypeDef::Record(_)))
+    {
         warnings.push(Warning::new(
             o,
             format!(
@@ -952,7 +966,11 @@ mod tests {
         let (objs, enums, w) = parse(&xml::parse(TYPES).unwrap()).unwrap();
         let o = |i: u16| &objs.iter().find(|o| o.object.index == i).unwrap().object;
         let rec = o(0x2000);
-        assert_eq!(rec.entries[0].default, DefaultValue::Int(4), "subindex 0 = highest");
+        assert_eq!(
+            rec.entries[0].default,
+            DefaultValue::Int(4),
+            "subindex 0 = highest"
+        );
         let key = &rec.entries[1];
         assert_eq!((key.data_type, key.bit_len), (DataType::OctetString, 32));
         assert_eq!(key.default, DefaultValue::Bytes(&[0x0A, 0x0B]));
@@ -963,33 +981,59 @@ mod tests {
         assert_eq!(rec.entries[3].data_type, DataType::Array(0x0006));
         let gain = &o(0x2001).entries[0];
         assert_eq!(gain.data_type, DataType::Real32);
-        assert_eq!(gain.default, DefaultValue::Int(i64::from((-2.5f32).to_bits())));
+        assert_eq!(
+            gain.default,
+            DefaultValue::Int(i64::from((-2.5f32).to_bits()))
+        );
         assert_eq!(gain.min, Some(i64::from((-10f32).to_bits())));
         assert_eq!(o(0x2002).entries[0].data_type, DataType::Int16);
         assert_eq!(o(0x2002).entries[0].default, DefaultValue::Int(-10));
-        assert_eq!(o(0x2003).entries[0].data_type, DataType::UInt16, "enum without index");
+        assert_eq!(
+            o(0x2003).entries[0].data_type,
+            DataType::UInt16,
+            "enum without index"
+        );
         assert_eq!(o(0x2005).entries[0].data_type, DataType::UInt24);
         let name = &o(0x1008).entries[0];
-        assert_eq!((name.bit_len, name.default), (160, DefaultValue::Str("short")));
+        assert_eq!(
+            (name.bit_len, name.default),
+            (160, DefaultValue::Str("short"))
+        );
         assert!(objs.iter().all(|o| o.object.index != 0x2004), "left out");
-        assert!(w.iter().any(|w| w.message.contains("0x2004") && w.message.contains("262144 bits")), "{w:?}");
+        assert!(
+            w.iter()
+                .any(|w| w.message.contains("0x2004") && w.message.contains("262144 bits")),
+            "{w:?}"
+        );
         let dict = build(objs.into_iter().map(|p| p.object).collect(), enums);
         assert_eq!(dict.validate(), Ok(()));
-        assert_eq!(dict.value_slots(), dict.entry_count() + 1 + 1, "two 4- and 8-byte areas");
+        assert_eq!(
+            dict.value_slots(),
+            dict.entry_count() + 1 + 1,
+            "two 4- and 8-byte areas"
+        );
     }
 
     #[test]
     fn malformed_dictionaries_are_errors_or_warnings_never_panics() {
         for cut in (0..TYPES.len()).step_by(97) {
-            let Some(text) = TYPES.get(..cut) else { continue };
+            let Some(text) = TYPES.get(..cut) else {
+                continue;
+            };
             if let Ok(e) = xml::parse(text) {
                 let _ = parse(&e);
             }
         }
         for (from, to) in [
-            ("ARRAY [0..3] OF BYTE</Type>", "ARRAY [0..-9] OF BYTE</Type>"),
+            (
+                "ARRAY [0..3] OF BYTE</Type>",
+                "ARRAY [0..-9] OF BYTE</Type>",
+            ),
             ("<BitSize>262144</BitSize>", "<BitSize>-5</BitSize>"),
-            ("<DefaultValue>-2.5</DefaultValue>", "<DefaultValue>pi</DefaultValue>"),
+            (
+                "<DefaultValue>-2.5</DefaultValue>",
+                "<DefaultValue>pi</DefaultValue>",
+            ),
             ("STRING(20)", "STRING(99999)"),
             ("<PdoMapping>tr</PdoMapping>", "<PdoMapping>x</PdoMapping>"),
         ] {

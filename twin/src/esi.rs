@@ -468,7 +468,13 @@ fn dictionary_types(dict: &Element) -> BTreeMap<String, u8> {
         let base = dt
             .text_at("BaseType")
             .and_then(base_type_code)
-            .map(|c| if dt.child("ArrayInfo").is_some() && c == 0x1E { 0x0A } else { c })
+            .map(|c| {
+                if dt.child("ArrayInfo").is_some() && c == 0x1E {
+                    0x0A
+                } else {
+                    c
+                }
+            })
             .or_else(|| base_type_code(name));
         match base {
             Some(code) => {
@@ -503,8 +509,12 @@ fn dictionary_objects(dict: &Element) -> BTreeMap<(u16, u8), u16> {
             let subs = dt
                 .children_named("SubItem")
                 .map(|si| {
-                    let sub = n(si, "SubIdx").and_then(|v| u8::try_from(v).ok()).unwrap_or(0);
-                    let bits = n(si, "BitSize").and_then(|v| u16::try_from(v).ok()).unwrap_or(0);
+                    let sub = n(si, "SubIdx")
+                        .and_then(|v| u8::try_from(v).ok())
+                        .unwrap_or(0);
+                    let bits = n(si, "BitSize")
+                        .and_then(|v| u16::try_from(v).ok())
+                        .unwrap_or(0);
                     (sub, bits)
                 })
                 .collect();
@@ -515,7 +525,9 @@ fn dictionary_objects(dict: &Element) -> BTreeMap<(u16, u8), u16> {
         let Some(index) = n(o, "Index").and_then(|v| u16::try_from(v).ok()) else {
             continue;
         };
-        let bits = n(o, "BitSize").and_then(|v| u16::try_from(v).ok()).unwrap_or(0);
+        let bits = n(o, "BitSize")
+            .and_then(|v| u16::try_from(v).ok())
+            .unwrap_or(0);
         let ty = o.text_at("Type").unwrap_or("").trim();
         match type_subs.get(ty).filter(|s| !s.is_empty()) {
             Some(subs) => {
@@ -604,21 +616,21 @@ fn parse_pdo(
                     ));
                     0
                 }
-                Some(dt) => match base_type_code(&dt.text)
-                    .or_else(|| types.get(dt.text.trim()).copied())
-                {
-                    Some(c) => c,
-                    None => {
-                        warnings.push(Warning::new(
+                Some(dt) => {
+                    match base_type_code(&dt.text).or_else(|| types.get(dt.text.trim()).copied()) {
+                        Some(c) => c,
+                        None => {
+                            warnings.push(Warning::new(
                             dt,
                             format!(
                                 "PDO entry {eindex:#06x}:{sub:02x}: unknown data type '{}': typed by its {bit_len} bits",
                                 dt.text.trim()
                             ),
                         ));
-                        0
+                            0
+                        }
                     }
-                },
+                }
             }
         };
         entries.push(EsiPdoEntry {
@@ -1278,7 +1290,10 @@ mod tests {
     #[test]
     fn an_iso_8859_1_file_loads_with_lowercase_flags_and_its_names_decoded() {
         let latin1: Vec<u8> = ONE
-            .replace("<?xml version=\"1.0\"?>", "<?xml version=\"1.0\" encoding=\"ISO-8859-1\"?>")
+            .replace(
+                "<?xml version=\"1.0\"?>",
+                "<?xml version=\"1.0\" encoding=\"ISO-8859-1\"?>",
+            )
             .replace("Deutsch", "Ausg\u{e4}nge")
             .chars()
             .map(|c| c as u8)
@@ -1287,6 +1302,9 @@ mod tests {
         let f = EsiFile::parse_bytes(&latin1).unwrap();
         let de = f.devices[0].source.children_named("Name").next().unwrap();
         assert_eq!(de.text, "Ausg\u{e4}nge");
-        assert!(EsiFile::parse_bytes(&latin1[..40]).is_err(), "cut: an error, no panic");
+        assert!(
+            EsiFile::parse_bytes(&latin1[..40]).is_err(),
+            "cut: an error, no panic"
+        );
     }
 }

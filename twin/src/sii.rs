@@ -18,7 +18,7 @@ use ecat_slave::sii::{
 use crate::esi::{EsiDevice, EsiPdo};
 
 /// Bytes of EEPROM the software ESC emulates.
-pub const EEPROM_BYTES: usize = 2048;
+pub const EEPROM_BYTES: usize = ecat_slave::sii::SII_SIZE;
 
 /// Why the SII image cannot be made.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -191,7 +191,11 @@ fn encode(dev: &EsiDevice) -> Result<Vec<u8>, SiiBuildError> {
         .or_else(|_| encode_with(dev, false, false))
 }
 
-fn encode_with(dev: &EsiDevice, entry_names: bool, pdo_names: bool) -> Result<Vec<u8>, SiiBuildError> {
+fn encode_with(
+    dev: &EsiDevice,
+    entry_names: bool,
+    pdo_names: bool,
+) -> Result<Vec<u8>, SiiBuildError> {
     let cd = &dev.config_data;
     // A loaded ESI's size fits (EsiFile::parse refuses larger ones).
     let kbit = dev.eeprom_kbit().unwrap_or(u16::MAX);

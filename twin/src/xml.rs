@@ -207,7 +207,11 @@ fn declared_encoding(bytes: &[u8]) -> Result<&'static encoding_rs::Encoding, Xml
     let Some(rest) = decl.split("encoding").nth(1) else {
         return Ok(encoding_rs::UTF_8);
     };
-    let rest = rest.trim_start().strip_prefix('=').unwrap_or(rest).trim_start();
+    let rest = rest
+        .trim_start()
+        .strip_prefix('=')
+        .unwrap_or(rest)
+        .trim_start();
     let quote = rest.chars().next().filter(|q| *q == '"' || *q == '\'');
     let label = match quote {
         Some(q) => rest.get(1..).and_then(|r| r.split(q).next()).unwrap_or(""),
@@ -216,7 +220,13 @@ fn declared_encoding(bytes: &[u8]) -> Result<&'static encoding_rs::Encoding, Xml
     encoding_rs::Encoding::for_label(label.trim().as_bytes())
         // A document that names UTF-16 but has no byte order mark was
         // caught above; a declaration read as ASCII is not UTF-16.
-        .map(|e| if e == encoding_rs::UTF_16LE || e == encoding_rs::UTF_16BE { encoding_rs::UTF_8 } else { e })
+        .map(|e| {
+            if e == encoding_rs::UTF_16LE || e == encoding_rs::UTF_16BE {
+                encoding_rs::UTF_8
+            } else {
+                e
+            }
+        })
         .ok_or_else(|| XmlError {
             position: 0,
             line: 1,
@@ -419,17 +429,37 @@ mod tests {
     fn documents_decode_by_their_bom_or_declaration() {
         let latin1 = |s: &str| s.chars().map(|c| c as u8).collect::<Vec<u8>>();
         let utf8 = |s: &str| s.as_bytes().to_vec();
-        let utf16le = |s: &str| s.encode_utf16().flat_map(u16::to_le_bytes).collect::<Vec<u8>>();
-        let utf16be = |s: &str| s.encode_utf16().flat_map(u16::to_be_bytes).collect::<Vec<u8>>();
+        let utf16le = |s: &str| {
+            s.encode_utf16()
+                .flat_map(u16::to_le_bytes)
+                .collect::<Vec<u8>>()
+        };
+        let utf16be = |s: &str| {
+            s.encode_utf16()
+                .flat_map(u16::to_be_bytes)
+                .collect::<Vec<u8>>()
+        };
         let cases: Vec<Vec<u8>> = vec![
             doc_in("<?xml version=\"1.0\" encoding=\"ISO-8859-1\"?>", latin1),
             doc_in("<?xml version='1.0' encoding='ISO8859-1'?>", latin1),
             doc_in("<?xml version=\"1.0\" encoding=\"windows-1252\"?>", latin1),
             doc_in("<?xml version=\"1.0\"?>", utf8),
             doc_in("", utf8),
-            [b"\xEF\xBB\xBF".as_slice(), &doc_in("<?xml version=\"1.0\" encoding=\"utf-8\"?>", utf8)].concat(),
-            [b"\xFF\xFE".as_slice(), &doc_in("<?xml version=\"1.0\" encoding=\"UTF-16\"?>", utf16le)].concat(),
-            [b"\xFE\xFF".as_slice(), &doc_in("<?xml version=\"1.0\" encoding=\"UTF-16\"?>", utf16be)].concat(),
+            [
+                b"\xEF\xBB\xBF".as_slice(),
+                &doc_in("<?xml version=\"1.0\" encoding=\"utf-8\"?>", utf8),
+            ]
+            .concat(),
+            [
+                b"\xFF\xFE".as_slice(),
+                &doc_in("<?xml version=\"1.0\" encoding=\"UTF-16\"?>", utf16le),
+            ]
+            .concat(),
+            [
+                b"\xFE\xFF".as_slice(),
+                &doc_in("<?xml version=\"1.0\" encoding=\"UTF-16\"?>", utf16be),
+            ]
+            .concat(),
             doc_in("<?xml version=\"1.0\" encoding=\"UTF-16\"?>", utf16le),
         ];
         for bytes in cases {
@@ -448,7 +478,14 @@ mod tests {
         let e = decode(b"<?xml version=\"1.0\" encoding=\"EBCDIC-42\"?><a/>").unwrap_err();
         assert!(e.message.contains("unknown encoding 'EBCDIC-42'"), "{e}");
         // Truncated and odd inputs are errors or text, never a panic.
-        for b in [&b""[..], b"\xFF", b"\xFF\xFE<", b"<?xml encoding=", b"<?xml encoding=\"", b"\x00<\x00"] {
+        for b in [
+            &b""[..],
+            b"\xFF",
+            b"\xFF\xFE<",
+            b"<?xml encoding=",
+            b"<?xml encoding=\"",
+            b"\x00<\x00",
+        ] {
             let _ = decode(b);
         }
     }

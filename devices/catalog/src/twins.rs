@@ -62,6 +62,14 @@ pub fn parse_revision(s: &str) -> Result<u32, TwinsError> {
         .ok_or_else(|| TwinsError::BadRevision(s.to_string()))
 }
 
+/// What [`from_esi`] makes: the device's label, its twins, and what they
+/// leave out of the ESI or assume.
+pub type FromEsi = (
+    String,
+    Vec<Box<dyn LineSlave>>,
+    Vec<ecat_twin::esi::Warning>,
+);
+
 /// `count` twins of the device `type_name`/`revision` of the ESI file
 /// `path` (either may be omitted when the file has one device type), and
 /// what the twin leaves out of the ESI or assumes.
@@ -71,7 +79,7 @@ pub fn from_esi(
     revision: Option<u32>,
     rules: &InputRules,
     count: usize,
-) -> Result<(String, Vec<Box<dyn LineSlave>>, Vec<ecat_twin::esi::Warning>), TwinsError> {
+) -> Result<FromEsi, TwinsError> {
     let file = ecat_twin::load_esi(path)?;
     let dev = file
         .device(type_name, revision)

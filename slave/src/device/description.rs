@@ -409,9 +409,7 @@ impl DeviceDescription {
                             while let Some((t, tt)) = ts.split_first() {
                                 if t.sub == msub {
                                     found = true;
-                                    let ok = !t.gap
-                                        && t.bit_len == mbits
-                                        && t.pdo.allows(want);
+                                    let ok = !t.gap && t.bit_len == mbits && t.pdo.allows(want);
                                     if !ok {
                                         return Err(DescriptionError::BadMapping {
                                             pdo,

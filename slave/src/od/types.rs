@@ -555,7 +555,9 @@ impl Entry {
     /// as one value; 0 for numbers (their `i64` slot) and for visible
     /// strings (string slots, see `super::store`).
     pub const fn area_len(&self) -> usize {
-        if self.gap || !self.data_type.is_bytes() || matches!(self.data_type, DataType::VisibleString)
+        if self.gap
+            || !self.data_type.is_bytes()
+            || matches!(self.data_type, DataType::VisibleString)
         {
             return 0;
         }

@@ -272,7 +272,7 @@ fn corpus(dir: &Path, junit: Option<&Path>, min_pass: Option<f64>) -> Result<(),
             r.outcome.word()
         );
     })
-        .map_err(|e| input(format!("cannot read {}: {e}", dir.display())))?;
+    .map_err(|e| input(format!("cannot read {}: {e}", dir.display())))?;
     if let Some(j) = junit {
         std::fs::write(j, master_test::corpus::junit(&rows))
             .map_err(|e| input(format!("cannot write {}: {e}", j.display())))?;
@@ -280,7 +280,10 @@ fn corpus(dir: &Path, junit: Option<&Path>, min_pass: Option<f64>) -> Result<(),
     outln!("{}", master_test::corpus::table(&rows).trim_end());
     use master_test::corpus::Outcome;
     let pass = rows.iter().filter(|r| r.outcome == Outcome::Pass).count();
-    let counted = rows.iter().filter(|r| r.outcome != Outcome::Passive).count();
+    let counted = rows
+        .iter()
+        .filter(|r| r.outcome != Outcome::Passive)
+        .count();
     let rate = 100.0 * pass as f64 / counted.max(1) as f64;
     if pass == counted || min_pass.is_some_and(|m| rate >= m) {
         return Ok(());
