@@ -426,7 +426,8 @@ fn check_selected(
     // more than a 128-byte ByteSize says, EL9800): smaller is a mismatch.
     let declared = text("ByteSize").and_then(hex_dec);
     let size = i64::from(r.eeprom_size_bytes());
-    if declared.is_none_or(|b| size < b) {
+    // (No ByteSize: the ESI does not say; the SII's size stands.)
+    if declared.is_some_and(|b| size < b) {
         d.hex("Eeprom ByteSize", declared, r.eeprom_size_bytes());
     }
     Ok(d.0)
