@@ -9,7 +9,9 @@
 //! dictionary's objects and data types (to check the PDO entries).
 //!
 //! Every error names the element and the line it starts on
-//! ([`EsiError`]); a file that has one starts nothing.
+//! ([`EsiError`]) and refuses only its device ([`EsiFile::refused`]); what
+//! the loader cannot model is a [`Warning`] with element and line, and the
+//! twin still starts.
 
 use std::collections::BTreeMap;
 use std::fmt;

@@ -19,10 +19,11 @@
 //!   library or a built-in device.
 //! - [`xml`]: the small element tree (with line numbers) both readers use.
 //!
-//! **Not yet supported** (refused with an error naming the device and,
-//! where it is in the file, the element and line): data types the core does not serve (`REAL`, `LREAL`,
-//! `UINT24`, `OCTET_STRING`, arrays of bytes), writable PDO mappings, EoE,
-//! SoE, AoE. DC op modes are read but the SII of a twin has no DC category
+//! **Not yet supported** (left out with a warning naming the element and
+//! line, or refused for that device only): objects longer than SDO
+//! Information can describe, writable PDO mappings, SDO downloads of octet
+//! strings, EoE, SoE, AoE, CiA 402 behaviour (a drive runs as a plain CoE
+//! twin). DC op modes are read but the SII of a twin has no DC category
 //! yet. Built-in devices (the PAM, IO8, DMA-22) run their real behaviour
 //! in a line.
 

@@ -15,7 +15,7 @@ pub const STRING_SLOTS: usize = 4;
 /// Values up to 64 bits live in the store's `i64` slot of their entry
 /// (signed types sign-extended; `REAL` and `LREAL` as their IEEE 754 bit
 /// patterns, zero-extended). Strings, octet strings, `GUID` and arrays held
-/// as one value are *byte entries* ([`Entry::holds_bytes`]); see
+/// as one value are *byte entries* ([`Entry::area_len`]); see
 /// `super::store` for where their bytes live.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DataType {
