@@ -71,6 +71,24 @@ impl Diff {
     }
 }
 
+/// `s` cut to what an SII name may hold for ethercrab.
+fn fit(s: &str) -> String {
+    let mut end = s.len().min(ecat_slave::sii::MAX_NAME_LEN);
+    while !s.is_char_boundary(end) {
+        end -= 1;
+    }
+    s.get(..end).unwrap_or("").to_string()
+}
+
+/// The device's `Name`: the English one (LcId 1033) if there is one.
+fn english_name(dev: &Element) -> String {
+    dev.children_named("Name")
+        .find(|n| n.attr("LcId") == Some("1033"))
+        .or_else(|| dev.child("Name"))
+        .map(|n| n.text.trim().to_string())
+        .unwrap_or_default()
+}
+
 fn num(e: Option<&Element>) -> Option<i64> {
     e.and_then(|e| hex_dec(&e.text))
 }
@@ -113,12 +131,37 @@ fn esi_fmmu(u: FmmuUsage) -> Option<&'static str> {
 /// Compares the ESI text `esi` with the SII image `sii`; an empty list
 /// means they agree. Only the first `Device` of the ESI is checked.
 pub fn check(esi: &str, sii: &[u8]) -> Result<Vec<Mismatch>, CheckError> {
+    check_selected(esi, sii, |_| true)
+}
+
+/// [`check`] for the device of the ESI with this product code and
+/// revision (a file of several devices).
+pub fn check_device(
+    esi: &str,
+    product_code: u32,
+    revision: u32,
+    sii: &[u8],
+) -> Result<Vec<Mismatch>, CheckError> {
+    check_selected(esi, sii, |d| {
+        let ty = d.child("Type");
+        let n = |a: &str| ty.and_then(|t| num_attr(t, a));
+        n("ProductCode") == Some(i64::from(product_code))
+            && n("RevisionNo") == Some(i64::from(revision))
+    })
+}
+
+fn check_selected(
+    esi: &str,
+    sii: &[u8],
+    pick: impl Fn(&Element) -> bool,
+) -> Result<Vec<Mismatch>, CheckError> {
     let root = xml::parse(esi)?;
     if root.name != "EtherCATInfo" {
         return Err(CheckError::Missing("EtherCATInfo root element"));
     }
     let dev = root
-        .path("Descriptions/Devices/Device")
+        .path("Descriptions/Devices")
+        .and_then(|d| d.children_named("Device").find(|d| pick(d)))
         .ok_or(CheckError::Missing("Descriptions/Devices/Device"))?;
     let r = SiiReader::new(sii)?;
     let strings = r.strings()?;
@@ -137,26 +180,29 @@ pub fn check(esi: &str, sii: &[u8]) -> Result<Vec<Mismatch>, CheckError> {
     // Device strings and CoE details from the General category.
     match general {
         Some(g) => {
+            // Names as the SII can hold them for ethercrab (at most 64
+            // bytes, ecat_slave::sii::MAX_NAME_LEN); the English `Name`
+            // (LcId 1033) first, as configurators show it.
             d.cmp(
                 "order code (Type)",
-                ty.text.clone(),
+                fit(ty.text.trim()),
                 string(&strings, g.order_idx),
             );
             d.cmp(
                 "device name (Name)",
-                dev.text_at("Name").unwrap_or("").to_string(),
+                fit(&english_name(dev)),
                 string(&strings, g.name_idx),
             );
             d.cmp(
                 "group (GroupType)",
-                dev.text_at("GroupType").unwrap_or("").to_string(),
+                fit(dev.text_at("GroupType").unwrap_or("").trim()),
                 string(&strings, g.group_idx),
             );
             // SOEM names a slave after SII string 1 (ethercrab follows the
             // name index): it must be the device type or its name.
             let first = string(&strings, 1);
-            let name = dev.text_at("Name").unwrap_or("");
-            if first != ty.text && first != name {
+            let name = english_name(dev);
+            if first != fit(ty.text.trim()) && first != fit(&name) {
                 d.0.push(Mismatch {
                     what: "SII string 1 (the device name SOEM shows)".into(),
                     esi: format!("{:?} (Type) or {name:?} (Name)", ty.text),
@@ -215,17 +261,25 @@ pub fn check(esi: &str, sii: &[u8]) -> Result<Vec<Mismatch>, CheckError> {
             num_attr(e, "StartAddress"),
             s.start,
         );
+        // No DefaultSize: the master sizes it (0 in the SII).
         d.hex(
             format!("SM{i} length"),
-            num_attr(e, "DefaultSize"),
+            Some(num_attr(e, "DefaultSize").unwrap_or(0)),
             s.length,
         );
+        // A virtual SyncManager may leave ControlByte and Enable out.
         d.hex(
             format!("SM{i} control byte"),
-            num_attr(e, "ControlByte"),
+            Some(num_attr(e, "ControlByte").unwrap_or(0)),
             s.control,
         );
-        d.hex(format!("SM{i} enable"), num_attr(e, "Enable"), s.enable);
+        // ETG.2010 SyncM enable byte: bit 0 enable, 2 virtual, 3 OpOnly.
+        let enable = Some(
+            num_attr(e, "Enable").unwrap_or(0) & 1
+                | i64::from(e.attr("Virtual").is_some_and(xml_true)) << 2
+                | i64::from(e.attr("OpOnly").is_some_and(xml_true)) << 3,
+        );
+        d.hex(format!("SM{i} enable"), enable, s.enable);
         d.cmp(
             format!("SM{i} type"),
             e.text.as_str(),
@@ -238,15 +292,16 @@ pub fn check(esi: &str, sii: &[u8]) -> Result<Vec<Mismatch>, CheckError> {
         ("MBoxOut", mb.rx_offset, mb.rx_size),
         ("MBoxIn", mb.tx_offset, mb.tx_size),
     ] {
+        // No mailbox SyncManager: no mailbox (0 in the SII).
         let e = by_type(t);
         d.hex(
             format!("{t} offset (SII standard mailbox)"),
-            e.and_then(|e| num_attr(e, "StartAddress")),
+            Some(e.and_then(|e| num_attr(e, "StartAddress")).unwrap_or(0)),
             offset,
         );
         d.hex(
             format!("{t} size (SII standard mailbox)"),
-            e.and_then(|e| num_attr(e, "DefaultSize")),
+            Some(e.and_then(|e| num_attr(e, "DefaultSize")).unwrap_or(0)),
             size,
         );
     }
@@ -298,8 +353,10 @@ pub fn check(esi: &str, sii: &[u8]) -> Result<Vec<Mismatch>, CheckError> {
                     p.flags & bit != 0,
                 );
             }
+            // A padding entry of no bits maps nothing (the SII has none).
             let esi_entries: Vec<(i64, i64, i64)> = e
                 .children_named("Entry")
+                .filter(|x| num(x.child("Index")) != Some(0) || num(x.child("BitLen")) != Some(0))
                 .map(|x| {
                     (
                         num(x.child("Index")).unwrap_or(-1),
@@ -345,21 +402,34 @@ pub fn check(esi: &str, sii: &[u8]) -> Result<Vec<Mismatch>, CheckError> {
             .and_then(hex_binary)
             .map_or_else(|| "missing".to_string(), |b| crate::esi::hex_binary(&b))
     };
+    // ConfigData gives the first words; the rest of 0..13 is zero.
+    let config = text("ConfigData").and_then(hex_binary).map(|mut b| {
+        b.resize(r.config_data().len(), 0);
+        crate::esi::hex_binary(&b)
+    });
     d.cmp(
         "Eeprom ConfigData (SII bytes 0..13)",
-        bytes_at("ConfigData"),
+        config.unwrap_or_else(|| crate::esi::hex_binary(&r.config_data())),
         crate::esi::hex_binary(&r.config_data()),
     );
+    // No BootStrap: no bootstrap mailbox (zeros in the SII).
+    let boot = match bytes_at("BootStrap") {
+        b if b == "missing" => "0000000000000000".to_string(),
+        b => b,
+    };
     d.cmp(
         "Eeprom BootStrap (SII bootstrap mailbox)",
-        bytes_at("BootStrap"),
+        boot,
         crate::esi::hex_binary(&bootstrap_bytes(&r.bootstrap_mailbox())),
     );
-    d.hex(
-        "Eeprom ByteSize",
-        text("ByteSize").and_then(hex_dec),
-        r.eeprom_size_bytes(),
-    );
+    // An EEPROM may be larger than the ESI's ByteSize (the image needs
+    // more than a 128-byte ByteSize says, EL9800): smaller is a mismatch.
+    let declared = text("ByteSize").and_then(hex_dec);
+    let size = i64::from(r.eeprom_size_bytes());
+    // (No ByteSize: the ESI does not say; the SII's size stands.)
+    if declared.is_some_and(|b| size < b) {
+        d.hex("Eeprom ByteSize", declared, r.eeprom_size_bytes());
+    }
     Ok(d.0)
 }
 

@@ -130,6 +130,18 @@ fn flag(b: bool) -> &'static str {
 pub fn type_name(e: &Entry) -> String {
     match e.data_type {
         DataType::VisibleString => format!("STRING({})", e.bit_len / 8),
+        DataType::OctetString => format!("ARRAY [0..{}] OF BYTE", i32::from(e.bit_len / 8) - 1),
+        t @ DataType::Array(_) => {
+            let n = ecat_slave::od::dictionary::natural_bits(
+                &DataType::from_code(t.code()).unwrap_or(DataType::UInt8),
+            )
+            .max(1);
+            format!(
+                "ARRAY [0..{}] OF {}",
+                i32::from(e.bit_len / n) - 1,
+                t.etg_name()
+            )
+        }
         t => t.etg_name().to_string(),
     }
 }
@@ -191,6 +203,7 @@ fn pdo_flag(p: PdoMapping) -> Option<&'static str> {
         PdoMapping::None => None,
         PdoMapping::Rx => Some("R"),
         PdoMapping::Tx => Some("T"),
+        PdoMapping::RxTx => Some("RT"),
     }
 }
 
@@ -378,6 +391,11 @@ fn write_complex_types(w: &mut W, objects: Objects<'_>) -> io::Result<()> {
 fn write_value_info(w: &mut W, e: &Entry) -> io::Result<()> {
     match e.default {
         DefaultValue::Str(s) => text(w, "DefaultString", s)?,
+        DefaultValue::Bytes(b) => {
+            let mut bytes = b.to_vec();
+            bytes.resize(usize::from(e.bit_len).div_ceil(8), 0);
+            text(w, "DefaultData", &hex_binary(&bytes))?;
+        }
         DefaultValue::Int(v) => {
             if let Some(min) = e.min {
                 text(w, "MinData", &default_data(min, e.bit_len))?;
@@ -735,7 +753,7 @@ pub fn generate(dev: &DeviceDescription) -> Result<Vec<u8>, EsiError> {
     let profile = match dev.dictionary.find_entry(0x1000, 0) {
         Some((_, e)) => match e.default {
             DefaultValue::Int(v) => v & 0xFFFF,
-            DefaultValue::Str(_) => 0,
+            DefaultValue::Str(_) | DefaultValue::Bytes(_) => 0,
         },
         None => 0,
     };
@@ -1004,6 +1022,13 @@ mod tests {
     fn check_info(info: &Element, e: &Entry, what: &str) {
         match e.default {
             DefaultValue::Str(s) => assert_eq!(info.text_at("DefaultString"), Some(s), "{what}"),
+            DefaultValue::Bytes(b) => {
+                let d = info
+                    .text_at("DefaultData")
+                    .and_then(unhex)
+                    .unwrap_or_default();
+                assert!(d.starts_with(b), "{what}");
+            }
             DefaultValue::Int(v) => {
                 let d = info
                     .text_at("DefaultData")

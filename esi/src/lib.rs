@@ -31,7 +31,15 @@ pub use ecat_twin::xml;
 use ecat_slave::device::DeviceDescription;
 pub use esi::generate;
 
-/// The SII EEPROM image of `dev`, as the software ESC serves it.
+/// The SII EEPROM image of `dev`, as the software ESC serves it, as long
+/// as the device's EEPROM (`eeprom_kbit`; the software ESC's buffer may be
+/// larger).
 pub fn sii_image(dev: &DeviceDescription) -> Vec<u8> {
-    dev.sii_image().to_vec()
+    let mut image = dev.sii_image().to_vec();
+    image.truncate(
+        usize::from(dev.esc.eeprom_kbit)
+            .saturating_mul(128)
+            .max(128),
+    );
+    image
 }

@@ -23,7 +23,13 @@ fuzz_target!(|data: &[u8]| {
     let lines = u32::try_from(text.lines().count() + 1).unwrap_or(u32::MAX);
     match EsiFile::parse(&text) {
         Ok(file) => {
+            for (_, e) in &file.refused {
+                if let ecat_twin::EsiError::BadValue { at, .. } = e {
+                    assert!(at.line <= lines, "{e}");
+                }
+            }
             for dev in file.devices.iter().take(4) {
+                let _ = ecat_twin::warnings(dev);
                 let rule = InputRule::ALL[data.len() % 3].1;
                 if let Ok(mut t) = ecat_twin::twin(dev, Some(7), rule) {
                     assert!(t.esc().sii().len() >= 128);
@@ -38,4 +44,6 @@ fuzz_target!(|data: &[u8]| {
         }
     }
     let _ = eni::parse(&text);
+    // The bytes as a file: decoded by their BOM or declaration.
+    let _ = EsiFile::parse_bytes(data);
 });

@@ -15,6 +15,7 @@
 pub mod bus;
 pub mod cli;
 pub mod conformance;
+pub mod corpus;
 pub mod eeprom;
 pub mod foe;
 pub mod link;

@@ -24,7 +24,7 @@ use crate::firmware::Crc32;
 use crate::hal::{NvError, NvStorage};
 use crate::od::Dictionary;
 use crate::od::store::{Od, byte_len, from_raw};
-use crate::od::types::{DataType, DefaultValue, Entry};
+use crate::od::types::{DefaultValue, Entry};
 
 /// Size of one slot.
 pub const SLOT_SIZE: usize = 512;
@@ -65,7 +65,7 @@ pub enum Stored {
 
 fn stored_entries(dict: &Dictionary) -> impl Iterator<Item = (usize, &'static Entry)> {
     dict.entries()
-        .filter(|(_, _, e)| e.backup && !e.gap && e.data_type != DataType::VisibleString)
+        .filter(|(_, _, e)| e.backup && !e.gap && !e.data_type.is_bytes())
         .map(|(flat, _, e)| (flat, e))
 }
 

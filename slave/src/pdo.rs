@@ -35,10 +35,27 @@ pub struct ProcessData {
     pub sets: &'static [PdoSet],
 }
 
-/// Most mapped entries (padding included) of one direction.
+/// Most mapped entries (padding included) of one direction: 48 in a
+/// firmware build; a host build (feature `std`), which simulates devices
+/// described by any vendor's ESI (twins of 8-channel time-stamp terminals
+/// map 280), allows 320.
+#[cfg(not(feature = "std"))]
 pub const MAX_MAPPED: usize = 48;
-/// Largest process image of one direction in bytes.
+/// Most mapped entries (padding included) of one direction (see the
+/// firmware build's value).
+#[cfg(feature = "std")]
+pub const MAX_MAPPED: usize = 320;
+/// Largest process image of one direction in bytes: 128 in a firmware
+/// build, 512 in a host build (feature `std`, twins of large devices).
+#[cfg(not(feature = "std"))]
 pub const MAX_IMAGE: usize = 128;
+/// Largest process image of one direction in bytes (see the firmware
+/// build's value).
+#[cfg(feature = "std")]
+pub const MAX_IMAGE: usize = 512;
+/// Bytes the default memory layout leaves for the outputs before the
+/// inputs (`MemoryLayout::new`), the same in every build.
+pub const DEFAULT_OUTPUT_AREA: usize = 128;
 
 /// Which process image: outputs (RxPDOs, 0x1C12) or inputs (TxPDOs, 0x1C13).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -217,7 +234,7 @@ impl<const N: usize> ProcessImage<N> {
             None
         } else {
             let (flat, e) = dict.find_entry(index, sub).ok_or(invalid)?;
-            if e.pdo != dir.mapping() || e.bit_len != u16::from(bits) || e.gap {
+            if !e.pdo.allows(dir.mapping()) || e.bit_len != u16::from(bits) || e.gap {
                 return Err(invalid);
             }
             Some(u16::try_from(flat).map_err(|_| PdoError::TooLarge)?)
@@ -263,8 +280,20 @@ impl<const N: usize> ProcessImage<N> {
     /// Packs the mapped entries' values into `out` (inputs).
     pub fn pack(&self, store: &Od, out: &mut [u8]) {
         for e in &self.entries {
+            if e.bit_len > 64
+                && let Some(f) = e.flat
+            {
+                // A byte-area entry (an array held as one value).
+                let mut bytes = [0u8; 32];
+                let n = store.area_bytes(usize::from(f), &mut bytes).unwrap_or(0);
+                for (i, b) in bytes.iter().take(n).enumerate() {
+                    let at = e.bit_offset.saturating_add(8 * i as u16);
+                    write_bits(out, at, 8, u64::from(*b));
+                }
+                continue;
+            }
             let v = e.flat.map_or(0, |f| store.value(usize::from(f))) as u64;
-            write_bits(out, e.bit_offset, e.bit_len, v);
+            write_bits(out, e.bit_offset, e.bit_len.min(64), v);
         }
     }
 
@@ -274,6 +303,16 @@ impl<const N: usize> ProcessImage<N> {
         let dict = store.dictionary();
         for e in &self.entries {
             let Some(f) = e.flat else { continue };
+            if e.bit_len > 64 {
+                let mut bytes = [0u8; 32];
+                let n = usize::from(e.bit_len).div_ceil(8).min(bytes.len());
+                for (i, b) in bytes.iter_mut().take(n).enumerate() {
+                    let at = e.bit_offset.saturating_add(8 * i as u16);
+                    *b = read_bits(data, at, 8) as u8;
+                }
+                store.set_area_bytes(usize::from(f), bytes.get(..n).unwrap_or(&[]));
+                continue;
+            }
             let raw = read_bits(data, e.bit_offset, e.bit_len);
             let v = dict
                 .entry_at(usize::from(f))

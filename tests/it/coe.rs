@@ -175,7 +175,11 @@ fn malformed_mailboxes_get_error_replies_and_repeated_counters_run_once() {
             c.receive().await.is_err(),
             "no second response: not executed again"
         );
-        assert_eq!(eeprom_writes(), after_save, "EEPROM written by one SAVE only");
+        assert_eq!(
+            eeprom_writes(),
+            after_save,
+            "EEPROM written by one SAVE only"
+        );
         // Same counter, different content (another master's sequence): served.
         let read = [0x00, 0x20, 0x40, 0x18, 0x10, 0x02, 0, 0, 0, 0];
         c.send_raw(MailboxType::CoE, 5, &read).await.expect("send");

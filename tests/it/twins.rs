@@ -375,36 +375,42 @@ fn line_of(text: &str, needle: &str) -> u32 {
 }
 
 #[test]
-fn an_esi_with_an_unknown_data_type_names_the_element_and_line() {
+fn an_unknown_pdo_entry_type_is_a_warning_naming_the_element_and_line() {
     let text = broken(
         "<Name>Output</Name><DataType>BOOL</DataType></Entry>\n        </RxPdo>\n        <RxPdo Fixed=\"1\" Mandatory=\"1\" Sm=\"0\">\n          <Index>#x1601</Index>",
         "<Name>Output</Name><DataType>BOOLEAN9</DataType></Entry>\n        </RxPdo>\n        <RxPdo Fixed=\"1\" Mandatory=\"1\" Sm=\"0\">\n          <Index>#x1601</Index>",
     );
-    let e = EsiFile::parse(&text).unwrap_err();
+    let f = EsiFile::parse(&text).expect("the device still loads");
+    let dev = f.device(Some("EL2004"), None).expect("EL2004");
     let line = line_of(&text, "BOOLEAN9");
+    let w: Vec<String> = ecat_twin::warnings(dev)
+        .expect("warnings")
+        .iter()
+        .map(ToString::to_string)
+        .collect();
     assert_eq!(
-        e.to_string(),
-        format!("<DataType> at line {line}: unknown data type 'BOOLEAN9'")
+        w,
+        [format!(
+            "<DataType> at line {line}: PDO entry 0x7000:01: unknown data type 'BOOLEAN9': typed by its 1 bits"
+        )]
     );
+    ecat_twin::twin(dev, None, InputRule::Hold).expect("the twin starts");
 }
 
 #[test]
-fn an_esi_pdo_entry_outside_the_dictionary_names_the_element_and_line() {
+fn a_pdo_entry_without_a_dictionary_object_loads_and_the_twin_starts() {
     let text = broken(
         "<GroupType>DigOut</GroupType>\n        <Fmmu>Outputs</Fmmu>\n        <Sm ControlByte=\"#x44\" StartAddress=\"#x0f00\" Enable=\"1\" OpOnly=\"1\">",
         "<GroupType>DigOut</GroupType>\n        <Profile><Dictionary><Objects><Object><Index>#x7000</Index><Name>Ch 1</Name><Type>BOOL</Type><BitSize>1</BitSize></Object></Objects></Dictionary></Profile>\n        <Fmmu>Outputs</Fmmu>\n        <Sm ControlByte=\"#x44\" StartAddress=\"#x0f00\" Enable=\"1\" OpOnly=\"1\">",
     );
-    let e = EsiFile::parse(&text).unwrap_err();
     // The first entry maps 0x7000:01; the dictionary has only 0x7000:00.
-    let line = line_of(&text, "<Entry><Index>#x7000</Index>");
-    assert_eq!(
-        e.to_string(),
-        format!("<Entry> at line {line}: PDO entry 0x7000:01 is not an object of the dictionary")
-    );
+    let f = EsiFile::parse(&text).expect("loads");
+    let dev = f.device(Some("EL2004"), None).expect("EL2004");
+    ecat_twin::twin(dev, None, InputRule::Hold).expect("the twin starts");
 }
 
 #[test]
-fn an_esi_sm_too_small_for_its_pdos_names_the_element_and_line() {
+fn an_sm_smaller_than_its_pdos_is_a_warning_and_the_pdos_size_it() {
     // Four 1-bit PDOs fit one byte; make the EL2828's 8 need 2 bytes.
     let text = broken(
         "<Entry><Index>#x7070</Index><SubIndex>1</SubIndex><BitLen>1</BitLen>",
@@ -415,13 +421,17 @@ fn an_esi_sm_too_small_for_its_pdos_names_the_element_and_line() {
         "<DataType>BIT2</DataType></Entry></RxPdo>\n      </Device>",
         1,
     );
-    let e = EsiFile::parse(&text).unwrap_err();
+    let f = EsiFile::parse(&text).expect("loads");
+    let dev = f.device(Some("EL2828"), None).expect("EL2828");
     let line = line_of(&text, "DefaultSize=\"1\"");
     assert_eq!(
-        e.to_string(),
-        format!(
-            "<Sm> at line {line}: SM0 DefaultSize 1 bytes is too small for 2 bytes (the PDOs assigned to it)"
-        )
+        dev.warnings
+            .iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>(),
+        [format!(
+            "<Sm> at line {line}: SM0 DefaultSize 1 bytes is smaller than the 2 bytes of the PDOs assigned to it: 2 assumed"
+        )]
     );
 }
 
@@ -433,7 +443,7 @@ fn pam_slave_refuses_a_broken_esi_before_serving_with_exit_2() {
     let dir = std::env::temp_dir().join(format!("twin-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
     let bad = dir.join("bad.xml");
-    let text = broken("<DataType>BOOL</DataType>", "<DataType>FLOAT7</DataType>");
+    let text = broken("ProductCode=\"#x07d43052\"", "ProductCode=\"#xZZ\"");
     std::fs::write(&bad, &text).expect("write");
     // No --dry-run: it must stop before opening the (missing) interface.
     let out = std::process::Command::new(&bin)
@@ -444,11 +454,9 @@ fn pam_slave_refuses_a_broken_esi_before_serving_with_exit_2() {
         .expect("run");
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
-    let line = line_of(&text, "FLOAT7");
+    let line = line_of(&text, "#xZZ");
     assert!(
-        err.contains(&format!(
-            "<DataType> at line {line}: unknown data type 'FLOAT7'"
-        )),
+        err.contains(&format!("<Type> at line {line}: bad ProductCode '#xZZ'")),
         "{err}"
     );
     assert!(err.contains("bad.xml"), "names the file: {err}");

@@ -1,10 +1,17 @@
 //! The object dictionary of an ESI device (`Profile/Dictionary`, ETG.2000)
 //! as the core's [`Dictionary`], built at run time.
 //!
-//! Data types: the base types the core serves (`BOOL`, `SINT`..`LINT`,
-//! `USINT`..`ULINT`, `BYTE`/`WORD`/`DWORD`, `BIT1`..`BIT8`, `STRING(n)`),
-//! enumerations (`EnumInfo`), records (`SubItem`s with `SubIdx`) and
-//! arrays (a `SubItem` of an `ArrayInfo` type). Objects: `Var` of a base
+//! Data types: every base type of ETG.1000.6 Table 64 by its ETG.2000 name
+//! (`BOOL`, `SINT`..`LINT`, `INT24`..`INT56`, `USINT`..`ULINT`,
+//! `UINT24`..`UINT56`, `REAL`, `LREAL`, `BYTE`/`WORD`/`DWORD`, `BIT1`..`BIT8`,
+//! `BITARR8`..`BITARR32`, `STRING(n)`, `OCTET_STRING`, `UNICODE_STRING`,
+//! `TIME_OF_DAY`, `TIME_DIFFERENCE`, `GUID`), `ARRAY [lo..hi] OF T` held as
+//! one value (an array of `BYTE` is an `OCTET_STRING`), derived types (a
+//! `DataType` with only a `BaseType`), enumerations (`EnumInfo`; one
+//! without an `Index` is served as its base type), records (`SubItem`s
+//! with `SubIdx`) and arrays (a `SubItem` of an `ArrayInfo` type).
+//! What cannot be modelled (an object of an unknown type, more bits than
+//! CoE's UNSIGNED16 bit length) is left out with a [`Warning`]. Objects: `Var` of a base
 //! type or enumeration, records and arrays; `Info` gives defaults
 //! (`DefaultData` little-endian hex, `DefaultValue`, `DefaultString`),
 //! ranges (`MinData`/`MaxData`, `MinValue`/`MaxValue`) and units
@@ -25,7 +32,7 @@ use ecat_slave::od::{
     Access, DataType, DefaultValue, Dictionary, Entry, EnumDesc, Object, ObjectCode, PdoMapping,
 };
 
-use crate::esi::{At, EsiError, base_type_code};
+use crate::esi::{At, EsiError, Warning, array_bounds, array_element, base_type_code};
 use crate::leak;
 use crate::xml::{Element, hex_binary};
 
@@ -45,11 +52,10 @@ fn child_u(e: &Element, name: &str, what: &'static str) -> Result<Option<i64>, E
     e.child(name).map(|c| number(c, what)).transpose()
 }
 
-/// The core's data type of a CoE base type code (`None` for types the
-/// core does not serve: REAL, UINT24, ...).
+/// The core's data type of a CoE base type code (`None` for a code that
+/// is no base type).
 pub(crate) fn data_type_of_code(code: u8) -> Option<DataType> {
-    // Strings are served from their own entries, not as a scalar.
-    DataType::from_code(u16::from(code)).filter(|t| *t != DataType::VisibleString)
+    DataType::from_code(u16::from(code))
 }
 
 /// A scalar type the core can serve.
@@ -59,7 +65,9 @@ struct Scalar {
     bits: u16,
 }
 
-/// The scalar type named `name`, if it is a base type the core serves.
+/// The scalar type named `name`, if it is a base type, `STRING(n)` or an
+/// `ARRAY [lo..hi] OF` a base type (bit size 0: the entry's `BitSize`
+/// says, as for `OCTET_STRING`).
 fn base_scalar(name: &str) -> Option<Scalar> {
     let n = name.trim();
     if let Some(len) = n.strip_prefix("STRING(").and_then(|r| r.strip_suffix(')')) {
@@ -69,11 +77,39 @@ fn base_scalar(name: &str) -> Option<Scalar> {
             bits: len.checked_mul(8)?,
         });
     }
+    if let Some(element) = array_element(n) {
+        let e = base_scalar(element)?;
+        let bits = array_bounds(n)
+            .and_then(|(lo, hi)| u16::try_from((hi - lo + 1).max(0)).ok())
+            .and_then(|k| k.checked_mul(e.bits))
+            .unwrap_or(0);
+        return Some(array_scalar(e, bits));
+    }
     let ty = data_type_of_code(base_type_code(n)?)?;
     Some(Scalar {
         ty,
         bits: natural_bits(&ty),
     })
+}
+
+/// An array of `element`s held as one value of `bits` bits.
+fn array_scalar(element: Scalar, bits: u16) -> Scalar {
+    let ty = if element.ty == DataType::Byte {
+        DataType::OctetString
+    } else {
+        DataType::Array(element.ty.code())
+    };
+    Scalar { ty, bits }
+}
+
+/// `s` with the entry's `BitSize` `bits` where its type leaves the length
+/// open (strings, octet strings, arrays).
+fn sized(s: Scalar, bits: u16) -> Scalar {
+    if s.ty.is_bytes() && bits != 0 {
+        Scalar { bits, ..s }
+    } else {
+        s
+    }
 }
 
 /// One item of a record or array data type.
@@ -114,7 +150,22 @@ impl<'a> Types<'a> {
             })?;
             let name = name_el.text.trim().to_string();
             let bits = child_u(dt, "BitSize", "BitSize")?.unwrap_or(0);
-            let def = if dt.child("EnumInfo").is_some() {
+            let named_index = enum_index_of_name(&name);
+            let def = if dt.child("EnumInfo").is_some()
+                && dt.child("Index").is_none()
+                && named_index.is_none()
+            {
+                // An enumeration without a data type index: its values are
+                // served as its base type of its size (what the ESI lets a
+                // master know).
+                let size = u16::try_from(bits).unwrap_or(0);
+                let base = dt
+                    .text_at("BaseType")
+                    .and_then(|b| self_or_base(&defs, b))
+                    .filter(|b| b.bits == size)
+                    .unwrap_or_else(|| unsigned_of(size));
+                TypeDef::Scalar(base)
+            } else if dt.child("EnumInfo").is_some() {
                 let mut values = Vec::new();
                 for ei in dt.children_named("EnumInfo") {
                     let v = ei
@@ -124,7 +175,9 @@ impl<'a> Types<'a> {
                         .unwrap_or(0);
                     values.push((v, leak(ei.text_at("Text").unwrap_or(""))));
                 }
-                let index = child_u(dt, "Index", "Index")?.unwrap_or(0);
+                let index = child_u(dt, "Index", "Index")?
+                    .or(named_index.map(i64::from))
+                    .unwrap_or(0);
                 let desc: &'static EnumDesc = Box::leak(Box::new(EnumDesc {
                     index: u16::try_from(index)
                         .map_err(|_| bad(dt, "Index", &index.to_string()))?,
@@ -172,13 +225,14 @@ impl<'a> Types<'a> {
                     });
                 }
                 TypeDef::Record(subs)
+            } else if let Some(s) = base_scalar(&name) {
+                TypeDef::Scalar(sized(s, u16::try_from(bits).unwrap_or(0)))
+            } else if let Some(base) = dt.text_at("BaseType").and_then(|b| self_or_base(&defs, b)) {
+                // A derived type (`DT_Temperature` of `INT`).
+                TypeDef::Scalar(sized(base, u16::try_from(bits).unwrap_or(0)))
             } else {
-                match base_scalar(&name) {
-                    Some(s) => TypeDef::Scalar(s),
-                    // A base type the core does not serve: only an error
-                    // when an object uses it.
-                    None => continue,
-                }
+                // Unknown: only a warning when an object uses it.
+                continue;
             };
             defs.insert(name, (def, dt));
         }
@@ -186,16 +240,57 @@ impl<'a> Types<'a> {
     }
 
     fn scalar(&self, name: &str, el: &Element) -> Result<Scalar, EsiError> {
-        if let Some(s) = base_scalar(name) {
-            return Ok(s);
-        }
         match self.defs.get(name.trim()) {
-            Some((TypeDef::Scalar(s), _)) => Ok(*s),
-            _ => Err(EsiError::UnknownDataType {
-                at: At::of(el),
-                name: name.trim().to_string(),
-            }),
+            Some((TypeDef::Scalar(s), _)) => return Ok(*s),
+            Some((TypeDef::ArrayOf { base, elements }, _)) => {
+                // An array type as an item's type: the array as one value.
+                let e = self.scalar(base, el)?;
+                return Ok(array_scalar(e, elements.saturating_mul(e.bits)));
+            }
+            _ => {}
         }
+        base_scalar(name).ok_or_else(|| EsiError::UnknownDataType {
+            at: At::of(el),
+            name: name.trim().to_string(),
+        })
+    }
+}
+
+/// `name` as a base type or one of the types `defs` already has.
+fn self_or_base(defs: &BTreeMap<String, (TypeDef<'_>, &Element)>, name: &str) -> Option<Scalar> {
+    match defs.get(name.trim()) {
+        Some((TypeDef::Scalar(s), _)) => Some(*s),
+        _ => base_scalar(name),
+    }
+}
+
+/// The data type index a Beckhoff-style enumeration name carries
+/// (`DT0800EN03`: index 0x0800, 3 bits), as its devices report it.
+fn enum_index_of_name(name: &str) -> Option<u16> {
+    let rest = name.trim().strip_prefix("DT")?;
+    let (hex, bits) = rest.split_once("EN")?;
+    if hex.len() != 4 || bits.is_empty() || !bits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    u16::from_str_radix(hex, 16)
+        .ok()
+        .filter(|i| (0x0800..=0x0FFF).contains(i))
+}
+
+/// The unsigned type of `bits` bits (an enumeration without an index).
+fn unsigned_of(bits: u16) -> Scalar {
+    let ty = match bits {
+        1..=8 if bits < 8 => DataType::Bits(bits as u8),
+        8 => DataType::UInt8,
+        16 => DataType::UInt16,
+        24 => DataType::UInt24,
+        32 => DataType::UInt32,
+        64 => DataType::UInt64,
+        _ => DataType::UInt32,
+    };
+    Scalar {
+        ty,
+        bits: natural_bits(&ty),
     }
 }
 
@@ -207,22 +302,36 @@ fn flags(
     let Some(f) = f else {
         return Ok((inherit, PdoMapping::None, false, false));
     };
+    // ETG.2000 AccessType: ro, rw, wo (any case), WriteRestrictions
+    // PreOP, SafeOP, OP and their pairs; the core knows "writable in
+    // PRE-OP only" and "writable", so PreOP is the one kept.
     let access = match f.child("Access") {
-        Some(a) => match (a.text.trim(), a.attr("WriteRestrictions")) {
+        Some(a) => match (
+            a.text.trim().to_ascii_lowercase().as_str(),
+            a.attr("WriteRestrictions"),
+        ) {
             ("ro", _) => Access::Ro,
             ("wo", _) => Access::Wo,
-            ("rw", Some(r)) if r.eq_ignore_ascii_case("PreOP") => Access::RwPreOp,
+            ("rw", Some(r)) if r.trim().eq_ignore_ascii_case("PreOP") => Access::RwPreOp,
             ("rw", _) => Access::Rw,
             (other, _) => return Err(bad(a, "Access", other)),
         },
         None => inherit,
     };
+    // ETG.2000 PdoMappingType: R, T, RT, TR, in either case.
     let pdo = match f.text_at("PdoMapping").map(str::trim) {
         None | Some("") => PdoMapping::None,
-        Some(p) if p.contains('R') => PdoMapping::Rx,
-        Some(p) if p.contains('T') => PdoMapping::Tx,
         Some(p) => {
-            return Err(bad(f.child("PdoMapping").unwrap_or(f), "PdoMapping", p));
+            let rx = p.contains(['R', 'r']);
+            let tx = p.contains(['T', 't']);
+            if p.chars().any(|c| !matches!(c, 'R' | 'r' | 'T' | 't')) {
+                return Err(bad(f.child("PdoMapping").unwrap_or(f), "PdoMapping", p));
+            }
+            match (rx, tx) {
+                (true, true) => PdoMapping::RxTx,
+                (true, false) => PdoMapping::Rx,
+                _ => PdoMapping::Tx,
+            }
         }
     };
     let on = |n: &str| matches!(f.text_at(n).map(str::trim), Some("1" | "true"));
@@ -275,13 +384,52 @@ fn value_info(info: Option<&Element>, s: &Scalar) -> Result<ValueInfo, EsiError>
         }
     };
     let val = |name: &str| -> Result<Option<i64>, EsiError> {
-        info.child(name).map(|c| number(c, "value")).transpose()
+        let Some(c) = info.child(name) else {
+            return Ok(None);
+        };
+        if s.ty.is_real() {
+            // A float as text ("1.5", "-3e2"): its bit pattern.
+            let f: f64 = c
+                .text
+                .trim()
+                .parse()
+                .map_err(|_| bad(c, "value", &c.text))?;
+            return Ok(Some(match s.ty {
+                DataType::Real32 => i64::from((f as f32).to_bits()),
+                _ => f.to_bits() as i64,
+            }));
+        }
+        number(c, "value").map(Some)
     };
-    let default = if s.ty == DataType::VisibleString {
-        DefaultValue::Str(leak(info.text_at("DefaultString").unwrap_or("")))
-    } else {
-        DefaultValue::Int(data("DefaultData")?.or(val("DefaultValue")?).unwrap_or(0))
-    };
+    if s.ty.is_bytes() {
+        let default = match s.ty {
+            DataType::VisibleString => {
+                let text = info.text_at("DefaultString").unwrap_or("");
+                // Cut to the string's length (at a character boundary).
+                let max = usize::from(s.bits / 8);
+                let mut end = text.len().min(max);
+                while !text.is_char_boundary(end) {
+                    end -= 1;
+                }
+                DefaultValue::Str(leak(text.get(..end).unwrap_or("")))
+            }
+            _ => match info.child("DefaultData") {
+                Some(d) => {
+                    let mut b = hex_binary(&d.text).ok_or_else(|| bad(d, "hexBinary", &d.text))?;
+                    b.truncate(usize::from(s.bits).div_ceil(8));
+                    DefaultValue::Bytes(Box::leak(b.into_boxed_slice()))
+                }
+                None => DefaultValue::Bytes(&[]),
+            },
+        };
+        return Ok(ValueInfo {
+            default,
+            min: None,
+            max: None,
+            unit: "",
+        });
+    }
+    let default = DefaultValue::Int(data("DefaultData")?.or(val("DefaultValue")?).unwrap_or(0));
     let min = data("MinData")?.or(val("MinValue")?);
     let max = data("MaxData")?.or(val("MaxValue")?);
     let unit = match info.child("Unit") {
@@ -321,6 +469,12 @@ fn entry(spec: &EntrySpec, info: Option<&Element>) -> Result<Entry, EsiError> {
     } else {
         value_info(info, &spec.scalar)?
     };
+    // No Info: a string is empty, other bytes zeros.
+    let default = match (default, spec.scalar.ty) {
+        (DefaultValue::Int(_), DataType::VisibleString) => DefaultValue::Str(""),
+        (DefaultValue::Int(_), t) if t.is_bytes() => DefaultValue::Bytes(&[]),
+        (d, _) => d,
+    };
     Ok(Entry {
         sub: spec.sub,
         name: leak(&spec.name),
@@ -350,11 +504,14 @@ fn sub_infos<'a>(obj_info: Option<&'a Element>, names: &[String]) -> Vec<Option<
         let by_name = items.iter().enumerate().find(|(i, it)| {
             !used.get(*i).copied().unwrap_or(true) && it.text_at("Name") == Some(n)
         });
+        // By position only where the Info names no entry there (an Info
+        // that leaves entries out must not shift its defaults onto
+        // others).
         let pick = match by_name {
             Some((i, it)) => Some((i, *it)),
             None => items
                 .get(k)
-                .filter(|_| !used.get(k).copied().unwrap_or(true))
+                .filter(|it| !used.get(k).copied().unwrap_or(true) && it.child("Name").is_none())
                 .map(|it| (k, *it)),
         };
         match pick {
@@ -379,7 +536,15 @@ pub struct ParsedObject {
     pub at: At,
 }
 
-fn parse_object(o: &Element, types: &Types<'_>) -> Result<ParsedObject, EsiError> {
+/// Most bits an entry can have: SDO Information's bit length is
+/// UNSIGNED16 (ETG.1000.6, Get Entry Description).
+const MAX_ENTRY_BITS: i64 = u16::MAX as i64;
+
+fn parse_object(
+    o: &Element,
+    types: &Types<'_>,
+    warnings: &mut Vec<Warning>,
+) -> Result<Option<ParsedObject>, EsiError> {
     let index_el = o.child("Index").ok_or_else(|| EsiError::Missing {
         at: At::of(o),
         what: "<Index>",
@@ -394,15 +559,41 @@ fn parse_object(o: &Element, types: &Types<'_>) -> Result<ParsedObject, EsiError
     let ty = type_el.text.trim();
     let (obj_access, obj_pdo, obj_backup, obj_setting) = flags(o.child("Flags"), Access::Ro)?;
     let info = o.child("Info");
-    let def = match base_scalar(ty) {
-        Some(s) => Some(TypeDef::Scalar(s)),
-        None => types.defs.get(ty).map(|(d, _)| d.clone()),
+    let obj_bits = o
+        .text_at("BitSize")
+        .and_then(crate::xml::number)
+        .unwrap_or(0);
+    if obj_bits > MAX_ENTRY_BITS
+        && !types
+            .defs
+            .get(ty)
+            .is_some_and(|(d, _)| matches!(d, TypeDef::Record(_)))
+    {
+        warnings.push(Warning::new(
+            o,
+            format!(
+                "object {index:#06x} '{name}' of {obj_bits} bits is longer than a CoE entry can be described (UNSIGNED16 bit length): left out"
+            ),
+        ));
+        return Ok(None);
+    }
+    let obj_bits = u16::try_from(obj_bits.max(0)).unwrap_or(0);
+    let def = match types.defs.get(ty) {
+        Some((d, _)) => Some(d.clone()),
+        None => base_scalar(ty).map(TypeDef::Scalar),
     };
     let Some(def) = def else {
-        return Err(EsiError::UnknownDataType {
-            at: At::of(type_el),
-            name: ty.to_string(),
-        });
+        warnings.push(Warning::new(
+            type_el,
+            format!("object {index:#06x} '{name}' has the unknown data type '{ty}': left out"),
+        ));
+        return Ok(None);
+    };
+    // A variable of an array type: the array as one value.
+    let def = match def {
+        TypeDef::ArrayOf { .. } => TypeDef::Scalar(sized(types.scalar(ty, type_el)?, obj_bits)),
+        TypeDef::Scalar(s) => TypeDef::Scalar(sized(s, obj_bits)),
+        d => d,
     };
     let (code, entries) = match def {
         TypeDef::Scalar(s) => {
@@ -472,7 +663,7 @@ fn parse_object(o: &Element, types: &Types<'_>) -> Result<ParsedObject, EsiError
                             at: At::of(s.el),
                             what: "<SubIdx>",
                         })?;
-                        let sc = types.scalar(&s.type_name, s.el)?;
+                        let sc = sized(types.scalar(&s.type_name, s.el)?, s.bits);
                         if s.bits != 0 && s.bits != sc.bits {
                             return Err(bad(
                                 s.el,
@@ -518,18 +709,36 @@ fn parse_object(o: &Element, types: &Types<'_>) -> Result<ParsedObject, EsiError
                 .collect();
             let mut infos = sub_infos(info, &named).into_iter();
             let mut entries = Vec::with_capacity(specs.len());
+            let highest = specs.iter().map(|s| s.sub).max().unwrap_or(0);
             for spec in &specs {
                 let i = if spec.gap {
                     None
                 } else {
                     infos.next().flatten()
                 };
-                entries.push(entry(spec, i)?);
+                let mut e = entry(spec, i)?;
+                if e.sub == 0 {
+                    // Subindex 0 holds the highest subindex (a PDO
+                    // assignment or module list: at most that).
+                    // (A writable subindex 0: the number of entries in
+                    // use, as the core reads it.)
+                    let list = matches!(index, 0x1C12 | 0x1C13 | 0xF030) || e.access.writable();
+                    let want = i64::from(highest);
+                    let ok = matches!(e.default, DefaultValue::Int(v) if v == want || (list && (0..=want).contains(&v)));
+                    if !ok {
+                        warnings.push(Warning::new(
+                            o,
+                            format!("object {index:#06x}: subindex 0 defaults to {:?}, its highest subindex is {highest}: {highest} assumed", e.default),
+                        ));
+                        e.default = DefaultValue::Int(want);
+                    }
+                }
+                entries.push(e);
             }
             (code, entries)
         }
     };
-    Ok(ParsedObject {
+    Ok(Some(ParsedObject {
         object: Object {
             index,
             name: leak(&name),
@@ -537,21 +746,38 @@ fn parse_object(o: &Element, types: &Types<'_>) -> Result<ParsedObject, EsiError
             entries: Box::leak(entries.into_boxed_slice()),
         },
         at: At::of(o),
-    })
+    }))
 }
 
+/// What [`parse`] reads of a `Profile/Dictionary`.
+pub type ParsedDictionary = (Vec<ParsedObject>, Vec<&'static EnumDesc>, Vec<Warning>);
+
 /// The objects and enumerations of a `Profile/Dictionary` element, objects
-/// ascending by index.
-pub fn parse(dict: &Element) -> Result<(Vec<ParsedObject>, Vec<&'static EnumDesc>), EsiError> {
+/// ascending by index, and what was left out.
+pub fn parse(dict: &Element) -> Result<ParsedDictionary, EsiError> {
     let types = Types::parse(dict.child("DataTypes"))?;
-    let mut objects = Vec::new();
+    let mut objects: Vec<ParsedObject> = Vec::new();
+    let mut warnings = Vec::new();
     if let Some(objs) = dict.child("Objects") {
         for o in objs.children_named("Object") {
-            objects.push(parse_object(o, &types)?);
+            let Some(p) = parse_object(o, &types, &mut warnings)? else {
+                continue;
+            };
+            if let Some(first) = objects.iter().find(|x| x.object.index == p.object.index) {
+                warnings.push(Warning::new(
+                    o,
+                    format!(
+                        "object {:#06x} is described again (first at line {}): the first kept",
+                        p.object.index, first.at.line
+                    ),
+                ));
+                continue;
+            }
+            objects.push(p);
         }
     }
     objects.sort_by_key(|o| o.object.index);
-    Ok((objects, types.enums))
+    Ok((objects, types.enums, warnings))
 }
 
 /// A [`Dictionary`] over `objects` (ascending) and `enums`, leaked.
@@ -610,7 +836,7 @@ mod tests {
 </Dictionary>"##;
 
     fn parsed(text: &str) -> Result<(Vec<ParsedObject>, Vec<&'static EnumDesc>), EsiError> {
-        parse(&xml::parse(text).unwrap())
+        parse(&xml::parse(text).unwrap()).map(|(o, e, _)| (o, e))
     }
 
     #[test]
@@ -661,14 +887,16 @@ mod tests {
     fn dictionary_errors_name_the_element_and_line() {
         let line =
             |needle: &str, text: &str| text.lines().position(|l| l.contains(needle)).unwrap() + 1;
-        let t = DICT.replace("<Type>INT</Type>", "<Type>REAL</Type>");
-        let e = parsed(&t).unwrap_err().to_string();
+        // An object of an unknown type is left out with a warning.
+        let t = DICT.replace("<Type>INT</Type>", "<Type>FLOAT7</Type>");
+        let (objs, _, w) = parse(&xml::parse(&t).unwrap()).unwrap();
+        assert!(objs.iter().all(|o| o.object.index != 0x2000));
         assert_eq!(
-            e,
-            format!(
-                "<Type> at line {}: unknown data type 'REAL'",
-                line("REAL", &t)
-            )
+            w.iter().map(ToString::to_string).collect::<Vec<_>>(),
+            [format!(
+                "<Type> at line {}: object 0x2000 'Offset' has the unknown data type 'FLOAT7': left out",
+                line("FLOAT7", &t)
+            )]
         );
         let t = DICT.replace(
             "<Access>rw</Access><PdoMapping>T",
@@ -709,6 +937,109 @@ mod tests {
                 .to_string()
                 .contains("bad BitSize '999'")
         );
+    }
+
+    /// Types of ETG.1000.6 Table 64 the loader once refused, as a
+    /// synthetic dictionary (written for this test).
+    const TYPES: &str = r##"<Dictionary><DataTypes>
+    <DataType><Name>ARRAY [0..3] OF BYTE</Name><BaseType>BYTE</BaseType><BitSize>32</BitSize><ArrayInfo><LBound>0</LBound><Elements>4</Elements></ArrayInfo></DataType>
+    <DataType><Name>DT_Temperature</Name><BaseType>INT</BaseType><BitSize>16</BitSize></DataType>
+    <DataType><Name>DT0801EN03</Name><BaseType>USINT</BaseType><BitSize>3</BitSize><EnumInfo><Text>a</Text><Enum>0</Enum></EnumInfo></DataType>
+    <DataType><Name>DT_Mode</Name><BaseType>UINT</BaseType><BitSize>16</BitSize><EnumInfo><Text>a</Text><Enum>1</Enum></EnumInfo></DataType>
+    <DataType><Name>DT2000</Name><BitSize>112</BitSize>
+      <SubItem><SubIdx>0</SubIdx><Name>SubIndex 000</Name><Type>USINT</Type><BitSize>8</BitSize><BitOffs>0</BitOffs><Flags><Access>ro</Access></Flags></SubItem>
+      <SubItem><SubIdx>1</SubIdx><Name>Key</Name><Type>ARRAY [0..3] OF BYTE</Type><BitSize>32</BitSize><BitOffs>16</BitOffs><Flags><Access>ro</Access></Flags></SubItem>
+      <SubItem><SubIdx>2</SubIdx><Name>Mode</Name><Type>DT0801EN03</Type><BitSize>3</BitSize><BitOffs>48</BitOffs><Flags><Access>rw</Access><PdoMapping>tr</PdoMapping></Flags></SubItem>
+      <SubItem><SubIdx>4</SubIdx><Name>Filter</Name><Type>ARRAY [0..3] OF UINT</Type><BitSize>64</BitSize><BitOffs>51</BitOffs><Flags><Access>ro</Access></Flags></SubItem>
+    </DataType></DataTypes><Objects>
+    <Object><Index>#x2000</Index><Name>Rec</Name><Type>DT2000</Type><BitSize>112</BitSize><Info><SubItem><Name>SubIndex 000</Name><Info><DefaultData>01</DefaultData></Info></SubItem><SubItem><Name>Key</Name><Info><DefaultData>0A0B</DefaultData></Info></SubItem></Info></Object>
+    <Object><Index>#x2001</Index><Name>Gain</Name><Type>REAL</Type><BitSize>32</BitSize><Info><DefaultValue>-2.5</DefaultValue><MinValue>-10</MinValue><MaxValue>10</MaxValue></Info><Flags><Access>rw</Access><PdoMapping>r</PdoMapping></Flags></Object>
+    <Object><Index>#x2002</Index><Name>Temp</Name><Type>DT_Temperature</Type><BitSize>16</BitSize><Info><DefaultData>F6FF</DefaultData></Info><Flags><Access>ro</Access><PdoMapping>T</PdoMapping></Flags></Object>
+    <Object><Index>#x2003</Index><Name>Mode</Name><Type>DT_Mode</Type><BitSize>16</BitSize><Flags><Access>ro</Access></Flags></Object>
+    <Object><Index>#x2004</Index><Name>Buffer</Name><Type>ARRAY [0..16383] OF UINT</Type><BitSize>262144</BitSize><Flags><Access>rw</Access></Flags></Object>
+    <Object><Index>#x2005</Index><Name>Counts</Name><Type>UINT24</Type><BitSize>24</BitSize><Flags><Access>ro</Access></Flags></Object>
+    <Object><Index>#x1008</Index><Name>Name</Name><Type>STRING(20)</Type><BitSize>160</BitSize><Info><DefaultString>short</DefaultString></Info><Flags><Access>ro</Access></Flags></Object>
+    </Objects></Dictionary>"##;
+
+    #[test]
+    fn real_arrays_derived_types_enumerations_and_24_bit_integers_are_read() {
+        let (objs, enums, w) = parse(&xml::parse(TYPES).unwrap()).unwrap();
+        let o = |i: u16| &objs.iter().find(|o| o.object.index == i).unwrap().object;
+        let rec = o(0x2000);
+        assert_eq!(
+            rec.entries[0].default,
+            DefaultValue::Int(4),
+            "subindex 0 = highest"
+        );
+        let key = &rec.entries[1];
+        assert_eq!((key.data_type, key.bit_len), (DataType::OctetString, 32));
+        assert_eq!(key.default, DefaultValue::Bytes(&[0x0A, 0x0B]));
+        let mode = &rec.entries[2];
+        assert_eq!(mode.pdo, PdoMapping::RxTx);
+        assert!(matches!(mode.data_type, DataType::Enum(e) if e.index == 0x0801 && e.bit_len == 3));
+        assert_eq!(enums.len(), 1, "only the enumeration with an index");
+        assert_eq!(rec.entries[3].data_type, DataType::Array(0x0006));
+        let gain = &o(0x2001).entries[0];
+        assert_eq!(gain.data_type, DataType::Real32);
+        assert_eq!(
+            gain.default,
+            DefaultValue::Int(i64::from((-2.5f32).to_bits()))
+        );
+        assert_eq!(gain.min, Some(i64::from((-10f32).to_bits())));
+        assert_eq!(o(0x2002).entries[0].data_type, DataType::Int16);
+        assert_eq!(o(0x2002).entries[0].default, DefaultValue::Int(-10));
+        assert_eq!(
+            o(0x2003).entries[0].data_type,
+            DataType::UInt16,
+            "enum without index"
+        );
+        assert_eq!(o(0x2005).entries[0].data_type, DataType::UInt24);
+        let name = &o(0x1008).entries[0];
+        assert_eq!(
+            (name.bit_len, name.default),
+            (160, DefaultValue::Str("short"))
+        );
+        assert!(objs.iter().all(|o| o.object.index != 0x2004), "left out");
+        assert!(
+            w.iter()
+                .any(|w| w.message.contains("0x2004") && w.message.contains("262144 bits")),
+            "{w:?}"
+        );
+        let dict = build(objs.into_iter().map(|p| p.object).collect(), enums);
+        assert_eq!(dict.validate(), Ok(()));
+        assert_eq!(
+            dict.value_slots(),
+            dict.entry_count() + 1 + 1,
+            "two 4- and 8-byte areas"
+        );
+    }
+
+    #[test]
+    fn malformed_dictionaries_are_errors_or_warnings_never_panics() {
+        for cut in (0..TYPES.len()).step_by(97) {
+            let Some(text) = TYPES.get(..cut) else {
+                continue;
+            };
+            if let Ok(e) = xml::parse(text) {
+                let _ = parse(&e);
+            }
+        }
+        for (from, to) in [
+            (
+                "ARRAY [0..3] OF BYTE</Type>",
+                "ARRAY [0..-9] OF BYTE</Type>",
+            ),
+            ("<BitSize>262144</BitSize>", "<BitSize>-5</BitSize>"),
+            (
+                "<DefaultValue>-2.5</DefaultValue>",
+                "<DefaultValue>pi</DefaultValue>",
+            ),
+            ("STRING(20)", "STRING(99999)"),
+            ("<PdoMapping>tr</PdoMapping>", "<PdoMapping>x</PdoMapping>"),
+        ] {
+            let t = TYPES.replace(from, to);
+            let _ = parse(&xml::parse(&t).unwrap());
+        }
     }
 
     #[test]

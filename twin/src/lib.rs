@@ -19,10 +19,11 @@
 //!   library or a built-in device.
 //! - [`xml`]: the small element tree (with line numbers) both readers use.
 //!
-//! **Not yet supported** (refused with an error naming the device and,
-//! where it is in the file, the element and line): data types the core does not serve (`REAL`, `LREAL`,
-//! `UINT24`, `OCTET_STRING`, arrays of bytes), writable PDO mappings, EoE,
-//! SoE, AoE. DC op modes are read but the SII of a twin has no DC category
+//! **Not yet supported** (left out with a warning naming the element and
+//! line, or refused for that device only): objects longer than SDO
+//! Information can describe, writable PDO mappings, SDO downloads of octet
+//! strings, EoE, SoE, AoE, CiA 402 behaviour (a drive runs as a plain CoE
+//! twin). DC op modes are read but the SII of a twin has no DC category
 //! yet. Built-in devices (the PAM, IO8, DMA-22) run their real behaviour
 //! in a line.
 
@@ -151,16 +152,26 @@ pub enum TwinError {
     Description(#[from] coe_twin::DescriptionBuildError),
 }
 
-/// Reads and parses one ESI file.
+/// Reads and parses one ESI file (in the encoding its byte order mark or
+/// XML declaration names, [`xml::decode`]).
 pub fn load_esi(path: &Path) -> Result<EsiFile, TwinError> {
-    let text = std::fs::read_to_string(path).map_err(|source| TwinError::Io {
+    let bytes = std::fs::read(path).map_err(|source| TwinError::Io {
         path: path.display().to_string(),
         source,
     })?;
-    EsiFile::parse(&text).map_err(|source| TwinError::Esi {
+    EsiFile::parse_bytes(&bytes).map_err(|source| TwinError::Esi {
         path: path.display().to_string(),
         source,
     })
+}
+
+/// What the twin of `dev` leaves out of its ESI or assumes, each naming
+/// the element and line (empty for a device the twin models completely).
+pub fn warnings(dev: &EsiDevice) -> Result<Vec<esi::Warning>, TwinError> {
+    if !dev.has_mailbox() {
+        return Ok(dev.warnings.clone());
+    }
+    Ok(coe_twin::describe_with_warnings(dev)?.2.to_vec())
 }
 
 /// The twin of an ESC-only `dev` (no mailbox) with station alias `alias`
@@ -200,12 +211,11 @@ pub fn twin_with_modules(
     let (desc, layout) = coe_twin::describe(dev)?;
     let modules = modules.map_or_else(|| coe_twin::default_modules(dev), <[u32]>::to_vec);
     let mut slave = coe_twin::slave(desc, layout, rule, modules);
+    // The EEPROM a real device ships with is written from its ESI (or is
+    // the ESI's `<Eeprom><Data>`): the twin serves that image, so a master
+    // reads what the ESI says, whatever the firmware's description adds.
     let esc = LineSlave::esc_mut(&mut slave);
-    if dev.eeprom_data.is_some() {
-        esc.program_sii(&sii::image(dev, alias)?);
-    } else if let Some(a) = alias {
-        esc.program_sii_alias(a);
-    }
+    esc.program_sii(&sii::image(dev, alias)?);
     esc.power_on();
     Ok(Box::new(slave))
 }

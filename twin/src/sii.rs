@@ -18,7 +18,7 @@ use ecat_slave::sii::{
 use crate::esi::{EsiDevice, EsiPdo};
 
 /// Bytes of EEPROM the software ESC emulates.
-pub const EEPROM_BYTES: usize = 2048;
+pub const EEPROM_BYTES: usize = ecat_slave::sii::SII_SIZE;
 
 /// Why the SII image cannot be made.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -93,7 +93,7 @@ fn to_pdos<'a>(v: &'a [PdoParts<'a>]) -> Vec<SiiPdo<'a>> {
         .collect()
 }
 
-fn sii_pdos(pdos: &[EsiPdo]) -> Vec<PdoParts<'_>> {
+fn sii_pdos(pdos: &[EsiPdo], entry_names: bool, pdo_names: bool) -> Vec<PdoParts<'_>> {
     pdos.iter()
         .map(|p| {
             let entries = p
@@ -102,12 +102,13 @@ fn sii_pdos(pdos: &[EsiPdo]) -> Vec<PdoParts<'_>> {
                 .map(|e| SiiPdoEntry {
                     index: e.index,
                     sub: e.sub,
-                    name: &e.name,
+                    name: if entry_names { &e.name } else { "" },
                     data_type: e.data_type,
                     bit_len: e.bit_len,
                 })
                 .collect();
-            (p.index, p.sm, p.name.as_str(), p.flags, entries)
+            let name = if pdo_names { p.name.as_str() } else { "" };
+            (p.index, p.sm, name, p.flags, entries)
         })
         .collect()
 }
@@ -141,6 +142,39 @@ pub fn image(dev: &EsiDevice, alias: Option<u16>) -> Result<Vec<u8>, SiiBuildErr
     Ok(out)
 }
 
+/// Bytes an SII image uses: up to the end of its last category (ETG.2010:
+/// categories from word 0x40, each a type word and a length in words, the
+/// last of type 0xFFFF).
+fn image_end(img: &[u8]) -> usize {
+    let mut w = 0x40usize;
+    while w * 2 + 4 <= img.len() {
+        let ty = word(img, w);
+        if ty == 0xFFFF {
+            return (w + 1) * 2;
+        }
+        w += 2 + usize::from(word(img, w + 1));
+    }
+    img.len()
+}
+
+/// The bootstrap mailbox of `Eeprom/BootStrap` (out offset, out size, in
+/// offset, in size, little-endian words); none without one.
+fn bootstrap(dev: &EsiDevice) -> SiiMailbox {
+    let Some(b) = dev
+        .source
+        .path("Eeprom/BootStrap")
+        .and_then(|b| crate::xml::hex_binary(&b.text))
+    else {
+        return SiiMailbox::default();
+    };
+    SiiMailbox {
+        rx_offset: word(&b, 0),
+        rx_size: word(&b, 1),
+        tx_offset: word(&b, 2),
+        tx_size: word(&b, 3),
+    }
+}
+
 fn mailbox_area(dev: &EsiDevice, kind: SmType) -> (u16, u16) {
     dev.sms
         .iter()
@@ -149,6 +183,19 @@ fn mailbox_area(dev: &EsiDevice, kind: SmType) -> (u16, u16) {
 }
 
 fn encode(dev: &EsiDevice) -> Result<Vec<u8>, SiiBuildError> {
+    // An image that does not fit the emulated EEPROM with the names of
+    // the PDO entries fits without them (what an EEPROM of a vendor's
+    // device often leaves out too): the master names entries from the ESI.
+    encode_with(dev, true, true)
+        .or_else(|_| encode_with(dev, false, true))
+        .or_else(|_| encode_with(dev, false, false))
+}
+
+fn encode_with(
+    dev: &EsiDevice,
+    entry_names: bool,
+    pdo_names: bool,
+) -> Result<Vec<u8>, SiiBuildError> {
     let cd = &dev.config_data;
     // A loaded ESI's size fits (EsiFile::parse refuses larger ones).
     let kbit = dev.eeprom_kbit().unwrap_or(u16::MAX);
@@ -165,8 +212,8 @@ fn encode(dev: &EsiDevice) -> Result<Vec<u8>, SiiBuildError> {
             sm_type: s.kind,
         })
         .collect();
-    let rx = sii_pdos(&dev.rx_pdos);
-    let tx = sii_pdos(&dev.tx_pdos);
+    let rx = sii_pdos(&dev.rx_pdos, entry_names, pdo_names);
+    let tx = sii_pdos(&dev.tx_pdos, entry_names, pdo_names);
     let rx_pdos = to_pdos(&rx);
     let tx_pdos = to_pdos(&tx);
     let cfg = SiiConfig {
@@ -181,7 +228,7 @@ fn encode(dev: &EsiDevice) -> Result<Vec<u8>, SiiBuildError> {
             revision: dev.revision,
             serial: 0,
         },
-        bootstrap_mailbox: SiiMailbox::default(),
+        bootstrap_mailbox: bootstrap(dev),
         standard_mailbox: SiiMailbox {
             rx_offset,
             rx_size,
@@ -189,7 +236,10 @@ fn encode(dev: &EsiDevice) -> Result<Vec<u8>, SiiBuildError> {
             tx_size,
         },
         mailbox_protocols: dev.mailbox_protocols,
-        eeprom_kbit: kbit,
+        // The image may need more than the EEPROM the ESI declares (a
+        // 128-byte `ByteSize` with categories): the emulated EEPROM holds
+        // it all, the header keeps the declared size (word 0x3E below).
+        eeprom_kbit: kbit.max(u16::try_from(EEPROM_BYTES / 128).unwrap_or(u16::MAX)),
         general: SiiGeneral {
             group: fit_name(&dev.group_type),
             image: "",
@@ -207,11 +257,19 @@ fn encode(dev: &EsiDevice) -> Result<Vec<u8>, SiiBuildError> {
         tx_pdos: &tx_pdos,
         rx_pdos: &rx_pdos,
     };
-    let mut out = vec![0xFFu8; usize::from(kbit) * 128];
+    let mut out = vec![0xFFu8; usize::from(cfg.eeprom_kbit) * 128];
     sii::encode(&cfg, &mut out).map_err(|source| SiiBuildError::Encode {
         device: dev.label(),
         source,
     })?;
+    // SII word 0x3E: EEPROM size in kbit - 1 (ETG.2010): the declared
+    // size, or the size the image needs when it is more (an EEPROM chip
+    // larger than the ESI's ByteSize).
+    let end = image_end(&out);
+    let needed = u16::try_from(end.div_ceil(128)).unwrap_or(u16::MAX);
+    if let Some(w) = out.get_mut(0x7C..0x7E) {
+        w.copy_from_slice(&kbit.max(needed).saturating_sub(1).to_le_bytes());
+    }
     out.resize(EEPROM_BYTES.max(out.len()), 0xFF);
     Ok(out)
 }

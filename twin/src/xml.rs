@@ -155,6 +155,85 @@ fn start_element(
     })
 }
 
+/// The text of an XML document as its bytes are written: a byte order
+/// mark first (UTF-8, UTF-16LE/BE), else the encoding the XML declaration
+/// names (`<?xml version="1.0" encoding="ISO-8859-1"?>`), else UTF-8 (XML
+/// 1.0, 4.3.3 and appendix F). Labels are looked up as the WHATWG
+/// Encoding Standard defines them (`encoding_rs`), so `ISO-8859-1`,
+/// `ISO8859-1` and `latin1` decode as Windows-1252, which agrees with
+/// ISO-8859-1 on every byte but 0x80..0x9F (C1 controls there, printable
+/// characters in Windows-1252: no ESI means a control character).
+/// Bytes that are not valid in the encoding are an error naming the line.
+pub fn decode(bytes: &[u8]) -> Result<String, XmlError> {
+    let (encoding, body) = match encoding_rs::Encoding::for_bom(bytes) {
+        Some((enc, bom)) => (enc, bytes.get(bom..).unwrap_or(&[])),
+        None => (declared_encoding(bytes)?, bytes),
+    };
+    match encoding.decode_without_bom_handling_and_without_replacement(body) {
+        Some(text) => Ok(text.into_owned()),
+        None => {
+            // Where: the first byte the decoder refuses.
+            let (text, _) = encoding.decode_without_bom_handling(body);
+            let at = text.find('\u{FFFD}').unwrap_or(0);
+            let prefix = text.get(..at).unwrap_or("");
+            let line = 1 + prefix.matches('\n').count();
+            Err(XmlError {
+                position: prefix.len() as u64,
+                line: u32::try_from(line).unwrap_or(u32::MAX),
+                message: format!("bytes that are not {} text", encoding.name()),
+            })
+        }
+    }
+}
+
+/// The encoding an XML declaration at the start of `bytes` names (UTF-8
+/// without one). UTF-16 without a byte order mark shows as `<\0?\0` or
+/// `\0<\0?`.
+fn declared_encoding(bytes: &[u8]) -> Result<&'static encoding_rs::Encoding, XmlError> {
+    match bytes.get(..4) {
+        Some([b'<', 0, b'?', 0]) => return Ok(encoding_rs::UTF_16LE),
+        Some([0, b'<', 0, b'?']) => return Ok(encoding_rs::UTF_16BE),
+        _ => {}
+    }
+    let head = bytes.get(..bytes.len().min(256)).unwrap_or(bytes);
+    let head = String::from_utf8_lossy(head);
+    let Some(decl) = head
+        .trim_start()
+        .strip_prefix("<?xml")
+        .and_then(|d| d.split("?>").next())
+    else {
+        return Ok(encoding_rs::UTF_8);
+    };
+    let Some(rest) = decl.split("encoding").nth(1) else {
+        return Ok(encoding_rs::UTF_8);
+    };
+    let rest = rest
+        .trim_start()
+        .strip_prefix('=')
+        .unwrap_or(rest)
+        .trim_start();
+    let quote = rest.chars().next().filter(|q| *q == '"' || *q == '\'');
+    let label = match quote {
+        Some(q) => rest.get(1..).and_then(|r| r.split(q).next()).unwrap_or(""),
+        None => "",
+    };
+    encoding_rs::Encoding::for_label(label.trim().as_bytes())
+        // A document that names UTF-16 but has no byte order mark was
+        // caught above; a declaration read as ASCII is not UTF-16.
+        .map(|e| {
+            if e == encoding_rs::UTF_16LE || e == encoding_rs::UTF_16BE {
+                encoding_rs::UTF_8
+            } else {
+                e
+            }
+        })
+        .ok_or_else(|| XmlError {
+            position: 0,
+            line: 1,
+            message: format!("unknown encoding '{label}' in the XML declaration"),
+        })
+}
+
 /// Parses `text` into its root element.
 pub fn parse(text: &str) -> Result<Element, XmlError> {
     let mut reader = Reader::from_str(text);
@@ -339,6 +418,76 @@ mod tests {
             };
         }
         drop(e);
+    }
+
+    /// `<a n="ä€"/>` with the declaration `decl`, encoded by `encode`.
+    fn doc_in(decl: &str, encode: impl Fn(&str) -> Vec<u8>) -> Vec<u8> {
+        encode(&format!("{decl}<a n=\"\u{e4}\"/>"))
+    }
+
+    #[test]
+    fn documents_decode_by_their_bom_or_declaration() {
+        let latin1 = |s: &str| s.chars().map(|c| c as u8).collect::<Vec<u8>>();
+        let utf8 = |s: &str| s.as_bytes().to_vec();
+        let utf16le = |s: &str| {
+            s.encode_utf16()
+                .flat_map(u16::to_le_bytes)
+                .collect::<Vec<u8>>()
+        };
+        let utf16be = |s: &str| {
+            s.encode_utf16()
+                .flat_map(u16::to_be_bytes)
+                .collect::<Vec<u8>>()
+        };
+        let cases: Vec<Vec<u8>> = vec![
+            doc_in("<?xml version=\"1.0\" encoding=\"ISO-8859-1\"?>", latin1),
+            doc_in("<?xml version='1.0' encoding='ISO8859-1'?>", latin1),
+            doc_in("<?xml version=\"1.0\" encoding=\"windows-1252\"?>", latin1),
+            doc_in("<?xml version=\"1.0\"?>", utf8),
+            doc_in("", utf8),
+            [
+                b"\xEF\xBB\xBF".as_slice(),
+                &doc_in("<?xml version=\"1.0\" encoding=\"utf-8\"?>", utf8),
+            ]
+            .concat(),
+            [
+                b"\xFF\xFE".as_slice(),
+                &doc_in("<?xml version=\"1.0\" encoding=\"UTF-16\"?>", utf16le),
+            ]
+            .concat(),
+            [
+                b"\xFE\xFF".as_slice(),
+                &doc_in("<?xml version=\"1.0\" encoding=\"UTF-16\"?>", utf16be),
+            ]
+            .concat(),
+            doc_in("<?xml version=\"1.0\" encoding=\"UTF-16\"?>", utf16le),
+        ];
+        for bytes in cases {
+            let text = decode(&bytes).unwrap();
+            let doc = parse(&text).unwrap();
+            assert_eq!(doc.attr("n"), Some("\u{e4}"), "{bytes:02x?}");
+        }
+    }
+
+    #[test]
+    fn bytes_that_are_not_the_declared_encoding_name_the_line() {
+        let bad = b"<?xml version=\"1.0\"?>\n<a>\n<b n=\"\xE4\"/></a>";
+        let e = decode(bad).unwrap_err();
+        assert_eq!(e.line, 3, "{e}");
+        assert!(e.message.contains("not UTF-8"), "{e}");
+        let e = decode(b"<?xml version=\"1.0\" encoding=\"EBCDIC-42\"?><a/>").unwrap_err();
+        assert!(e.message.contains("unknown encoding 'EBCDIC-42'"), "{e}");
+        // Truncated and odd inputs are errors or text, never a panic.
+        for b in [
+            &b""[..],
+            b"\xFF",
+            b"\xFF\xFE<",
+            b"<?xml encoding=",
+            b"<?xml encoding=\"",
+            b"\x00<\x00",
+        ] {
+            let _ = decode(b);
+        }
     }
 
     #[test]

@@ -62,15 +62,24 @@ pub fn parse_revision(s: &str) -> Result<u32, TwinsError> {
         .ok_or_else(|| TwinsError::BadRevision(s.to_string()))
 }
 
+/// What [`from_esi`] makes: the device's label, its twins, and what they
+/// leave out of the ESI or assume.
+pub type FromEsi = (
+    String,
+    Vec<Box<dyn LineSlave>>,
+    Vec<ecat_twin::esi::Warning>,
+);
+
 /// `count` twins of the device `type_name`/`revision` of the ESI file
-/// `path` (either may be omitted when the file has one device type).
+/// `path` (either may be omitted when the file has one device type), and
+/// what the twin leaves out of the ESI or assumes.
 pub fn from_esi(
     path: &Path,
     type_name: Option<&str>,
     revision: Option<u32>,
     rules: &InputRules,
     count: usize,
-) -> Result<(String, Vec<Box<dyn LineSlave>>), TwinsError> {
+) -> Result<FromEsi, TwinsError> {
     let file = ecat_twin::load_esi(path)?;
     let dev = file
         .device(type_name, revision)
@@ -82,7 +91,25 @@ pub fn from_esi(
     for _ in 0..count {
         slaves.push(ecat_twin::twin(dev, None, rules.for_type(&dev.type_name))?);
     }
-    Ok((dev.label(), slaves))
+    let warnings = ecat_twin::warnings(dev)?;
+    Ok((dev.label(), slaves, warnings))
+}
+
+/// The devices of the ESI file `path`, one line each: `TYPE rev 0x...
+/// product 0x... NAME`, and the devices that do not load with the reason.
+pub fn list_esi(path: &Path) -> Result<Vec<String>, TwinsError> {
+    let file = ecat_twin::load_esi(path)?;
+    let mut out: Vec<String> = file
+        .devices
+        .iter()
+        .map(|d| format!("{} product {:#010x} {}", d.label(), d.product_code, d.name))
+        .collect();
+    out.extend(
+        file.refused
+            .iter()
+            .map(|(label, e)| format!("{label} does not load: {}: {e}", path.display())),
+    );
+    Ok(out)
 }
 
 /// The line the ENI file `eni_path` describes, devices from the catalog

@@ -673,7 +673,7 @@ mod tests {
     fn int(e: &Entry) -> i64 {
         match e.default {
             DefaultValue::Int(v) => v,
-            DefaultValue::Str(_) => panic!("{} is a string", e.name),
+            DefaultValue::Str(_) | DefaultValue::Bytes(_) => panic!("{} is not a number", e.name),
         }
     }
 
@@ -755,6 +755,7 @@ mod tests {
                     DefaultValue::Int(_) => {
                         assert_eq!(e.bit_len, natural_bits(&e.data_type), "{}", e.name)
                     }
+                    DefaultValue::Bytes(_) => panic!("{}: the PAM has no octet strings", e.name),
                 }
             }
         }
@@ -1156,7 +1157,7 @@ mod tests {
             .flat_map(|o| o.entries)
             .filter_map(|e| match e.default {
                 DefaultValue::Str(s) => Some(s),
-                DefaultValue::Int(_) => None,
+                DefaultValue::Int(_) | DefaultValue::Bytes(_) => None,
             })
             .collect();
         assert_eq!(strings, ["PAM-199-P-ETC", "10", "10"]);

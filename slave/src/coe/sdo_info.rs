@@ -166,8 +166,8 @@ impl ListType {
         let any = |f: fn(&Entry) -> bool| o.entries.iter().any(f);
         match self {
             ListType::All => true,
-            ListType::RxPdo => any(|e| e.pdo == PdoMapping::Rx),
-            ListType::TxPdo => any(|e| e.pdo == PdoMapping::Tx),
+            ListType::RxPdo => any(|e| e.pdo.allows(PdoMapping::Rx)),
+            ListType::TxPdo => any(|e| e.pdo.allows(PdoMapping::Tx)),
             ListType::Backup => any(|e| e.backup),
             ListType::Settings => any(|e| e.setting),
         }
@@ -211,6 +211,7 @@ pub fn entry_access(e: &Entry) -> u16 {
         PdoMapping::None => 0,
         PdoMapping::Rx => access_flag::RX_PDO,
         PdoMapping::Tx => access_flag::TX_PDO,
+        PdoMapping::RxTx => access_flag::RX_PDO | access_flag::TX_PDO,
     };
     let backup = if e.backup { access_flag::BACKUP } else { 0 };
     let setting = if e.setting { access_flag::SETTING } else { 0 };
@@ -268,20 +269,12 @@ pub fn value_len(e: &Entry) -> usize {
     usize::from(e.bit_len).div_ceil(8)
 }
 
-/// The natural range of a data type (`None` for strings). `i128` holds
-/// every bound, UNSIGNED64 included.
-fn natural_range(t: &DataType) -> Option<(i128, i128)> {
+/// The natural range of a data type (`None` for strings, bytes and
+/// floats, whose limits are not integers). `i128` holds every bound,
+/// UNSIGNED64 included.
+fn natural_range(t: &DataType, bits: u16) -> Option<(i128, i128)> {
     let r = match t {
         DataType::Bool => (0, 1),
-        DataType::Int8 => (i8::MIN.into(), i8::MAX.into()),
-        DataType::Int16 => (i16::MIN.into(), i16::MAX.into()),
-        DataType::Int32 => (i32::MIN.into(), i32::MAX.into()),
-        DataType::Int64 => (i64::MIN.into(), i64::MAX.into()),
-        DataType::UInt8 => (0, u8::MAX.into()),
-        DataType::UInt16 => (0, u16::MAX.into()),
-        DataType::UInt32 => (0, u32::MAX.into()),
-        DataType::UInt64 => (0, u64::MAX.into()),
-        DataType::Bits(n) => (0, (1i128 << u32::from((*n).min(64))) - 1),
         DataType::Enum(en) => {
             let lo = en.values.iter().map(|(v, _)| *v).min();
             let hi = en.values.iter().map(|(v, _)| *v).max();
@@ -290,7 +283,12 @@ fn natural_range(t: &DataType) -> Option<(i128, i128)> {
                 _ => (0, (1i128 << u32::from(en.bit_len.min(64))) - 1),
             }
         }
-        DataType::VisibleString => return None,
+        t if t.is_bytes() || t.is_real() => return None,
+        t if t.is_signed() => {
+            let b = u32::from(bits.clamp(1, 64));
+            (-(1i128 << (b - 1)), (1i128 << (b - 1)) - 1)
+        }
+        _ => (0, (1i128 << u32::from(bits.clamp(1, 64))) - 1),
     };
     Some(r)
 }
@@ -298,7 +296,7 @@ fn natural_range(t: &DataType) -> Option<(i128, i128)> {
 /// The minimum and maximum an entry description reports: the model's range,
 /// else the type's natural range; `None` for strings.
 pub fn value_range(e: &Entry) -> Option<(i128, i128)> {
-    let (lo, hi) = natural_range(&e.data_type)?;
+    let (lo, hi) = natural_range(&e.data_type, e.bit_len)?;
     Some((e.min.map_or(lo, i128::from), e.max.map_or(hi, i128::from)))
 }
 
@@ -581,6 +579,11 @@ fn write_entry_description(w: &mut Writer<'_>, index: u16, e: &Entry, asked: u8)
                 let text = s.as_bytes();
                 for i in 0..n {
                     w.u8(text.get(i).copied().unwrap_or(0));
+                }
+            }
+            DefaultValue::Bytes(b) => {
+                for i in 0..n {
+                    w.u8(b.get(i).copied().unwrap_or(0));
                 }
             }
         }

@@ -194,7 +194,8 @@ impl MemoryLayout {
     /// Standard mailboxes of `size` bytes at 0x1000 and right after, the
     /// bootstrap mailboxes (if any) of `boot` bytes at 0x1000 and right
     /// after, process data after the standard mailboxes: outputs, then
-    /// inputs [`MAX_IMAGE`] bytes later. `None` for a size outside
+    /// inputs [`DEFAULT_OUTPUT_AREA`](crate::pdo::DEFAULT_OUTPUT_AREA)
+    /// bytes later. `None` for a size outside
     /// 16..=[`MAX_MAILBOX`].
     pub const fn new(size: u16, boot: Option<u16>) -> Option<Self> {
         if size < 16 || size as usize > MAX_MAILBOX {
@@ -213,7 +214,7 @@ impl MemoryLayout {
             boot_out: (out, boot),
             boot_in: (out + boot, boot),
             pd_out,
-            pd_in: pd_out + MAX_IMAGE as u16,
+            pd_in: pd_out + crate::pdo::DEFAULT_OUTPUT_AREA as u16,
         })
     }
 
@@ -245,7 +246,7 @@ const fn int_default(o: &Object, sub: u8) -> Option<i64> {
         if e.sub == sub {
             return match e.default {
                 DefaultValue::Int(v) => Some(v),
-                DefaultValue::Str(_) => None,
+                DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
             };
         }
         es = tail;
@@ -408,13 +409,7 @@ impl DeviceDescription {
                             while let Some((t, tt)) = ts.split_first() {
                                 if t.sub == msub {
                                     found = true;
-                                    let ok = !t.gap
-                                        && t.bit_len == mbits
-                                        && matches!(
-                                            (t.pdo, want),
-                                            (PdoMapping::Rx, PdoMapping::Rx)
-                                                | (PdoMapping::Tx, PdoMapping::Tx)
-                                        );
+                                    let ok = !t.gap && t.bit_len == mbits && t.pdo.allows(want);
                                     if !ok {
                                         return Err(DescriptionError::BadMapping {
                                             pdo,

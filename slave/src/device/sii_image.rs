@@ -27,7 +27,7 @@ pub fn mapping_entries(dict: &Dictionary, pdo: u16) -> impl Iterator<Item = (u16
     let entries = dict.find(pdo).map_or(&[][..], |(_, o)| o.entries);
     let count = entries.first().map_or(0, |e| match e.default {
         DefaultValue::Int(v) => v,
-        DefaultValue::Str(_) => 0,
+        DefaultValue::Str(_) | DefaultValue::Bytes(_) => 0,
     });
     entries
         .iter()
@@ -37,7 +37,7 @@ pub fn mapping_entries(dict: &Dictionary, pdo: u16) -> impl Iterator<Item = (u16
                 let m = m as u32;
                 Some(((m >> 16) as u16, (m >> 8) as u8, m as u8))
             }
-            DefaultValue::Str(_) => None,
+            DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
         })
 }
 

@@ -72,8 +72,23 @@ pub fn upload(store: &Od, index: u16, sub: u8, out: &mut [u8]) -> Result<usize, 
             if e.data_type == DataType::VisibleString {
                 return Err(SdoAbortCode::CompleteAccessNotSupported);
             }
-            let bits = e.bit_len.min(64) as u8;
-            write_bits(&mut buf, bit, bits, store.value(flat) as u64);
+            if e.data_type.is_bytes() {
+                // An octet string or array: its bytes in order.
+                let mut bytes = [0u8; MAX_COMPLETE];
+                let n = store
+                    .area_bytes(flat, &mut bytes)
+                    .ok_or(SdoAbortCode::ObjectTooLong)?;
+                for (i, b) in bytes.iter().take(n).enumerate() {
+                    let at = u16::try_from(i * 8)
+                        .ok()
+                        .and_then(|o| bit.checked_add(o))
+                        .ok_or(SdoAbortCode::ObjectTooLong)?;
+                    write_bits(&mut buf, at, 8, u64::from(*b));
+                }
+            } else {
+                let bits = e.bit_len.min(64) as u8;
+                write_bits(&mut buf, bit, bits, store.value(flat) as u64);
+            }
         }
         bit = bit
             .checked_add(bit_size(e))
@@ -144,6 +159,9 @@ pub fn check_download(
         bit += size;
         if e.gap {
             continue;
+        }
+        if e.data_type.is_bytes() {
+            return Err(SdoAbortCode::CompleteAccessNotSupported);
         }
         let current = store.value(flat);
         if e.access == Access::Ro {

@@ -42,6 +42,8 @@ pub struct Dictionary {
     /// Flat position of the first entry of each object.
     entry_base: &'static [u16],
     entry_count: usize,
+    /// Entries plus the `i64` slots of the byte area.
+    value_slots: usize,
 }
 
 /// Total number of entries of `objects` (gaps and subindex 0 included): the
@@ -51,6 +53,25 @@ pub const fn entry_count(objects: &[Object]) -> usize {
     let mut rest = objects;
     while let Some((obj, tail)) = rest.split_first() {
         acc += obj.entries.len();
+        rest = tail;
+    }
+    acc
+}
+
+/// Length of the value storage `objects` need: one `i64` slot per entry
+/// (gaps and subindex 0 included), then the byte area, 8 bytes a slot,
+/// where octet strings, `GUID`s and arrays held as one value keep their
+/// bytes ([`Entry::area_len`], in dictionary order).
+pub const fn value_slots(objects: &[Object]) -> usize {
+    let mut acc = 0usize;
+    let mut rest = objects;
+    while let Some((obj, tail)) = rest.split_first() {
+        acc += obj.entries.len();
+        let mut es = obj.entries;
+        while let Some((e, t)) = es.split_first() {
+            acc += e.area_len().div_ceil(8);
+            es = t;
+        }
         rest = tail;
     }
     acc
@@ -86,8 +107,9 @@ pub const fn entry_bases<const N: usize>(objects: &[Object]) -> [u16; N] {
 #[macro_export]
 macro_rules! dictionary {
     ($vis:vis $name:ident, $cvis:vis $count:ident = $objects:expr, $enums:expr $(,)?) => {
-        /// Number of entries of the dictionary (the value storage length).
-        $cvis const $count: usize = $crate::od::dictionary::entry_count($objects);
+        /// Length of the dictionary's value storage (its entries and its
+        /// byte area).
+        $cvis const $count: usize = $crate::od::dictionary::value_slots($objects);
         /// The object dictionary.
         $vis const $name: $crate::od::Dictionary = {
             const __DICTIONARY_OBJECTS: &[$crate::od::Object] = $objects;
@@ -180,22 +202,16 @@ pub enum DescriptionError {
         /// The entry.
         sub: u8,
     },
-    /// A string entry is not read-only or does not fit the string store.
-    #[error("{index:#06x}:{sub}: strings must be read-only and at most 32 bytes")]
+    /// A writable string does not fit the store's string slots.
+    #[error("{index:#06x}:{sub}: a writable string must be one of the first 4 of at most 32 bytes")]
     StringEntry {
         /// The object.
         index: u16,
         /// The entry.
         sub: u8,
     },
-    /// More string entries than the store holds.
-    #[error("more than {max} string entries")]
-    TooManyStrings {
-        /// The store's capacity.
-        max: usize,
-    },
     /// More entries than flat positions can address.
-    #[error("more than 65535 entries")]
+    #[error("more than 65535 entries and value slots")]
     TooManyEntries,
     /// A PDO mapping entry maps an entry that does not exist, is not
     /// mappable in the PDO's direction, or has another bit length.
@@ -258,8 +274,7 @@ impl DescriptionError {
             Self::EmptyRange { .. } => "an entry's minimum is above its maximum",
             Self::GapShape { .. } => "a padding gap must be a read-only, unmapped BITn",
             Self::UnknownEnum { .. } => "an enumeration type is not listed in the dictionary",
-            Self::StringEntry { .. } => "strings must be read-only and at most 32 bytes",
-            Self::TooManyStrings { .. } => "more string entries than the store holds",
+            Self::StringEntry { .. } => "a writable string must fit a string slot",
             Self::TooManyEntries => "more than 65535 entries",
             Self::BadMapping { .. } => {
                 "a PDO maps an entry that is missing, not mappable that way or of another size"
@@ -277,17 +292,49 @@ impl DescriptionError {
     }
 }
 
-/// Natural bit size of a type (strings: 0, sized by their default).
+/// Natural bit size of a type (strings, octet strings and arrays: 0,
+/// sized by their entry).
 pub const fn natural_bits(t: &DataType) -> u16 {
     match t {
         DataType::Bool => 1,
-        DataType::Int8 | DataType::UInt8 => 8,
-        DataType::Int16 | DataType::UInt16 => 16,
-        DataType::Int32 | DataType::UInt32 => 32,
-        DataType::Int64 | DataType::UInt64 => 64,
+        DataType::Int8 | DataType::UInt8 | DataType::Byte | DataType::BitArr8 => 8,
+        DataType::Int16 | DataType::UInt16 | DataType::Word | DataType::BitArr16 => 16,
+        DataType::Int24 | DataType::UInt24 => 24,
+        DataType::Int32
+        | DataType::UInt32
+        | DataType::Dword
+        | DataType::BitArr32
+        | DataType::Real32 => 32,
+        DataType::Int40 | DataType::UInt40 => 40,
+        DataType::Int48 | DataType::UInt48 | DataType::TimeOfDay | DataType::TimeDifference => 48,
+        DataType::Int56 | DataType::UInt56 => 56,
+        DataType::Int64 | DataType::UInt64 | DataType::Real64 => 64,
+        DataType::Guid => 128,
         DataType::Bits(n) => *n as u16,
         DataType::Enum(e) => e.bit_len as u16,
-        DataType::VisibleString => 0,
+        DataType::VisibleString
+        | DataType::OctetString
+        | DataType::UnicodeString
+        | DataType::Array(_) => 0,
+    }
+}
+
+/// A `REAL`/`LREAL` value from the bits the store holds.
+pub const fn real_value(t: &DataType, raw: i64) -> f64 {
+    match t {
+        DataType::Real32 => f32::from_bits(raw as u32) as f64,
+        _ => f64::from_bits(raw as u64),
+    }
+}
+
+/// `a <= b` for values of `t` as the store holds them (floats compared as
+/// floats; a NaN bound constrains nothing).
+pub const fn value_le(t: &DataType, a: i64, b: i64) -> bool {
+    if t.is_real() {
+        let (x, y) = (real_value(t, a), real_value(t, b));
+        x.is_nan() || y.is_nan() || x <= y
+    } else {
+        a <= b
     }
 }
 
@@ -363,24 +410,45 @@ const fn check_entry(
     match e.default {
         DefaultValue::Str(s) => {
             let ok =
-                matches!(e.data_type, DataType::VisibleString) && e.bit_len as usize == 8 * s.len();
+                matches!(e.data_type, DataType::VisibleString) && 8 * s.len() <= e.bit_len as usize;
             if !ok {
                 return Err(DescriptionError::BitLength { index, sub });
             }
-            if !matches!(e.access, Access::Ro) || s.len() > MAX_STRING {
-                return Err(DescriptionError::StringEntry { index, sub });
+        }
+        DefaultValue::Bytes(b) => {
+            let area = e.data_type.is_bytes() && !matches!(e.data_type, DataType::VisibleString);
+            if !area || b.len() > e.area_len() {
+                return Err(DescriptionError::BitLength { index, sub });
+            }
+        }
+        DefaultValue::Int(v) if e.data_type.is_bytes() => {
+            // A byte entry whose default is all zeros.
+            if v != 0 || matches!(e.data_type, DataType::VisibleString) {
+                return Err(DescriptionError::BitLength { index, sub });
             }
         }
         DefaultValue::Int(v) => {
-            if matches!(e.data_type, DataType::VisibleString)
-                || e.bit_len != natural_bits(&e.data_type)
-            {
+            if e.bit_len != natural_bits(&e.data_type) {
                 return Err(DescriptionError::BitLength { index, sub });
             }
             if let (Some(lo), Some(hi)) = (e.min, e.max)
-                && lo > hi
+                && !value_le(&e.data_type, lo, hi)
             {
                 return Err(DescriptionError::EmptyRange { index, sub });
+            }
+            if e.data_type.is_real() {
+                let below = match e.min {
+                    Some(m) => !value_le(&e.data_type, m, v),
+                    None => false,
+                };
+                let above = match e.max {
+                    Some(m) => !value_le(&e.data_type, v, m),
+                    None => false,
+                };
+                if below || above {
+                    return Err(DescriptionError::DefaultOutOfRange { index, sub });
+                }
+                return Ok(());
             }
             let (lo, hi) = natural_range(&e.data_type, e.bit_len);
             let lo = match e.min {
@@ -402,13 +470,12 @@ const fn check_entry(
                 // Lists the master writes in PRE-OP: the PDO assignments
                 // and the configured module ident list (ETG.5001).
                 let list = matches!(index, 0x1C12 | 0x1C13 | 0xF030);
+                // A writable subindex 0 (a PDO assignment, a module list
+                // such as 0xF010 or 0xF030) is the number of entries in
+                // use, not the capacity.
                 let ok = matches!(e.data_type, DataType::UInt8)
-                    && v == highest as i64
-                    && (matches!(e.access, Access::Ro)
-                        || (list && matches!(e.access, Access::RwPreOp)));
-                // A list's subindex 0 is the number of entries in use,
-                // not the capacity.
-                let ok = ok || (list && v <= highest as i64);
+                    && (v == highest as i64
+                        || ((list || e.access.writable()) && v >= 0 && v <= highest as i64));
                 if !ok {
                     return Err(DescriptionError::SubIndexZero { index });
                 }
@@ -432,6 +499,7 @@ impl Dictionary {
             enums,
             entry_base,
             entry_count: entry_count(objects),
+            value_slots: value_slots(objects),
         }
     }
 
@@ -445,9 +513,32 @@ impl Dictionary {
         self.enums
     }
 
-    /// Number of entries (the value storage length).
+    /// Number of entries (flat positions).
     pub const fn entry_count(&self) -> usize {
         self.entry_count
+    }
+
+    /// Length of the value storage: the entries, then the byte area
+    /// ([`value_slots`]).
+    pub const fn value_slots(&self) -> usize {
+        self.value_slots
+    }
+
+    /// Where the byte-area entry at flat position `flat` keeps its bytes:
+    /// `(first slot, length in bytes)`; `None` for an entry without bytes
+    /// there.
+    pub fn area_of(&self, flat: usize) -> Option<(usize, usize)> {
+        let mut slot = self.entry_count;
+        for (f, _, e) in self.entries() {
+            if f == flat {
+                let area = !e.gap
+                    && e.data_type.is_bytes()
+                    && !matches!(e.data_type, DataType::VisibleString);
+                return area.then_some((slot, e.area_len()));
+            }
+            slot += e.area_len().div_ceil(8);
+        }
+        None
     }
 
     /// Checks the description for contradictions: order and shape of
@@ -504,16 +595,27 @@ impl Dictionary {
                 if let Err(err) = check_entry(index, o.code, highest, e, self.enums) {
                     return Err(err);
                 }
-                if matches!(e.default, DefaultValue::Str(_)) {
+                if let DefaultValue::Str(text) = e.default
+                    && text.len() <= MAX_STRING
+                {
+                    // Strings take the store's slots in order; a writable
+                    // one needs a slot.
+                    if e.access.writable() && strings >= MAX_STRINGS {
+                        return Err(DescriptionError::StringEntry { index, sub: e.sub });
+                    }
                     strings += 1;
+                } else if let DefaultValue::Str(_) = e.default
+                    && e.access.writable()
+                {
+                    return Err(DescriptionError::StringEntry { index, sub: e.sub });
                 }
                 es = t;
             }
             i += 1;
             objs = tail;
         }
-        if strings > MAX_STRINGS {
-            return Err(DescriptionError::TooManyStrings { max: MAX_STRINGS });
+        if self.value_slots() > u16::MAX as usize {
+            return Err(DescriptionError::TooManyEntries);
         }
         // The bases must be the prefix sums.
         let mut acc = 0usize;

@@ -1,7 +1,12 @@
 //! Live values of the object dictionary.
 //!
 //! One `i64` slot per entry of the device's [`Dictionary`], indexed by the
-//! entry's flat position, plus a few string slots. SDO access goes through
+//! entry's flat position; after them the *byte area*: the bytes of octet
+//! strings, `UNICODE_STRING`s, `GUID`s and arrays held as one value, 8 a
+//! slot, in dictionary order ([`Dictionary::value_slots`]); and a few
+//! string slots for visible strings (further or longer strings are served
+//! from their defaults and are read-only). `REAL`/`LREAL` values are their
+//! IEEE 754 bit patterns in the entry's slot. SDO access goes through
 //! [`ObjectStore::upload`] and [`ObjectStore::download`], which apply the
 //! description's rules (existence, access in the current state, length,
 //! range, enumeration members) and answer with the CoE abort code a master
@@ -14,7 +19,7 @@
 //! `&Od` / `&mut Od`; [`ObjectStore::od`] / [`ObjectStore::od_mut`] turn a
 //! sized store into one (the way `heapless`'s `VecView` works).
 
-use super::dictionary::Dictionary;
+use super::dictionary::{Dictionary, value_le};
 use super::types::{Access, DataType, DefaultValue, Entry};
 use crate::al::AlState;
 use crate::wire::coe::SdoAbortCode;
@@ -126,29 +131,62 @@ impl Od {
     /// Restores every entry to its default value.
     pub fn load_defaults(&mut self) {
         self.strings.clear();
-        let mut flat = 0usize;
-        for obj in self.dict.objects() {
-            for e in obj.entries {
-                match e.default {
-                    DefaultValue::Int(v) => {
-                        if let Some(slot) = self.values.get_mut(flat) {
-                            *slot = v;
-                        }
-                    }
-                    DefaultValue::Str(s) => {
-                        let mut text = heapless::String::new();
-                        for c in s.chars() {
-                            if text.push(c).is_err() {
-                                break;
-                            }
-                        }
-                        // Strings beyond the slots read as their default
-                        // (see `encode`) and cannot be written.
-                        let _ = self.strings.push((flat as u16, text));
-                    }
+        let dict = self.dict;
+        let mut area = dict.entry_count();
+        for (flat, _, e) in dict.entries() {
+            let slots = e.area_len().div_ceil(8);
+            match e.default {
+                DefaultValue::Int(v) if slots == 0 => self.set_value(flat, v),
+                DefaultValue::Int(_) => self.fill_area(area, slots, &[]),
+                DefaultValue::Bytes(b) => self.fill_area(area, slots, b),
+                DefaultValue::Str(s) if s.len() <= STRING_CAPACITY => {
+                    let mut text = heapless::String::new();
+                    // Fits: checked above.
+                    let _ = text.push_str(s);
+                    // Strings beyond the slots read as their default
+                    // (see `encode`) and cannot be written.
+                    let _ = self.strings.push((flat as u16, text));
                 }
-                flat += 1;
+                DefaultValue::Str(_) => {}
             }
+            area += slots;
+        }
+    }
+
+    /// Writes `bytes` (zeros after them) into `slots` slots of the byte
+    /// area from slot `first`.
+    fn fill_area(&mut self, first: usize, slots: usize, bytes: &[u8]) {
+        for k in 0..slots {
+            let mut chunk = [0u8; 8];
+            for (i, c) in chunk.iter_mut().enumerate() {
+                *c = bytes.get(k * 8 + i).copied().unwrap_or(0);
+            }
+            self.set_value(first + k, i64::from_le_bytes(chunk));
+        }
+    }
+
+    /// Copies the bytes of the byte-area entry at flat position `flat`
+    /// into `out`; returns how many (its length), `None` when the entry
+    /// keeps no bytes there or `out` is too short.
+    pub fn area_bytes(&self, flat: usize, out: &mut [u8]) -> Option<usize> {
+        let (first, len) = self.dict.area_of(flat)?;
+        let dst = out.get_mut(..len)?;
+        for (i, d) in dst.iter_mut().enumerate() {
+            let word = self.value(first + i / 8).to_le_bytes();
+            *d = word.get(i % 8).copied().unwrap_or(0);
+        }
+        Some(len)
+    }
+
+    /// Replaces the bytes of the byte-area entry at flat position `flat`
+    /// with `data` (its length exactly); returns whether it was stored.
+    pub fn set_area_bytes(&mut self, flat: usize, data: &[u8]) -> bool {
+        match self.dict.area_of(flat) {
+            Some((first, len)) if len == data.len() => {
+                self.fill_area(first, len.div_ceil(8), data);
+                true
+            }
+            _ => false,
         }
     }
 
@@ -220,12 +258,17 @@ impl Od {
         entry: &Entry,
         out: &mut [u8],
     ) -> Result<usize, SdoAbortCode> {
+        if entry.data_type.is_bytes() && entry.data_type != DataType::VisibleString {
+            return self
+                .area_bytes(flat, out)
+                .ok_or(SdoAbortCode::ObjectTooLong);
+        }
         if entry.data_type == DataType::VisibleString {
             // A string beyond the store's slots is served from its default
             // (read-only strings of a large dictionary need no slot).
             let fallback = match entry.default {
                 DefaultValue::Str(d) => d,
-                DefaultValue::Int(_) => "",
+                DefaultValue::Int(_) | DefaultValue::Bytes(_) => "",
             };
             let s = self.string(flat).unwrap_or(fallback);
             let dst = out.get_mut(..s.len()).ok_or(SdoAbortCode::ObjectTooLong)?;
@@ -259,7 +302,8 @@ impl Od {
             Access::RwPreOp if state != AlState::PreOp => return Err(SdoAbortCode::InvalidState),
             _ => {}
         }
-        if entry.data_type == DataType::VisibleString {
+        if entry.data_type.is_bytes() {
+            // Bytes are stored by `download`, not as a number.
             return Err(SdoAbortCode::UnsupportedAccess);
         }
         let n = byte_len(entry);
@@ -293,13 +337,14 @@ impl Od {
         if !entry.data_type.is_signed() && bits < 64 && unsigned >> bits != 0 {
             return Err(SdoAbortCode::ValueTooHigh);
         }
+        let t = &entry.data_type;
         if let Some(max) = entry.max
-            && value > max
+            && !value_le(t, value, max)
         {
             return Err(SdoAbortCode::ValueTooHigh);
         }
         if let Some(min) = entry.min
-            && value < min
+            && !value_le(t, min, value)
         {
             return Err(SdoAbortCode::ValueTooLow);
         }
@@ -316,6 +361,24 @@ impl Od {
         state: AlState,
     ) -> Result<i64, SdoAbortCode> {
         let (flat, entry) = self.lookup(index, sub)?;
+        if self.dict.area_of(flat).is_some() {
+            match entry.access {
+                Access::Ro => return Err(SdoAbortCode::ReadOnly),
+                Access::RwPreOp if state != AlState::PreOp => {
+                    return Err(SdoAbortCode::InvalidState);
+                }
+                _ => {}
+            }
+            let len = entry.area_len();
+            if data.len() > len {
+                return Err(SdoAbortCode::LengthTooHigh);
+            }
+            if data.len() < len {
+                return Err(SdoAbortCode::LengthTooLow);
+            }
+            self.set_area_bytes(flat, data);
+            return Ok(0);
+        }
         let value = Self::check(entry, data, state)?;
         self.set_value(flat, value);
         Ok(value)

@@ -4,12 +4,19 @@
 //! of EtherCAT frames. A device builds its one description from them
 //! (see [`super::dictionary`] and [`super::build`]).
 
-/// Longest string value an entry can hold (the value store's slot size).
+/// Longest visible string a string slot of the value store holds.
 pub const STRING_CAPACITY: usize = 32;
-/// Number of string entries a value store can hold.
+/// Number of string slots a value store has (longer or further strings are
+/// served from their defaults and are read-only).
 pub const STRING_SLOTS: usize = 4;
 
-/// CoE base data types used by the dictionary (ETG.1000.6 table 63 codes).
+/// CoE base data types used by the dictionary (ETG.1000.6 Table 64 codes).
+///
+/// Values up to 64 bits live in the store's `i64` slot of their entry
+/// (signed types sign-extended; `REAL` and `LREAL` as their IEEE 754 bit
+/// patterns, zero-extended). Strings, octet strings, `GUID` and arrays held
+/// as one value are *byte entries* ([`Entry::area_len`]); see
+/// `super::store` for where their bytes live.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DataType {
     /// BOOL, 1 bit (0x0001).
@@ -26,14 +33,61 @@ pub enum DataType {
     UInt16,
     /// UDINT / UNSIGNED32 (0x0007).
     UInt32,
+    /// REAL / REAL32 (0x0008): the IEEE 754 single's bits.
+    Real32,
     /// VISIBLE_STRING (0x0009).
     VisibleString,
+    /// OCTET_STRING (0x000A): bytes of the entry's length.
+    OctetString,
+    /// UNICODE_STRING (0x000B): UTF-16LE code units of the entry's length.
+    UnicodeString,
+    /// TIME_OF_DAY (0x000C): 48 bits (ms since midnight, days since 1984).
+    TimeOfDay,
+    /// TIME_DIFFERENCE (0x000D): 48 bits.
+    TimeDifference,
+    /// INT24 / INTEGER24 (0x0010).
+    Int24,
+    /// LREAL / REAL64 (0x0011): the IEEE 754 double's bits.
+    Real64,
+    /// INT40 / INTEGER40 (0x0012).
+    Int40,
+    /// INT48 / INTEGER48 (0x0013).
+    Int48,
+    /// INT56 / INTEGER56 (0x0014).
+    Int56,
     /// LINT / INTEGER64 (0x0015).
     Int64,
+    /// UINT24 / UNSIGNED24 (0x0016).
+    UInt24,
+    /// UINT40 / UNSIGNED40 (0x0018).
+    UInt40,
+    /// UINT48 / UNSIGNED48 (0x0019).
+    UInt48,
+    /// UINT56 / UNSIGNED56 (0x001A).
+    UInt56,
     /// ULINT / UNSIGNED64 (0x001B).
     UInt64,
+    /// GUID (0x001D): 128 bits, a byte entry.
+    Guid,
+    /// BYTE (0x001E): 8 bits without arithmetic meaning.
+    Byte,
+    /// WORD (0x001F): 16 bits.
+    Word,
+    /// DWORD (0x0020): 32 bits.
+    Dword,
+    /// BITARR8 (0x002D): 8 bits addressed one by one.
+    BitArr8,
+    /// BITARR16 (0x002E).
+    BitArr16,
+    /// BITARR32 (0x002F).
+    BitArr32,
     /// BITn padding / bit field of n bits (0x0030 + n - 1, n in 1..=8).
     Bits(u8),
+    /// An array of the base type with this code held as one value (an
+    /// ETG.2000 `ARRAY [0..n] OF T` that is the type of a variable or of a
+    /// record item, not an array object with subindices): a byte entry of
+    /// the entry's length. Reported with the element's code.
+    Array(u16),
     /// A device-specific enumeration (data type index 0x0800.., see [`EnumDesc`]).
     Enum(&'static EnumDesc),
 }
@@ -49,16 +103,38 @@ impl DataType {
             DataType::UInt8 => 0x0005,
             DataType::UInt16 => 0x0006,
             DataType::UInt32 => 0x0007,
+            DataType::Real32 => 0x0008,
             DataType::VisibleString => 0x0009,
+            DataType::OctetString => 0x000A,
+            DataType::UnicodeString => 0x000B,
+            DataType::TimeOfDay => 0x000C,
+            DataType::TimeDifference => 0x000D,
+            DataType::Int24 => 0x0010,
+            DataType::Real64 => 0x0011,
+            DataType::Int40 => 0x0012,
+            DataType::Int48 => 0x0013,
+            DataType::Int56 => 0x0014,
             DataType::Int64 => 0x0015,
+            DataType::UInt24 => 0x0016,
+            DataType::UInt40 => 0x0018,
+            DataType::UInt48 => 0x0019,
+            DataType::UInt56 => 0x001A,
             DataType::UInt64 => 0x001B,
+            DataType::Guid => 0x001D,
+            DataType::Byte => 0x001E,
+            DataType::Word => 0x001F,
+            DataType::Dword => 0x0020,
+            DataType::BitArr8 => 0x002D,
+            DataType::BitArr16 => 0x002E,
+            DataType::BitArr32 => 0x002F,
             DataType::Bits(n) => 0x002F + *n as u16,
+            DataType::Array(code) => *code,
             DataType::Enum(e) => e.index,
         }
     }
 
     /// The type of a base data type code the core serves (not an
-    /// enumeration), the inverse of [`DataType::code`].
+    /// enumeration, not an array), the inverse of [`DataType::code`].
     pub const fn from_code(code: u16) -> Option<DataType> {
         Some(match code {
             0x0001 => DataType::Bool,
@@ -68,9 +144,30 @@ impl DataType {
             0x0005 => DataType::UInt8,
             0x0006 => DataType::UInt16,
             0x0007 => DataType::UInt32,
+            0x0008 => DataType::Real32,
             0x0009 => DataType::VisibleString,
+            0x000A => DataType::OctetString,
+            0x000B => DataType::UnicodeString,
+            0x000C => DataType::TimeOfDay,
+            0x000D => DataType::TimeDifference,
+            0x0010 => DataType::Int24,
+            0x0011 => DataType::Real64,
+            0x0012 => DataType::Int40,
+            0x0013 => DataType::Int48,
+            0x0014 => DataType::Int56,
             0x0015 => DataType::Int64,
+            0x0016 => DataType::UInt24,
+            0x0018 => DataType::UInt40,
+            0x0019 => DataType::UInt48,
+            0x001A => DataType::UInt56,
             0x001B => DataType::UInt64,
+            0x001D => DataType::Guid,
+            0x001E => DataType::Byte,
+            0x001F => DataType::Word,
+            0x0020 => DataType::Dword,
+            0x002D => DataType::BitArr8,
+            0x002E => DataType::BitArr16,
+            0x002F => DataType::BitArr32,
             0x0030..=0x0037 => DataType::Bits((code - 0x002F) as u8),
             _ => return None,
         })
@@ -80,13 +177,40 @@ impl DataType {
     pub const fn is_signed(&self) -> bool {
         matches!(
             self,
-            DataType::Int8 | DataType::Int16 | DataType::Int32 | DataType::Int64
+            DataType::Int8
+                | DataType::Int16
+                | DataType::Int24
+                | DataType::Int32
+                | DataType::Int40
+                | DataType::Int48
+                | DataType::Int56
+                | DataType::Int64
+        )
+    }
+
+    /// Whether values are IEEE 754 floats (`REAL`, `LREAL`), held as their
+    /// bit patterns.
+    pub const fn is_real(&self) -> bool {
+        matches!(self, DataType::Real32 | DataType::Real64)
+    }
+
+    /// Whether values of this type are bytes rather than a number:
+    /// strings, octet strings, `GUID`, arrays held as one value.
+    pub const fn is_bytes(&self) -> bool {
+        matches!(
+            self,
+            DataType::VisibleString
+                | DataType::OctetString
+                | DataType::UnicodeString
+                | DataType::Guid
+                | DataType::Array(_)
         )
     }
 
     /// The ETG/IEC 61131 type name used in the ESI (`BOOL`, `UINT`, `BIT7`, ...).
     /// Enumerations return their own name (`DT0800EN03`); strings return
-    /// `STRING` (the ESI appends the length: `STRING(13)`).
+    /// `STRING` (the ESI appends the length: `STRING(13)`); an array its
+    /// element's name (the ESI writes `ARRAY [0..n] OF T`).
     pub const fn etg_name(&self) -> &'static str {
         match self {
             DataType::Bool => "BOOL",
@@ -96,9 +220,30 @@ impl DataType {
             DataType::UInt8 => "USINT",
             DataType::UInt16 => "UINT",
             DataType::UInt32 => "UDINT",
+            DataType::Real32 => "REAL",
             DataType::VisibleString => "STRING",
+            DataType::OctetString => "OCTET_STRING",
+            DataType::UnicodeString => "UNICODE_STRING",
+            DataType::TimeOfDay => "TIME_OF_DAY",
+            DataType::TimeDifference => "TIME_DIFFERENCE",
+            DataType::Int24 => "INT24",
+            DataType::Real64 => "LREAL",
+            DataType::Int40 => "INT40",
+            DataType::Int48 => "INT48",
+            DataType::Int56 => "INT56",
             DataType::Int64 => "LINT",
+            DataType::UInt24 => "UINT24",
+            DataType::UInt40 => "UINT40",
+            DataType::UInt48 => "UINT48",
+            DataType::UInt56 => "UINT56",
             DataType::UInt64 => "ULINT",
+            DataType::Guid => "GUID",
+            DataType::Byte => "BYTE",
+            DataType::Word => "WORD",
+            DataType::Dword => "DWORD",
+            DataType::BitArr8 => "BITARR8",
+            DataType::BitArr16 => "BITARR16",
+            DataType::BitArr32 => "BITARR32",
             DataType::Bits(1) => "BIT1",
             DataType::Bits(2) => "BIT2",
             DataType::Bits(3) => "BIT3",
@@ -107,9 +252,25 @@ impl DataType {
             DataType::Bits(6) => "BIT6",
             DataType::Bits(7) => "BIT7",
             DataType::Bits(_) => "BIT8",
+            DataType::Array(code) => match base_type_const(*code) {
+                Some(b) => b.name,
+                None => "BYTE",
+            },
             DataType::Enum(e) => e.name,
         }
     }
+}
+
+/// [`base_type`] in `const` context.
+const fn base_type_const(code: u16) -> Option<&'static BaseType> {
+    let mut rest = BASE_TYPES;
+    while let Some((t, tail)) = rest.split_first() {
+        if t.code == code {
+            return Some(t);
+        }
+        rest = tail;
+    }
+    None
 }
 
 /// What values of a base data type are.
@@ -293,6 +454,20 @@ pub enum PdoMapping {
     Rx,
     /// Mappable into a TxPDO (master inputs, 0x6000/0xA000 range).
     Tx,
+    /// Mappable into both (ETG.2000 `PdoMapping` `RT`/`TR`).
+    RxTx,
+}
+
+impl PdoMapping {
+    /// Whether an entry of this mappability may be mapped the way `dir`
+    /// (`Rx` or `Tx`) says.
+    pub const fn allows(self, dir: PdoMapping) -> bool {
+        matches!(
+            (self, dir),
+            (PdoMapping::Rx | PdoMapping::RxTx, PdoMapping::Rx)
+                | (PdoMapping::Tx | PdoMapping::RxTx, PdoMapping::Tx)
+        )
+    }
 }
 
 /// CoE object code (ETG.1000.6 table 62).
@@ -322,8 +497,11 @@ impl ObjectCode {
 pub enum DefaultValue {
     /// A number (integers, booleans as 0/1, enumerations by value).
     Int(i64),
-    /// A visible string.
+    /// A visible string (it may be shorter than the entry).
     Str(&'static str),
+    /// The bytes of an octet string, `GUID` or array entry (zeros after
+    /// them up to the entry's length).
+    Bytes(&'static [u8]),
 }
 
 /// One subindex of an object.
@@ -371,6 +549,22 @@ pub struct Object {
     pub entries: &'static [Entry],
 }
 
+impl Entry {
+    /// Bytes of the entry's value kept in the store's byte area: the
+    /// length of an octet string, `UNICODE_STRING`, `GUID` or an array held
+    /// as one value; 0 for numbers (their `i64` slot) and for visible
+    /// strings (string slots, see `super::store`).
+    pub const fn area_len(&self) -> usize {
+        if self.gap
+            || !self.data_type.is_bytes()
+            || matches!(self.data_type, DataType::VisibleString)
+        {
+            return 0;
+        }
+        (self.bit_len as usize).div_ceil(8)
+    }
+}
+
 impl Object {
     /// The entry with subindex `sub`, if present.
     pub fn entry(&self, sub: u8) -> Option<&'static Entry> {
@@ -398,9 +592,30 @@ mod tests {
             UInt8,
             UInt16,
             UInt32,
+            Real32,
             VisibleString,
+            OctetString,
+            UnicodeString,
+            TimeOfDay,
+            TimeDifference,
+            Int24,
+            Real64,
+            Int40,
+            Int48,
+            Int56,
             Int64,
+            UInt24,
+            UInt40,
+            UInt48,
+            UInt56,
             UInt64,
+            Guid,
+            Byte,
+            Word,
+            Dword,
+            BitArr8,
+            BitArr16,
+            BitArr32,
         ]
         .into_iter()
         .chain((1..=8).map(Bits))
@@ -413,5 +628,20 @@ mod tests {
         assert_eq!(base_type_named(" STRING(13) ").map(|t| t.code), Some(9));
         assert_eq!(base_type_named("BIT9"), None);
         assert_eq!(base_type(0x0017), None);
+        // Every code of the table is a type the core serves.
+        for b in BASE_TYPES {
+            assert_eq!(DataType::from_code(b.code).map(|t| t.code()), Some(b.code));
+        }
+        assert_eq!(Array(0x0006).code(), 0x0006);
+        assert_eq!(Array(0x0006).etg_name(), "UINT");
+        assert!(Array(0x001E).is_bytes() && OctetString.is_bytes() && !Real32.is_bytes());
+    }
+
+    #[test]
+    fn rt_mappable_entries_map_both_ways() {
+        assert!(PdoMapping::RxTx.allows(PdoMapping::Rx));
+        assert!(PdoMapping::RxTx.allows(PdoMapping::Tx));
+        assert!(!PdoMapping::Rx.allows(PdoMapping::Tx));
+        assert!(!PdoMapping::None.allows(PdoMapping::Rx));
     }
 }

@@ -56,8 +56,9 @@ pub use read::{
 pub const FIRST_CATEGORY_BYTE: usize = 0x80;
 
 /// Size of the SII EEPROM images this crate builds and the software ESC
-/// emulates, in bytes (16 Kbit, the size of the devices' EEPROMs).
-pub const SII_SIZE: usize = 2048;
+/// emulates, in bytes (64 Kbit: room for the images of vendors' devices
+/// with many PDOs; an image declares its own EEPROM size in word 0x3E).
+pub const SII_SIZE: usize = 8192;
 
 /// Word address of the first category header (ETG.2010 Table 2).
 pub const FIRST_CATEGORY_WORD: u16 = 0x40;

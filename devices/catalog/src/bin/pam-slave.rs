@@ -46,8 +46,8 @@ struct Cli {
     #[arg(long, conflicts_with_all = ["esi", "eni"])]
     line: Option<String>,
     /// Twins of a device of this ESI file (ETG.2000) instead of a catalog
-    /// device: --count of them. Devices with a mailbox are not supported
-    /// yet (an error says so).
+    /// device: --count of them. What the twin leaves out of the ESI is
+    /// printed as a warning naming the line.
     #[arg(long, value_name = "FILE", conflicts_with = "eni")]
     esi: Option<PathBuf>,
     /// With --esi: the device's type (order code) when the file has several.
@@ -57,6 +57,10 @@ struct Cli {
     /// highest of the type.
     #[arg(long, value_name = "R", requires = "esi")]
     revision: Option<String>,
+    /// With --esi: list the file's devices (type, revision, product code,
+    /// name; those that do not load with the reason) and exit.
+    #[arg(long, requires = "esi")]
+    list: bool,
     /// The line an ENI file (ETG.2100) describes, in its order: each slave
     /// from the catalog (by vendor ID and product code) or from an ESI file
     /// of --esi-dir.
@@ -117,6 +121,20 @@ struct Cli {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if cli.list
+        && let Some(esi) = &cli.esi
+    {
+        return match device_catalog::twins::list_esi(esi) {
+            Ok(lines) => {
+                println!("{}", lines.join("\n"));
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("pam-slave: {e}");
+                Exit::Input.into()
+            }
+        };
+    }
     let spec = match &cli.line {
         Some(l) => l.clone(),
         None => format!("{}*{}", cli.device, cli.count),
@@ -246,7 +264,7 @@ fn build_line(cli: &Cli, spec: &str) -> Result<Line, String> {
             .map(twins::parse_revision)
             .transpose()
             .map_err(|e| e.to_string())?;
-        let (label, slaves) = twins::from_esi(
+        let (label, slaves, warnings) = twins::from_esi(
             esi,
             cli.type_name.as_deref(),
             revision,
@@ -255,8 +273,14 @@ fn build_line(cli: &Cli, spec: &str) -> Result<Line, String> {
         )
         .map_err(|e| e.to_string())?;
         let what = format!("{label} from {}", esi.display());
+        let mut report = vec![format!("{} x {what}", slaves.len())];
+        report.extend(
+            warnings
+                .iter()
+                .map(|w| format!("warning: {}: {w}", esi.display())),
+        );
         return Ok(Line {
-            report: vec![format!("{} x {what}", slaves.len())],
+            report,
             summary: format!("{what} x{}", slaves.len()),
             slaves,
         });
