@@ -338,8 +338,7 @@ impl<A: Axis + Default> Default for Drive<A> {
 impl<A: Axis> Drive<A> {
     /// A drive on `axis`, Not ready to switch on, in CSP.
     pub fn new(axis: A) -> Self {
-        let demand_m = axis.motion().position_m;
-        Drive {
+        let mut drive = Drive {
             axis,
             state: PowerState::NotReadyToSwitchOn,
             mode: Mode::CyclicPosition,
@@ -347,17 +346,41 @@ impl<A: Axis> Drive<A> {
             last_ns: None,
             error_code: 0,
             ramp: None,
-            demand_m,
+            demand_m: 0,
             velocity_demand: 0,
             segment: None,
-            pp_target_m: demand_m,
+            pp_target_m: 0,
             pp_ack: false,
             homing_attained: false,
             homing_error: false,
             following_since: None,
             following_fault: false,
             warning: false,
-        }
+        };
+        drive.reset();
+        drive
+    }
+
+    /// Back to the power-on state (a power cycle of the drive's logic),
+    /// keeping the axis: Not ready to switch on, no fault, CSP.
+    pub fn reset(&mut self) {
+        let demand_m = self.axis.motion().position_m;
+        self.state = PowerState::NotReadyToSwitchOn;
+        self.mode = Mode::CyclicPosition;
+        self.last_controlword = 0;
+        self.last_ns = None;
+        self.error_code = 0;
+        self.ramp = None;
+        self.demand_m = demand_m;
+        self.velocity_demand = 0;
+        self.segment = None;
+        self.pp_target_m = demand_m;
+        self.pp_ack = false;
+        self.homing_attained = false;
+        self.homing_error = false;
+        self.following_since = None;
+        self.following_fault = false;
+        self.warning = false;
     }
 
     /// The PDS state.
@@ -642,9 +665,17 @@ impl<A: Axis> Drive<A> {
                 let Some(r) = &mut self.ramp else {
                     return (Demand::Off, false);
                 };
-                let v = towards(i128::from(r.velocity), 0, delta_v(r.deceleration, dt));
-                // Mean velocity over the step.
-                let dx = distance(i128::from(r.velocity).saturating_add(v), dt) / 2;
+                let v0 = i128::from(r.velocity);
+                let dv = delta_v(r.deceleration, dt);
+                let v = towards(v0, 0, dv);
+                let dx = if v == 0 && dv > 0 {
+                    // Stops within the step: v0² / (2 dec).
+                    v0.saturating_mul(v0.abs()).saturating_mul(i128::from(MILLI))
+                        / (2 * i128::from(r.deceleration.max(1)))
+                } else {
+                    // Mean velocity over the step.
+                    distance(v0.saturating_add(v), dt) / 2
+                };
                 r.velocity = sat(v);
                 self.demand_m = sat(i128::from(self.demand_m).saturating_add(dx));
                 (
@@ -684,8 +715,15 @@ impl<A: Axis> Drive<A> {
                 let target_m = unwrap_near(sp.target_position, self.demand_m);
                 let new = self.segment.is_none_or(|s| s.to_m != target_m);
                 if new {
+                    // A set point delivered at SYNC0: the previous one is
+                    // reached by now (its segment has run its cycle), or
+                    // the new one starts from where the demand is.
+                    let from_m = match self.segment {
+                        Some(s) if now_ns.saturating_sub(s.t0_ns) >= s.len_ns => s.to_m,
+                        _ => self.demand_m,
+                    };
                     self.segment = Some(Segment {
-                        from_m: self.demand_m,
+                        from_m,
                         to_m: target_m,
                         t0_ns: now_ns,
                         len_ns: link.dc_cycle_ns.map_or(0, u64::from),

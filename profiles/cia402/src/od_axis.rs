@@ -129,6 +129,16 @@ impl Cia402Axis<AxisModel> {
 }
 
 impl<A: Axis> Cia402Axis<A> {
+    /// Axis 0 on a dictionary that holds [`crate::objects::OBJECTS`] (a
+    /// device built on the profile; nothing to check, missing objects
+    /// would only be skipped).
+    pub fn axis0(axis: A) -> Self {
+        Cia402Axis {
+            drive: Drive::new(axis),
+            offset: 0,
+        }
+    }
+
     /// Axis `n` (0..=7, objects at 0x6000 + n × 0x800) of `dict`, moving
     /// `axis`.
     pub fn with_axis(dict: &Dictionary, n: u8, axis: A) -> Result<Self, AxisError> {
@@ -326,6 +336,11 @@ impl<A: Axis> Cia402Axis<A> {
             t.emergency(code, [0; 5]);
         }
         report
+    }
+
+    /// A power cycle of the drive's logic (see [`Drive::reset`]).
+    pub fn reset(&mut self) {
+        self.drive.reset();
     }
 
     /// The firmware stalled and the ESC's PDI watchdog cut the power

@@ -167,6 +167,21 @@ fn in_dc_mode_csp_set_points_are_interpolated_over_the_cycle() {
 }
 
 #[test]
+fn in_dc_mode_a_set_point_every_cycle_is_reached_at_the_next_sync0() {
+    let mut b = Bench::new();
+    b.link.dc_cycle_ns = Some(MS as u32);
+    b.enable(Mode::CyclicPosition);
+    // One tick per cycle, at the SYNC0 that delivers the next set point:
+    // the demand is the previous set point.
+    for k in 1..=50 {
+        b.sp.target_position = k * 100;
+        let r = b.run(1, MS);
+        assert_eq!(r.inputs.position_demand, (k - 1) * 100, "cycle {k}");
+    }
+    assert!((99..=101).contains(&b.last.inputs.following_error));
+}
+
+#[test]
 fn a_following_error_beyond_the_window_for_the_timeout_faults_with_0x8611_once() {
     let mut b = Bench::new();
     b.enable(Mode::CyclicPosition);
