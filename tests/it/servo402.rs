@@ -170,13 +170,37 @@ fn ethercrab_enables_servo402_in_csp_on_sync0_and_the_position_follows_a_target_
         // The state machine to Operation enabled, the target at the
         // actual position first.
         let start = dc_cycle(&bus, &group, out).await;
-        assert_eq!(start.state(), Some(PowerState::SwitchOnDisabled), "{start:?}");
+        assert_eq!(
+            start.state(),
+            Some(PowerState::SwitchOnDisabled),
+            "{start:?}"
+        );
         assert_eq!(start.mode_display, 8);
         out.target_position = start.position;
-        dc_command(&bus, &group, &mut out, control::SHUTDOWN, PowerState::ReadyToSwitchOn).await;
-        dc_command(&bus, &group, &mut out, control::SWITCH_ON, PowerState::SwitchedOn).await;
-        dc_command(&bus, &group, &mut out, control::ENABLE_OPERATION, PowerState::OperationEnabled)
-            .await;
+        dc_command(
+            &bus,
+            &group,
+            &mut out,
+            control::SHUTDOWN,
+            PowerState::ReadyToSwitchOn,
+        )
+        .await;
+        dc_command(
+            &bus,
+            &group,
+            &mut out,
+            control::SWITCH_ON,
+            PowerState::SwitchedOn,
+        )
+        .await;
+        dc_command(
+            &bus,
+            &group,
+            &mut out,
+            control::ENABLE_OPERATION,
+            PowerState::OperationEnabled,
+        )
+        .await;
         // A ramp of 100 inc per 1 ms cycle: 100 000 inc/s.
         let speed = 100;
         let mut worst = 0;
@@ -184,7 +208,11 @@ fn ethercrab_enables_servo402_in_csp_on_sync0_and_the_position_follows_a_target_
         for k in 1..=1000 {
             out.target_position = start.position + k * speed;
             last = dc_cycle(&bus, &group, out).await;
-            assert_eq!(last.state(), Some(PowerState::OperationEnabled), "cycle {k}: {last:?}");
+            assert_eq!(
+                last.state(),
+                Some(PowerState::OperationEnabled),
+                "cycle {k}: {last:?}"
+            );
             assert_ne!(last.statusword & 0x1000, 0, "CSP: target position used");
             worst = worst.max(last.following_error.abs());
         }
@@ -199,9 +227,18 @@ fn ethercrab_enables_servo402_in_csp_on_sync0_and_the_position_follows_a_target_
         // reached at the SYNC0 after the one that delivered it (the drive
         // interpolates over the cycle), and the frame's inputs being the
         // previous pass's.
-        assert!(worst <= speed + speed / 10, "following error up to {worst} inc");
-        assert!(lag > 0 && lag <= 3 * speed + speed / 10, "{lag} inc behind the target");
-        assert!((last.velocity - speed * 1000).abs() <= speed * 10, "{last:?}");
+        assert!(
+            worst <= speed + speed / 10,
+            "following error up to {worst} inc"
+        );
+        assert!(
+            lag > 0 && lag <= 3 * speed + speed / 10,
+            "{lag} inc behind the target"
+        );
+        assert!(
+            (last.velocity - speed * 1000).abs() <= speed * 10,
+            "{last:?}"
+        );
         assert_eq!(last.error_code, 0);
         let board = {
             let chain = lock(&bus.chain);
@@ -283,7 +320,11 @@ fn a_quick_stop_brakes_on_the_quick_stop_ramp_and_then_disables() {
         let mut braking = 0;
         for _ in 0..100 {
             i = cycle(&bus, &group, out).await;
-            assert!(i.velocity <= last_v + 10, "braking only: {} after {last_v}", i.velocity);
+            assert!(
+                i.velocity <= last_v + 10,
+                "braking only: {} after {last_v}",
+                i.velocity
+            );
             last_v = i.velocity;
             match i.state() {
                 // The inputs of a frame are the previous pass's.
@@ -295,7 +336,10 @@ fn a_quick_stop_brakes_on_the_quick_stop_ramp_and_then_disables() {
         }
         // 100 000 inc/s at 0x6085 = 5e6 inc/s²: 20 ms, then the loops settle.
         assert_eq!(i.state(), Some(PowerState::SwitchOnDisabled), "{i:?}");
-        assert!((15..=40).contains(&braking), "{braking} cycles in Quick stop active");
+        assert!(
+            (15..=40).contains(&braking),
+            "{braking} cycles in Quick stop active"
+        );
         assert_eq!(i.error_code, 0, "a quick stop is no fault");
     });
 }
@@ -327,7 +371,10 @@ fn a_following_error_faults_with_0x8611_and_its_emergency_and_a_fault_reset_reco
         assert_eq!(i.state(), Some(PowerState::Fault), "{i:?}");
         // The Emergency: error code 0x8611, error register with the
         // generic and profile bits.
-        let station = group.subdevice(md, 0).expect("servo402").configured_address();
+        let station = group
+            .subdevice(md, 0)
+            .expect("servo402")
+            .configured_address();
         let layout = servo402_example::DEVICE.layout();
         let mut client = MailboxClient::new(md, station, MailboxGeometry::of(&layout));
         let msg = client.receive().await.expect("the Emergency");
@@ -339,12 +386,32 @@ fn a_following_error_faults_with_0x8611_and_its_emergency_and_a_fault_reset_reco
         // The fault reset: the rising edge of bit 7, then enable again.
         out.target_position = i.position;
         command(&bus, &group, &mut out, 0, PowerState::Fault).await;
-        command(&bus, &group, &mut out, control::FAULT_RESET, PowerState::SwitchOnDisabled).await;
+        command(
+            &bus,
+            &group,
+            &mut out,
+            control::FAULT_RESET,
+            PowerState::SwitchOnDisabled,
+        )
+        .await;
         let i = cycle(&bus, &group, out).await;
         assert_eq!(i.error_code, 0);
-        command(&bus, &group, &mut out, control::SHUTDOWN, PowerState::ReadyToSwitchOn).await;
-        command(&bus, &group, &mut out, control::ENABLE_OPERATION, PowerState::OperationEnabled)
-            .await;
+        command(
+            &bus,
+            &group,
+            &mut out,
+            control::SHUTDOWN,
+            PowerState::ReadyToSwitchOn,
+        )
+        .await;
+        command(
+            &bus,
+            &group,
+            &mut out,
+            control::ENABLE_OPERATION,
+            PowerState::OperationEnabled,
+        )
+        .await;
     });
 }
 
@@ -369,12 +436,15 @@ fn leaving_op_in_operation_enabled_brakes_the_axis_and_ends_in_fault() {
         assert_eq!(s.al_status().state, AlState::SafeOp);
         let od = s.od();
         assert_eq!(
-            od.get(0x6041, 0).and_then(|w| PowerState::from_statusword(w as u16)),
+            od.get(0x6041, 0)
+                .and_then(|w| PowerState::from_statusword(w as u16)),
             Some(PowerState::Fault)
         );
         assert_eq!(od.get(0x603F, 0), Some(0x8100));
         assert_eq!(od.get(0x606C, 0), Some(0), "braked to rest");
-        let servo = chain.slave::<servo402_example::Servo402>(0).expect("a servo402");
+        let servo = chain
+            .slave::<servo402_example::Servo402>(0)
+            .expect("a servo402");
         assert!(!servo.slave().app().board().stage.enabled);
     });
 }

@@ -108,12 +108,20 @@ impl<A: Application> Master<A> {
 
     pub fn write(&mut self, ado: u16, data: &[u8]) {
         let mut d = data.to_vec();
-        assert_eq!(self.transfer(Command::Apwr, ado, &mut d), 1, "APWR {ado:#06x}");
+        assert_eq!(
+            self.transfer(Command::Apwr, ado, &mut d),
+            1,
+            "APWR {ado:#06x}"
+        );
     }
 
     pub fn read(&mut self, ado: u16, len: usize) -> Vec<u8> {
         let mut d = vec![0u8; len];
-        assert_eq!(self.transfer(Command::Aprd, ado, &mut d), 1, "APRD {ado:#06x}");
+        assert_eq!(
+            self.transfer(Command::Aprd, ado, &mut d),
+            1,
+            "APRD {ado:#06x}"
+        );
         d
     }
 
@@ -218,7 +226,11 @@ pub(crate) fn enable<A: Application>(m: &mut Master<A>, mode: i8) -> In {
         target_position: pos,
         ..Out::default()
     };
-    for cw in [control::SHUTDOWN, control::SWITCH_ON, control::ENABLE_OPERATION] {
+    for cw in [
+        control::SHUTDOWN,
+        control::SWITCH_ON,
+        control::ENABLE_OPERATION,
+    ] {
         out.controlword = cw;
         m.cycle(out);
     }
@@ -235,8 +247,14 @@ fn the_description_is_valid() {
 
 #[test]
 fn the_process_image_is_the_13_and_19_bytes_of_the_fixed_mappings() {
-    assert_eq!(usize::from(DEVICE.default_image_len(Direction::Outputs)), RX_PDO_BYTES);
-    assert_eq!(usize::from(DEVICE.default_image_len(Direction::Inputs)), TX_PDO_BYTES);
+    assert_eq!(
+        usize::from(DEVICE.default_image_len(Direction::Outputs)),
+        RX_PDO_BYTES
+    );
+    assert_eq!(
+        usize::from(DEVICE.default_image_len(Direction::Inputs)),
+        TX_PDO_BYTES
+    );
 }
 
 #[test]
@@ -245,7 +263,10 @@ fn the_sii_image_carries_identity_names_and_mailboxes() {
     let sii = SiiReader::new(&image).unwrap();
     assert!(sii.crc_ok());
     let id = sii.identity();
-    assert_eq!((id.vendor_id, id.product_code, id.revision), (0xABE, 0x402, 1));
+    assert_eq!(
+        (id.vendor_id, id.product_code, id.revision),
+        (0xABE, 0x402, 1)
+    );
     assert_eq!(sii.strings().unwrap().get(1), Some("SERVO402"));
 }
 
@@ -272,7 +293,10 @@ fn a_master_enables_csp_in_op_and_the_position_follows_a_ramp() {
     assert_eq!(last.state(), Some(PowerState::OperationEnabled));
     // The lag of the position loop: v x tau = 50 inc.
     assert!(worst <= 51, "following error up to {worst}");
-    assert!((out.target_position - last.position - 50).abs() <= 1, "{last:?}");
+    assert!(
+        (out.target_position - last.position - 50).abs() <= 1,
+        "{last:?}"
+    );
     assert_eq!(last.error_code, 0);
 }
 
@@ -282,8 +306,15 @@ fn an_sdo_written_controlword_never_enables_the_power_stage() {
     m.configure();
     for state in [AlState::PreOp, AlState::SafeOp] {
         m.request(state);
-        for cw in [control::SHUTDOWN, control::SWITCH_ON, control::ENABLE_OPERATION] {
-            assert_eq!(m.sdo(index::CONTROLWORD, 0, i64::from(cw)), Ok(Write::Store));
+        for cw in [
+            control::SHUTDOWN,
+            control::SWITCH_ON,
+            control::ENABLE_OPERATION,
+        ] {
+            assert_eq!(
+                m.sdo(index::CONTROLWORD, 0, i64::from(cw)),
+                Ok(Write::Store)
+            );
             m.poll_ns(MS);
         }
         assert_eq!(m.drive_state(), PowerState::SwitchOnDisabled, "{state:?}");
@@ -345,7 +376,11 @@ fn with_the_sm_watchdog_disarmed_the_drive_cannot_be_enabled() {
     m.request(AlState::Op);
     assert_eq!(m.status().state, AlState::Op);
     let mut out = Out::default();
-    for cw in [control::SHUTDOWN, control::SWITCH_ON, control::ENABLE_OPERATION] {
+    for cw in [
+        control::SHUTDOWN,
+        control::SWITCH_ON,
+        control::ENABLE_OPERATION,
+    ] {
         out.controlword = cw;
         let i = m.cycle(out);
         assert_eq!(i.state(), Some(PowerState::SwitchOnDisabled));
@@ -382,7 +417,10 @@ fn a_board_fault_faults_the_drive_and_holds_the_fault_reset_until_it_clears() {
     };
     let i = m.cycle(out);
     assert_eq!(i.error_code, 0x2310);
-    assert_eq!(m.slave.slave().od().get(description::POWER_STAGE_FAULT, 0), Some(0x2310));
+    assert_eq!(
+        m.slave.slave().od().get(description::POWER_STAGE_FAULT, 0),
+        Some(0x2310)
+    );
     for _ in 0..50 {
         m.cycle(out);
     }
@@ -400,29 +438,51 @@ fn a_board_fault_faults_the_drive_and_holds_the_fault_reset_until_it_clears() {
 #[test]
 fn safety_parameters_are_refused_in_operation_enabled_and_accepted_when_disabled() {
     let mut m = Master::new();
-    assert_eq!(m.sdo(index::QUICK_STOP_DECELERATION, 0, 1_000_000), Ok(Write::Store));
+    assert_eq!(
+        m.sdo(index::QUICK_STOP_DECELERATION, 0, 1_000_000),
+        Ok(Write::Store)
+    );
     m.bring_to_op(Out::default());
     enable(&mut m, 8);
     assert_eq!(
         m.sdo(index::QUICK_STOP_DECELERATION, 0, 1),
         Err(SdoAbortCode::InvalidState)
     );
-    assert_eq!(m.slave.slave().od().get(index::QUICK_STOP_DECELERATION, 0), Some(1_000_000));
+    assert_eq!(
+        m.slave.slave().od().get(index::QUICK_STOP_DECELERATION, 0),
+        Some(1_000_000)
+    );
     assert_eq!(m.sdo(index::PROFILE_VELOCITY, 0, 5), Ok(Write::Store));
-    assert_eq!(m.sdo(index::MODES_OF_OPERATION, 0, 2), Err(SdoAbortCode::ValueRange));
+    assert_eq!(
+        m.sdo(index::MODES_OF_OPERATION, 0, 2),
+        Err(SdoAbortCode::ValueRange)
+    );
 }
 
 #[test]
 fn save_stores_the_profile_parameters_for_the_next_power_on() {
     let mut m = Master::new();
-    assert_eq!(m.sdo(index::FOLLOWING_ERROR_WINDOW, 0, 1234), Ok(Write::Store));
-    assert_eq!(m.sdo(description::STORE_PARAMETERS, 1, 1), Err(SdoAbortCode::TransferFailed));
     assert_eq!(
-        m.sdo(description::STORE_PARAMETERS, 1, description::SAVE_SIGNATURE),
+        m.sdo(index::FOLLOWING_ERROR_WINDOW, 0, 1234),
+        Ok(Write::Store)
+    );
+    assert_eq!(
+        m.sdo(description::STORE_PARAMETERS, 1, 1),
+        Err(SdoAbortCode::TransferFailed)
+    );
+    assert_eq!(
+        m.sdo(
+            description::STORE_PARAMETERS,
+            1,
+            description::SAVE_SIGNATURE
+        ),
         Ok(Write::Done)
     );
     m.slave.power_cycle();
-    assert_eq!(m.slave.slave().od().get(index::FOLLOWING_ERROR_WINDOW, 0), Some(1234));
+    assert_eq!(
+        m.slave.slave().od().get(index::FOLLOWING_ERROR_WINDOW, 0),
+        Some(1234)
+    );
     assert_eq!(m.drive_state(), PowerState::NotReadyToSwitchOn);
     m.poll_ns(MS);
     assert_eq!(m.drive_state(), PowerState::SwitchOnDisabled);

@@ -670,7 +670,8 @@ impl<A: Axis> Drive<A> {
                 let v = towards(v0, 0, dv);
                 let dx = if v == 0 && dv > 0 {
                     // Stops within the step: v0² / (2 dec).
-                    v0.saturating_mul(v0.abs()).saturating_mul(i128::from(MILLI))
+                    v0.saturating_mul(v0.abs())
+                        .saturating_mul(i128::from(MILLI))
                         / (2 * i128::from(r.deceleration.max(1)))
                 } else {
                     // Mean velocity over the step.

@@ -283,4 +283,152 @@ mod tests {
         o.now_ns = 1_100_000_001;
         assert!(matches!(c.check(&o), Err(Violation::StopTooLong { .. })));
     }
+
+    /// The rules against the drive itself (the device-level property test is
+    /// servo402's `tests/invariants.rs`, with AL states and frames).
+    mod properties {
+        use super::*;
+        use crate::drive::{Drive, Link, Parameters, Report, Setpoints};
+        use crate::state::control;
+        use proptest::prelude::*;
+
+        const MS: u64 = 1_000_000;
+
+        struct Bench {
+            drive: Drive,
+            p: Parameters,
+            sp: Setpoints,
+            now: u64,
+            link: Link,
+            fault: Option<u16>,
+            last: Report,
+        }
+
+        impl Bench {
+            fn run(&mut self, n: usize, dt: u64) {
+                for _ in 0..n {
+                    self.now += dt;
+                    self.last = self
+                        .drive
+                        .step(&self.sp, self.link, self.fault, &self.p, self.now);
+                }
+            }
+        }
+
+        #[derive(Debug, Clone)]
+        enum Step {
+            Cycle {
+                cw: u16,
+                mode: i8,
+                position: i32,
+                velocity: i32,
+                torque: i16,
+                dt: u64,
+            },
+            Link(bool, bool),
+            Fault(Option<u16>),
+            Options(i16, i16, i16),
+            Cut,
+        }
+
+        fn step() -> impl Strategy<Value = Step> {
+            let cw = prop_oneof![
+                Just(0u16),
+                Just(control::SHUTDOWN),
+                Just(control::SWITCH_ON),
+                Just(control::ENABLE_OPERATION),
+                Just(control::QUICK_STOP),
+                Just(control::FAULT_RESET),
+                Just(control::ENABLE_OPERATION | control::NEW_SET_POINT),
+                Just(control::ENABLE_OPERATION | control::HALT),
+                any::<u16>(),
+            ];
+            let mode = prop_oneof![
+                Just(1i8),
+                Just(3),
+                Just(6),
+                Just(8),
+                Just(9),
+                Just(10),
+                any::<i8>()
+            ];
+            prop_oneof![
+                8 => (cw, mode, any::<i32>(), any::<i32>(), any::<i16>(), 0u64..20_000_000)
+                    .prop_map(|(cw, mode, position, velocity, torque, dt)| Step::Cycle {
+                        cw, mode, position: position >> (position as u32 % 24), velocity: velocity >> 8,
+                        torque, dt
+                    }),
+                1 => (any::<bool>(), any::<bool>()).prop_map(|(a, b)| Step::Link(a, b)),
+                1 => prop::option::of(any::<u16>()).prop_map(Step::Fault),
+                1 => (0i16..=3, -1i16..=9, -1i16..=5).prop_map(|(a, q, f)| Step::Options(a, q, f)),
+                1 => Just(Step::Cut),
+            ]
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(64))]
+            /// Any controlword, mode, set point, time step, link and fault
+            /// sequence: the drive never panics and keeps S1-S5 at every step.
+            #[test]
+            fn random_sequences_keep_the_safety_rules(steps in prop::collection::vec(step(), 1..200)) {
+                let mut b = Bench {
+                    drive: Drive::default(),
+                    p: Parameters::DEFAULT,
+                    sp: Setpoints::default(),
+                    now: 0,
+                    link: Link { outputs_valid: true, watchdog_armed: true, dc_cycle_ns: None },
+                    fault: None,
+                    last: Report::default(),
+                };
+                let mut checker = Checker::new(1_000_000);
+                for s in steps {
+                    match s {
+                        Step::Cycle { cw, mode, position, velocity, torque, dt } => {
+                            b.sp = Setpoints {
+                                controlword: cw,
+                                mode,
+                                target_position: position,
+                                target_velocity: velocity,
+                                target_torque: torque,
+                            };
+                            b.run(1, dt);
+                        }
+                        Step::Link(v, w) => {
+                            b.link = Link { outputs_valid: v, watchdog_armed: w, dc_cycle_ns: None };
+                            b.run(1, MS);
+                        }
+                        Step::Fault(f) => {
+                            b.fault = f.filter(|&c| c != 0);
+                            b.run(1, MS);
+                        }
+                        Step::Options(a, q, f) => {
+                            // Only while the power stage is off (S4).
+                            if !b.drive.power_stage_enabled() {
+                                b.p.abort_connection_option = a.max(1);
+                                b.p.quick_stop_option = q;
+                                b.p.fault_reaction_option = f;
+                            }
+                            b.run(1, MS);
+                        }
+                        Step::Cut => {
+                            b.drive.power_cut();
+                            b.run(1, MS);
+                        }
+                    }
+                    let r = b.last;
+                    let o = Observation {
+                        now_ns: b.now,
+                        op: true,
+                        outputs_valid: b.link.outputs_valid,
+                        watchdog_armed: b.link.watchdog_armed,
+                        statusword: r.inputs.statusword,
+                        error_code: r.inputs.error_code,
+                        velocity: i64::from(r.inputs.velocity),
+                        power_stage: r.power_stage,
+                    };
+                    prop_assert_eq!(checker.check(&o), Ok(()), "{:?} after {:?}", b.drive.state(), s);
+                }
+            }
+        }
+    }
 }

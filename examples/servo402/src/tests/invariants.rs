@@ -153,7 +153,16 @@ fn out() -> impl Strategy<Value = Out> {
         Just(control::ENABLE_OPERATION | control::HALT),
         any::<u16>(),
     ];
-    let mode = prop_oneof![Just(0i8), Just(1), Just(3), Just(6), Just(8), Just(9), Just(10), any::<i8>()];
+    let mode = prop_oneof![
+        Just(0i8),
+        Just(1),
+        Just(3),
+        Just(6),
+        Just(8),
+        Just(9),
+        Just(10),
+        any::<i8>()
+    ];
     (cw, mode, any::<i32>(), any::<i32>(), any::<i16>(), 0u8..24).prop_map(
         |(controlword, mode, p, v, t, shift)| Out {
             controlword,
@@ -246,8 +255,13 @@ impl<A: WithBoard> Harness<A> {
             Step::Enable(mode) => {
                 let mut out = Out {
                     mode,
-                    target_position: self.m.slave.slave().od().get(index::POSITION_ACTUAL, 0).unwrap_or(0)
-                        as i32,
+                    target_position: self
+                        .m
+                        .slave
+                        .slave()
+                        .od()
+                        .get(index::POSITION_ACTUAL, 0)
+                        .unwrap_or(0) as i32,
                     ..Out::default()
                 };
                 for cw in [
@@ -293,7 +307,12 @@ impl<A: WithBoard> Harness<A> {
                 self.m.poll_ns(MS);
             }
             Step::Fault(f) => {
-                self.m.slave.slave_mut().app_mut().sim_board_mut().fault_code = f;
+                self.m
+                    .slave
+                    .slave_mut()
+                    .app_mut()
+                    .sim_board_mut()
+                    .fault_code = f;
                 self.m.poll_ns(MS);
             }
             Step::Stall => {
@@ -381,10 +400,23 @@ fn a_sequence_through_every_reaction_keeps_the_rules() {
         Step::Ramp(100, 100),
         Step::Idle(150), // the SM watchdog ends OP: fault reaction
         Step::Request(AlState::Op),
-        Step::Cycle(Out { controlword: control::FAULT_RESET, ..Out::default() }, 1),
+        Step::Cycle(
+            Out {
+                controlword: control::FAULT_RESET,
+                ..Out::default()
+            },
+            1,
+        ),
         Step::Enable(9),
         Step::Ramp(50, 500),
-        Step::Cycle(Out { controlword: control::QUICK_STOP, mode: 9, ..Out::default() }, 1),
+        Step::Cycle(
+            Out {
+                controlword: control::QUICK_STOP,
+                mode: 9,
+                ..Out::default()
+            },
+            1,
+        ),
         Step::Ramp(100, 0),
         Step::Enable(9),
         Step::Ramp(50, 500),
@@ -438,7 +470,10 @@ fn the_checker_catches_a_drive_that_ignores_the_lost_connection() {
         Step::Idle(150),
     ]);
     assert!(
-        matches!(caught, Err((_, _, Violation::OperationWithoutMaster { .. }))),
+        matches!(
+            caught,
+            Err((_, _, Violation::OperationWithoutMaster { .. }))
+        ),
         "{caught:?}"
     );
 }
