@@ -448,3 +448,74 @@ fn leaving_op_in_operation_enabled_brakes_the_axis_and_ends_in_fault() {
         assert!(!servo.slave().app().board().stage.enabled);
     });
 }
+
+/// The twin hook (issue 28 (a)): what a twin of a vendor's CiA 402 drive
+/// adds to its `EsiApp`, here around a twin built from servo402's own
+/// generated ESI. `Cia402Axis::new` on the twin's run-time dictionary,
+/// `Cia402Axis::tick` after the twin's own tick, `check_download` before
+/// its SDO handling; the twin's input rule must leave the objects the
+/// axis `owns` alone (`Hold` here).
+struct Twin402 {
+    inner: ecat_twin::coe_twin::EsiApp,
+    axis: ecat_cia402::Cia402Axis,
+}
+
+impl ecat_slave::device::Application for Twin402 {
+    fn description(&self) -> &'static ecat_slave::device::DeviceDescription {
+        self.inner.description()
+    }
+    type Values = [i64; ecat_twin::coe_twin::TWIN_ENTRIES];
+    fn power_on(&mut self, od: &mut ecat_slave::od::Od) {
+        self.inner.power_on(od);
+    }
+    fn sdo_download(
+        &mut self,
+        od: &mut ecat_slave::od::Od,
+        d: &ecat_slave::device::Download<'_>,
+    ) -> Result<ecat_slave::device::Write, ecat_slave::SdoAbortCode> {
+        self.axis.check_download(d)?;
+        self.inner.sdo_download(od, d)
+    }
+    fn tick(&mut self, t: &mut ecat_slave::device::Tick<'_>) {
+        self.inner.tick(t);
+        self.axis.tick(t, None);
+    }
+    fn power_cycle(&mut self) {
+        self.inner.power_cycle();
+        self.axis.reset();
+    }
+}
+
+#[test]
+fn a_twin_of_a_cia402_esi_with_the_profile_hook_is_enabled_in_csp_and_follows_a_ramp() {
+    let xml = ecat_esi::generate(&servo402_example::DEVICE).expect("ESI");
+    let file = ecat_twin::EsiFile::parse(std::str::from_utf8(&xml).expect("utf-8")).expect("ESI");
+    let esi_dev = file.device(None, None).expect("one device");
+    let (desc, layout) = ecat_twin::coe_twin::describe(esi_dev).expect("description");
+    assert!(
+        ecat_cia402::Cia402Axis::is_cia402(desc.dictionary),
+        "ProfileNo 402, 0x6040/0x6041"
+    );
+    let app = Twin402 {
+        inner: ecat_twin::coe_twin::EsiApp::new(desc, ecat_twin::InputRule::Hold),
+        axis: ecat_cia402::Cia402Axis::new(desc.dictionary).expect("a CiA 402 axis"),
+    };
+    let slave = ecat_sim::SoftSlave::with_layout(app, layout);
+    let chain = Chain::with_slaves(vec![Box::new(slave)]);
+    let bus = VirtualBus::with_chain(chain, Clock::frames(), None).expect("bus");
+    smol::block_on(async {
+        let (group, mut out) = enabled(&bus, 8).await;
+        let start = out.target_position;
+        let mut last = In::default();
+        for k in 1..=200 {
+            out.target_position = start + 50 * k;
+            last = cycle(&bus, &group, out).await;
+        }
+        assert_eq!(last.state(), Some(PowerState::OperationEnabled), "{last:?}");
+        assert!(last.following_error.abs() <= 60, "{last:?}");
+        assert!(
+            (out.target_position - last.position).abs() <= 150,
+            "{last:?}"
+        );
+    });
+}
