@@ -25,7 +25,7 @@
 //! * [`od_axis`]: [`Cia402Axis`], a [`Drive`] bound to a dictionary by
 //!   object indices: what a device's or a twin's `Application::tick`
 //!   calls;
-//! * [`safety`]: the safety rules of docs/SAFETY.md (S1-S5) as a checker
+//! * [`safety`]: the safety rules of docs/SAFETY.md (S1-S3, S5) as a checker
 //!   of observations, for property tests of drives.
 //!
 //! Layers: `od_axis` → `objects`, `safety` → `drive` → `axis`, `mode`,

@@ -1,6 +1,7 @@
 //! The safety rules of a CiA 402 drive on the core (docs/SAFETY.md,
-//! "servo402 and CiA 402 twins", S1-S5) as a checker that watches a drive
-//! from outside, one observation per step.
+//! "servo402 and CiA 402 twins": S1, S2, S3 and S5; S4, what the master
+//! may write when, is checked by the SDO tests) as a checker that watches
+//! a drive from outside, one observation per step.
 //!
 //! A property test feeds it what a master and a scope would see after
 //! every step of a random sequence (the AL state, whether the cyclic
@@ -94,8 +95,8 @@ pub enum Violation {
         /// |velocity| when the ramp began.
         entry: u64,
     },
-    /// S4: Fault without an error code, or with the power stage on.
-    #[error("S4: Fault with error code {error_code:#06x}, power stage on {enabled}")]
+    /// S5: Fault without an error code, or with the power stage on.
+    #[error("S5: Fault with error code {error_code:#06x}, power stage on {enabled}")]
     FaultNotSafe {
         /// 0x603F.
         error_code: u16,
@@ -104,7 +105,7 @@ pub enum Violation {
     },
 }
 
-/// Checks observations against S1-S5. `min_deceleration` (inc/s², the
+/// Checks observations against S1, S2, S3 and S5. `min_deceleration` (inc/s², the
 /// smallest ramp the parameters allow) and `settle_ns` bound how long a
 /// stop without a master may take: |v| / deceleration + settle.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -368,7 +369,7 @@ mod tests {
         proptest! {
             #![proptest_config(ProptestConfig::with_cases(64))]
             /// Any controlword, mode, set point, time step, link and fault
-            /// sequence: the drive never panics and keeps S1-S5 at every step.
+            /// sequence: the drive never panics and keeps S1-S3 and S5 at every step.
             #[test]
             fn random_sequences_keep_the_safety_rules(steps in prop::collection::vec(step(), 1..200)) {
                 let mut b = Bench {

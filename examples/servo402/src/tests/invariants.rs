@@ -1,4 +1,6 @@
-//! The safety rules of docs/SAFETY.md (servo402, S1-S5) as invariants:
+//! The safety rules of docs/SAFETY.md (servo402: S1-S3 and S5; the SDO
+//! writes of S4 are among the steps, their refusals are checked by
+//! `tests.rs`) as invariants:
 //! random sequences of what a master and the world can do (controlwords,
 //! modes and set points in cyclic frames, enable sequences and ramps,
 //! frames that stop, AL state requests, the SM watchdog switched off and
@@ -377,7 +379,7 @@ impl<A: WithBoard> Harness<A> {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
 
-    /// S1-S5 hold after every step of any sequence.
+    /// S1-S3 and S5 hold after every step of any sequence.
     #[test]
     fn random_master_sequences_never_break_the_safety_rules(
         steps in prop::collection::vec(step(), 1..60)
