@@ -983,7 +983,7 @@ impl<A: Axis> Drive<A> {
                 let reached = if halt {
                     still
                 } else {
-                    (v - target).unsigned_abs() <= u64::from(p.velocity_window)
+                    v.saturating_sub(target).unsigned_abs() <= u64::from(p.velocity_window)
                 };
                 bit(reached, status::TARGET_REACHED) | bit(still, status::MODE_SPECIFIC_12)
             }

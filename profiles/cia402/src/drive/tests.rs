@@ -572,3 +572,54 @@ fn position_wraps_modulo_2_32_and_csp_follows_across_the_wrap() {
     assert!(r.inputs.following_error.abs() <= 101, "{:?}", r.inputs);
     assert_eq!(b.state(), PowerState::OperationEnabled);
 }
+
+/// An axis that reports the extremes of every value (a broken encoder).
+#[derive(Debug, Default)]
+struct Wild(u64);
+
+impl Axis for Wild {
+    fn step(&mut self, _: Demand, _: Limits, _: u64) -> Motion {
+        self.0 += 1;
+        self.motion()
+    }
+    fn motion(&self) -> Motion {
+        let big = self.0.is_multiple_of(2);
+        Motion {
+            position_m: if big { i64::MAX } else { i64::MIN },
+            velocity: if big { i64::MIN } else { i64::MAX },
+            torque: if big { i64::MAX } else { i64::MIN },
+            limited: big,
+        }
+    }
+    fn set_position(&mut self, _: i64) {}
+}
+
+#[test]
+fn an_axis_reporting_extreme_values_cannot_make_the_drive_panic() {
+    let mut drive = Drive::new(Wild::default());
+    let p = Parameters::DEFAULT;
+    let mut now = 0;
+    for mode in [1i8, 3, 6, 8, 9, 10] {
+        for cw in [
+            0,
+            control::SHUTDOWN,
+            control::ENABLE_OPERATION,
+            0x1F,
+            0x11F,
+            0x5F,
+            control::QUICK_STOP,
+            0x80,
+        ] {
+            now += MS;
+            let sp = Setpoints {
+                controlword: cw,
+                mode,
+                target_position: i32::MIN,
+                target_velocity: i32::MAX,
+                target_torque: i16::MIN,
+            };
+            let r = drive.step(&sp, CONNECTED, None, &p, now);
+            let _ = PowerState::from_statusword(r.inputs.statusword).expect("a state");
+        }
+    }
+}
