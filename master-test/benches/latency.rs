@@ -20,6 +20,7 @@
 
 use ecat_slave::wire::builder::FrameBuilder;
 use ecat_slave::wire::ecat::Command as Ecat;
+use master_test::registers;
 use pnet_datalink::{Channel, Config, DataLinkReceiver, DataLinkSender};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -115,21 +116,29 @@ fn config_frame(i: u16) -> (Vec<u8>, Vec<usize>) {
         f
     };
     frame(&[
-        (Ecat::Apwr, at(0x0010), (0x1000 + i).to_le_bytes().to_vec()),
         (
             Ecat::Apwr,
-            at(0x0810),
+            at(u32::from(registers::STATION_ADDRESS)),
+            (0x1000 + i).to_le_bytes().to_vec(),
+        ),
+        (
+            Ecat::Apwr,
+            at(u32::from(registers::SM2)),
             vec![0x00, 0x11, OUT as u8, 0, 0x64, 0, 1, 0],
         ),
         (
             Ecat::Apwr,
-            at(0x0818),
+            at(u32::from(registers::SM3)),
             vec![0x80, 0x11, IN as u8, 0, 0x20, 0, 1, 0],
         ),
-        (Ecat::Apwr, at(0x0600), fmmu(log_out, OUT, 0x1100, 2)),
         (
             Ecat::Apwr,
-            at(0x0610),
+            at(u32::from(registers::FMMU0)),
+            fmmu(log_out, OUT, 0x1100, 2),
+        ),
+        (
+            Ecat::Apwr,
+            at(u32::from(registers::FMMU1)),
             fmmu(log_out + u32::from(OUT), IN, 0x1180, 1),
         ),
     ])
@@ -140,7 +149,7 @@ fn cycle_frame(n: usize) -> (Vec<u8>, Vec<usize>) {
     let image = n * usize::from(OUT + IN);
     frame(&[
         (Ecat::Lrw, 0, vec![0x5A; image]),
-        (Ecat::Brd, 0x0130 << 16, vec![0, 0]),
+        (Ecat::Brd, u32::from(registers::AL_STATUS) << 16, vec![0, 0]),
     ])
 }
 

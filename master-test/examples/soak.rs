@@ -31,7 +31,7 @@
 use clap::Parser;
 use ecat_slave::al::AlState;
 use master_test::link::{Clock, FaultConfig, lock};
-use master_test::{VirtualBus, pam_line};
+use master_test::{VirtualBus, pam_line, registers};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -139,7 +139,9 @@ fn steady_state_allocations(n: usize) -> (u64, (u16, u16)) {
     let (lrw, brd) = {
         let mut b = FrameBuilder::new(&mut template, [0x10; 6]).expect("buffer");
         let lrw = b.push(Command::Lrw, 0, &vec![1u8; image]).expect("fits");
-        let brd = b.push(Command::Brd, 0x0130 << 16, &[0, 0]).expect("fits");
+        let brd = b
+            .push(Command::Brd, u32::from(registers::AL_STATUS) << 16, &[0, 0])
+            .expect("fits");
         let len = b.finish();
         template.truncate(len);
         (lrw, brd)
@@ -229,9 +231,10 @@ fn main() -> ExitCode {
             if cycle % 10_000 == 0 {
                 let injected = || master_test::link::lock_faults(&wire).stats().corrupted;
                 if let Some(base) = counter_base.take()
-                    && let Ok(v) = ethercrab::Command::fprd(stations[0], 0x0300)
-                        .receive::<u8>(md)
-                        .await
+                    && let Ok(v) =
+                        ethercrab::Command::fprd(stations[0], registers::RX_ERROR_COUNTER)
+                            .receive::<u8>(md)
+                            .await
                 {
                     let expect = (injected() - base).min(255);
                     if u64::from(v) != expect {
@@ -239,7 +242,7 @@ fn main() -> ExitCode {
                         eprintln!("cycle {cycle}: invalid frame counter {v}, injected {expect}");
                     }
                 }
-                if ethercrab::Command::fpwr(stations[0], 0x0300)
+                if ethercrab::Command::fpwr(stations[0], registers::RX_ERROR_COUNTER)
                     .send(md, 0u8)
                     .await
                     .is_ok()

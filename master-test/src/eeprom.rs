@@ -2,12 +2,13 @@
 //! registers 0x0500-0x050F), as a master's EEPROM tool reads and writes it.
 
 use crate::mailbox::{ClientError, MailboxGeometry};
+use crate::registers;
 use ecat_slave::sii::SiiReader;
 use ethercrab::{Command, MainDevice};
 use std::time::{Duration, Instant};
 
-const CONTROL: u16 = 0x0502;
-const DATA: u16 = 0x0508;
+const CONTROL: u16 = registers::SII_CONTROL;
+const DATA: u16 = registers::SII_DATA;
 /// Busy (bit 15) of the control/status word.
 const BUSY: u16 = 0x8000;
 /// Error bits 11-14 of the control/status word (checksum, device info,

@@ -3,6 +3,7 @@
 //! download, INIT).
 
 use crate::mailbox::{ClientError, MailboxClient};
+use crate::registers;
 use ecat_slave::wire::foe::{FoeRepr, HEADER_LEN};
 use ecat_slave::wire::mailbox::MailboxType;
 use ethercrab::{Command, MainDevice};
@@ -235,22 +236,29 @@ pub async fn read(
     }
 }
 
-/// Requests AL state `state` (0x0120) and waits until 0x0130 shows it.
+/// Requests AL state `state` (AL control) and waits until the AL status
+/// shows it.
 /// Fails with the AL status code when the slave refuses.
 pub async fn request_state(
     md: &MainDevice<'_>,
     station: u16,
     state: u16,
 ) -> Result<(), ClientError> {
-    Command::fpwr(station, 0x0120).send(md, state).await?;
+    Command::fpwr(station, registers::AL_CONTROL)
+        .send(md, state)
+        .await?;
     let start = Instant::now();
     loop {
-        let st: u16 = Command::fprd(station, 0x0130).receive(md).await?;
+        let st: u16 = Command::fprd(station, registers::AL_STATUS)
+            .receive(md)
+            .await?;
         if st & 0x1F == state & 0x0F {
             return Ok(());
         }
         if st & 0x10 != 0 {
-            let code: u16 = Command::fprd(station, 0x0134).receive(md).await?;
+            let code: u16 = Command::fprd(station, registers::AL_STATUS_CODE)
+                .receive(md)
+                .await?;
             return Err(ClientError::StateRefused { status: st, code });
         }
         if start.elapsed() > Duration::from_secs(5) {

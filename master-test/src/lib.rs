@@ -20,6 +20,7 @@ pub mod foe;
 pub mod link;
 pub mod mailbox;
 pub mod od;
+pub mod registers;
 pub mod sdo_info;
 
 use ethercrab::{MainDevice, MainDeviceConfig, PduStorage, RetryBehaviour, Timeouts};
@@ -87,11 +88,18 @@ pub fn pam_line(n: usize) -> Chain {
 }
 
 /// Timeouts suited to the in-process link on a busy CI machine.
+///
+/// ethercrab measures them in real time while the slaves run on the
+/// simulated clock, so they only bound how long the machine may stall a
+/// frame: a PDU or an EEPROM read that takes seconds means a hung link,
+/// not a slow slave. With 100 ms for an EEPROM operation a bring-up failed
+/// now and then with two busy loops on a 2-core machine already loaded to
+/// 9 (`timeout: EEPROM`).
 pub fn timeouts() -> Timeouts {
     Timeouts {
         state_transition: Duration::from_secs(10),
-        pdu: Duration::from_millis(500),
-        eeprom: Duration::from_millis(100),
+        pdu: Duration::from_secs(3),
+        eeprom: Duration::from_secs(3),
         wait_loop_delay: Duration::from_micros(100),
         mailbox_echo: Duration::from_millis(500),
         mailbox_response: Duration::from_secs(2),
@@ -282,8 +290,9 @@ impl VirtualBus {
 }
 
 /// How far a master has brought a line of software slaves, read from
-/// their registers: SII read (EEPROM address 0x0504 moved), AL state
-/// (0x0130) at least PRE-OP, at least SAFE-OP, OP.
+/// their registers: SII read (the EEPROM address,
+/// [`registers::SII_ADDRESS`], moved), AL state
+/// ([`registers::AL_STATUS`]) at least PRE-OP, at least SAFE-OP, OP.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct LineProgress {
     /// Slaves on the line.
@@ -311,8 +320,8 @@ impl LineProgress {
                 mem.get(a..a + 2)
                     .map_or(0, |b| u16::from_le_bytes([b[0], b[1]]))
             };
-            p.sii_read += usize::from(word(0x0504) != 0);
-            let state = word(0x0130) & 0x0F;
+            p.sii_read += usize::from(word(usize::from(registers::SII_ADDRESS)) != 0);
+            let state = word(usize::from(registers::AL_STATUS)) & 0x0F;
             p.pre_op += usize::from(matches!(state, 2 | 4 | 8));
             p.safe_op += usize::from(matches!(state, 4 | 8));
             p.op += usize::from(state == 8);

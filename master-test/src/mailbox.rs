@@ -7,6 +7,7 @@
 //! Frames are encoded and decoded with `ecat_slave::wire`, the same views
 //! the slave uses; the SDO state machine on each side is separate code.
 
+use crate::registers;
 use ecat_slave::wire::coe::{
     CoeHeader, CoeService, DownloadKind, SdoAbortCode, SdoRequest, SdoResponse,
 };
@@ -119,7 +120,7 @@ pub struct MailboxGeometry {
     pub inp: (u16, u16),
 }
 
-/// The 8-byte SyncManager register image (0x0800 + 8·n): start address,
+/// The 8-byte SyncManager register image ([`registers::sm`]): start address,
 /// length, control byte, activate (enable bit) as ETG.1000.4 lays it out.
 pub fn sm_register(start: u16, len: u16, control: u8, enable: bool) -> [u8; 8] {
     let mut b = [0u8; 8];
@@ -135,8 +136,14 @@ impl MailboxGeometry {
     /// register images for this mailbox, with their register addresses.
     pub fn sm_registers(&self) -> [(u16, [u8; 8]); 2] {
         [
-            (0x0800, sm_register(self.out.0, self.out.1, 0x26, true)),
-            (0x0808, sm_register(self.inp.0, self.inp.1, 0x22, true)),
+            (
+                registers::SM0,
+                sm_register(self.out.0, self.out.1, 0x26, true),
+            ),
+            (
+                registers::SM1,
+                sm_register(self.inp.0, self.inp.1, 0x22, true),
+            ),
         ]
     }
 
@@ -274,7 +281,7 @@ impl<'a> MailboxClient<'a> {
     /// Waits for the next message in SM1 and reads it.
     pub async fn receive(&mut self) -> Result<Message, ClientError> {
         let start = Instant::now();
-        let status_reg = 0x0808 + 5;
+        let status_reg = registers::SM1 + registers::SM_STATUS;
         loop {
             let status: u8 = Command::fprd(self.station, status_reg)
                 .receive(self.md)
@@ -302,8 +309,8 @@ impl<'a> MailboxClient<'a> {
     /// Toggles the repeat request bit of SM1 and waits for the slave's
     /// acknowledge, then reads the repeated message.
     pub async fn repeat(&mut self) -> Result<Message, ClientError> {
-        let activate_reg = 0x0808 + 6;
-        let pdi_reg = 0x0808 + 7;
+        let activate_reg = registers::SM1 + registers::SM_ACTIVATE;
+        let pdi_reg = registers::SM1 + registers::SM_PDI_CONTROL;
         let act: u8 = Command::fprd(self.station, activate_reg)
             .receive(self.md)
             .await?;

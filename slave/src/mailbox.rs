@@ -97,6 +97,12 @@ impl<const T: usize> MailboxServer<T> {
         self.foe.abort();
     }
 
+    /// Whether a response spanning several mailboxes is in progress
+    /// ([`MailboxServer::next_pending`] has a fragment to give).
+    pub fn has_pending(&self) -> bool {
+        self.coe.has_fragment()
+    }
+
     /// The next part of a response that spans several mailboxes (SDO
     /// Information fragments), framed for SM1; `None` when nothing is due.
     pub fn next_pending(&mut self, out: &mut [u8], view: ObjectView) -> Option<usize> {

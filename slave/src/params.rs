@@ -74,40 +74,51 @@ pub fn payload_len(dict: &Dictionary) -> usize {
     stored_entries(dict).map(|(_, e)| byte_len(e)).sum()
 }
 
-fn crc(header: &[u8], payload: &[u8]) -> u32 {
-    let mut c = Crc32::new();
-    c.update(header.get(4..12).unwrap_or(&[]));
-    c.update(payload);
-    c.finish()
+/// Bytes read or written at once: slots are checked and written in
+/// pieces, so no slot-sized buffer is ever on the stack.
+const CHUNK: usize = 32;
+
+fn header_word(head: &[u8; HEADER], at: usize) -> u32 {
+    let mut w = [0u8; 4];
+    if let Some(src) = head.get(at..at + 4) {
+        w.copy_from_slice(src);
+    }
+    u32::from_le_bytes(w)
 }
 
-fn read_slot<N: NvStorage>(
-    nv: &N,
-    dict: &Dictionary,
-    slot: usize,
-    buf: &mut [u8; SLOT_SIZE],
-) -> Option<(u32, usize)> {
-    nv.read(slot * SLOT_SIZE, buf).ok()?;
-    let word =
-        |o: usize| -> Option<u32> { Some(u32::from_le_bytes(buf.get(o..o + 4)?.try_into().ok()?)) };
-    if word(0)? != MAGIC {
+/// Sequence number and payload length of `slot` when it holds a valid set
+/// for `dict` (magic, layout version, length and CRC checked).
+fn read_slot<N: NvStorage>(nv: &N, dict: &Dictionary, slot: usize) -> Option<(u32, usize)> {
+    let base = slot * SLOT_SIZE;
+    let mut head = [0u8; HEADER];
+    nv.read(base, &mut head).ok()?;
+    if header_word(&head, 0) != MAGIC {
         return None;
     }
-    let seq = word(4)?;
-    let len = usize::from(u16::from_le_bytes(buf.get(8..10)?.try_into().ok()?));
-    let version = u16::from_le_bytes(buf.get(10..12)?.try_into().ok()?);
+    let seq = header_word(&head, 4);
+    let len = usize::from(u16::from_le_bytes([head[8], head[9]]));
+    let version = u16::from_le_bytes([head[10], head[11]]);
     if version != LAYOUT_VERSION || len != payload_len(dict) || HEADER + len > SLOT_SIZE {
         return None;
     }
-    let payload = buf.get(HEADER..HEADER + len)?;
-    (crc(buf, payload) == word(12)?).then_some((seq, len))
+    let mut c = Crc32::new();
+    c.update(head.get(4..12).unwrap_or(&[]));
+    let mut chunk = [0u8; CHUNK];
+    let mut at = 0;
+    while at < len {
+        let n = (len - at).min(CHUNK);
+        let piece = chunk.get_mut(..n)?;
+        nv.read(base + HEADER + at, piece).ok()?;
+        c.update(piece);
+        at += n;
+    }
+    (c.finish() == header_word(&head, 12)).then_some((seq, len))
 }
 
 /// The newest valid slot: (slot, sequence).
 fn newest<N: NvStorage>(nv: &N, dict: &Dictionary) -> Option<(usize, u32)> {
-    let mut buf = [0u8; SLOT_SIZE];
-    let a = read_slot(nv, dict, 0, &mut buf).map(|(s, _)| (0, s));
-    let b = read_slot(nv, dict, 1, &mut buf).map(|(s, _)| (1, s));
+    let a = read_slot(nv, dict, 0).map(|(s, _)| (0, s));
+    let b = read_slot(nv, dict, 1).map(|(s, _)| (1, s));
     match (a, b) {
         (Some(x), Some(y)) => Some(if y.1.wrapping_sub(x.1) as i32 > 0 {
             y
@@ -123,9 +134,9 @@ pub fn stored<N: NvStorage>(nv: &N, dict: &Dictionary) -> Stored {
     if let Some((_, seq)) = newest(nv, dict) {
         return Stored::Valid(seq);
     }
-    let mut buf = [0u8; SLOT_SIZE];
-    let blank =
-        (0..2).all(|s| nv.read(s * SLOT_SIZE, &mut buf).is_ok() && buf.iter().all(|b| *b == 0xFF));
+    let mut chunk = [0u8; CHUNK];
+    let blank = (0..STORAGE_SIZE / CHUNK)
+        .all(|k| nv.read(k * CHUNK, &mut chunk).is_ok() && chunk.iter().all(|b| *b == 0xFF));
     if blank {
         Stored::Blank
     } else {
@@ -135,6 +146,11 @@ pub fn stored<N: NvStorage>(nv: &N, dict: &Dictionary) -> Stored {
 
 /// SAVE: writes the backup entries of `store` into the older slot.
 /// Returns the new sequence number.
+///
+/// The payload is written first, entry by entry, and the header with the
+/// CRC over it last: a power cut at any byte leaves that slot invalid
+/// (its old header no longer matches its payload, or the new one is not
+/// there yet) and the other slot's set is the newest valid one.
 pub fn save<N: NvStorage>(store: &Od, nv: &mut N) -> Result<u32, ParamError> {
     if nv.capacity() < STORAGE_SIZE {
         return Err(ParamError::TooSmall(nv.capacity()));
@@ -148,27 +164,40 @@ pub fn save<N: NvStorage>(store: &Od, nv: &mut N) -> Result<u32, ParamError> {
         Some((s, seq)) => (1 - s, seq.wrapping_add(1)),
         None => (0, 1),
     };
-    let mut buf = [0xFFu8; SLOT_SIZE];
-    let mut at = HEADER;
-    for (flat, e) in stored_entries(dict) {
-        let n = byte_len(e);
-        let v = store.value(flat).to_le_bytes();
-        if let (Some(dst), Some(src)) = (buf.get_mut(at..at + n), v.get(..n)) {
-            dst.copy_from_slice(src);
-        }
-        at += n;
-    }
+    let base = slot * SLOT_SIZE;
     let mut head = [0u8; HEADER];
     head[0..4].copy_from_slice(&MAGIC.to_le_bytes());
     head[4..8].copy_from_slice(&seq.to_le_bytes());
     head[8..10].copy_from_slice(&(len as u16).to_le_bytes());
     head[10..12].copy_from_slice(&LAYOUT_VERSION.to_le_bytes());
-    let c = crc(&head, buf.get(HEADER..HEADER + len).unwrap_or(&[]));
-    head[12..16].copy_from_slice(&c.to_le_bytes());
-    if let Some(dst) = buf.get_mut(..HEADER) {
-        dst.copy_from_slice(&head);
+    let mut c = Crc32::new();
+    c.update(head.get(4..12).unwrap_or(&[]));
+    // Entries are gathered into chunks so the storage sees few writes.
+    let mut chunk = [0u8; CHUNK];
+    let (mut filled, mut at) = (0usize, 0usize);
+    for (flat, e) in stored_entries(dict) {
+        let n = byte_len(e);
+        let v = store.value(flat).to_le_bytes();
+        for &b in v.get(..n).unwrap_or(&[]) {
+            if let Some(slot_byte) = chunk.get_mut(filled) {
+                *slot_byte = b;
+            }
+            filled += 1;
+            if filled == CHUNK {
+                c.update(&chunk);
+                nv.write(base + HEADER + at, &chunk)?;
+                at += CHUNK;
+                filled = 0;
+            }
+        }
     }
-    nv.write(slot * SLOT_SIZE, buf.get(..HEADER + len).unwrap_or(&[]))?;
+    if filled > 0 {
+        let piece = chunk.get(..filled).unwrap_or(&[]);
+        c.update(piece);
+        nv.write(base + HEADER + at, piece)?;
+    }
+    head[12..16].copy_from_slice(&c.finish().to_le_bytes());
+    nv.write(base, &head)?;
     Ok(seq)
 }
 
@@ -176,15 +205,15 @@ pub fn save<N: NvStorage>(store: &Od, nv: &mut N) -> Result<u32, ParamError> {
 pub fn load<N: NvStorage>(store: &mut Od, nv: &N) -> Result<u32, ParamError> {
     let dict = store.dictionary();
     let (slot, seq) = newest(nv, dict).ok_or(ParamError::NoValidSet)?;
-    let mut buf = [0u8; SLOT_SIZE];
-    let (_, len) = read_slot(nv, dict, slot, &mut buf).ok_or(ParamError::NoValidSet)?;
-    let mut at = HEADER;
+    let mut at = slot * SLOT_SIZE + HEADER;
     for (flat, e) in stored_entries(dict) {
         let n = byte_len(e);
-        store.set_value(flat, decode(e, buf.get(at..at + n).unwrap_or(&[])));
+        let mut bytes = [0u8; 8];
+        let piece = bytes.get_mut(..n.min(8)).unwrap_or(&mut []);
+        nv.read(at, piece)?;
+        store.set_value(flat, decode(e, piece));
         at += n;
     }
-    debug_assert_eq!(at, HEADER + len);
     Ok(seq)
 }
 
@@ -194,13 +223,14 @@ pub fn load<N: NvStorage>(store: &mut Od, nv: &N) -> Result<u32, ParamError> {
 pub fn stored_value<N: NvStorage>(nv: &N, dict: &Dictionary, index: u16, sub: u8) -> Option<i64> {
     let (flat, _) = dict.find_entry(index, sub)?;
     let (slot, _) = newest(nv, dict)?;
-    let mut buf = [0u8; SLOT_SIZE];
-    read_slot(nv, dict, slot, &mut buf)?;
-    let mut at = HEADER;
+    let mut at = slot * SLOT_SIZE + HEADER;
     for (f, e) in stored_entries(dict) {
         let n = byte_len(e);
         if f == flat {
-            return Some(decode(e, buf.get(at..at + n)?));
+            let mut bytes = [0u8; 8];
+            let piece = bytes.get_mut(..n.min(8))?;
+            nv.read(at, piece).ok()?;
+            return Some(decode(e, piece));
         }
         at += n;
     }

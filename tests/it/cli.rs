@@ -4,6 +4,8 @@
 //! 3 communication, 130 Ctrl-C), closed pipes, Ctrl-C, and `master-test
 //! --iface` against the raw runner over a veth pair.
 
+mod snapshots;
+
 use crate::common::{binary, runner_binary, setup, skip};
 use assert_cmd::Command;
 use std::io::{BufRead as _, BufReader, Read as _};

@@ -2,9 +2,10 @@
 //! the EEPROM interface.
 
 use super::*;
+use crate::registers;
 
 pub(super) async fn esc_checks(r: &mut Run<'_>) {
-    let o = match r.read::<[u8; 4]>(0x0000).await {
+    let o = match r.read::<[u8; 4]>(registers::TYPE).await {
         Ok(b) => Outcome::Pass(format!(
             "type {:#04x}, revision {}, build {}",
             b[0],
@@ -20,7 +21,7 @@ pub(super) async fn esc_checks(r: &mut Run<'_>) {
         o,
     );
 
-    let o = match r.read::<u16>(0x0010).await {
+    let o = match r.read::<u16>(registers::STATION_ADDRESS).await {
         Ok(a) if a == r.station => Outcome::Pass(format!("{a:#06x}")),
         Ok(a) => Outcome::Fail(format!("{a:#06x}, configured {:#06x}", r.station)),
         Err(e) => Outcome::Fail(e),
@@ -33,7 +34,7 @@ pub(super) async fn esc_checks(r: &mut Run<'_>) {
     );
 
     let word4 = r.sii.get(8..10).map(|b| u16::from_le_bytes([b[0], b[1]]));
-    let o = match (r.read::<u16>(0x0012).await, word4) {
+    let o = match (r.read::<u16>(registers::STATION_ALIAS).await, word4) {
         (Ok(a), Some(w)) if a == w => Outcome::Pass(format!("{a:#06x} = SII word 4")),
         (Ok(a), Some(w)) => Outcome::Fail(format!("{a:#06x}, SII word 4 is {w:#06x}")),
         (Ok(_), None) => Outcome::Fail("SII unreadable".into()),
@@ -46,7 +47,7 @@ pub(super) async fn esc_checks(r: &mut Run<'_>) {
         o,
     );
 
-    let o = match r.read::<u16>(0x0110).await {
+    let o = match r.read::<u16>(registers::DL_STATUS).await {
         Ok(s) if s & 0x0010 != 0 && s & 0x0200 != 0 => {
             Outcome::Pass(format!("{s:#06x}: port 0 link and communication"))
         }
@@ -66,7 +67,7 @@ pub(super) async fn esc_checks(r: &mut Run<'_>) {
 
     let a = eeprom::read(r.md, r.station, 8).await;
     let b = eeprom::read(r.md, r.station, 8).await;
-    let ctl = r.read::<u16>(0x0502).await;
+    let ctl = r.read::<u16>(registers::SII_CONTROL).await;
     let o = match (a, b, ctl) {
         (Ok(a), Ok(b), Ok(c)) if a == b && c & 0x8000 == 0 && c & 0x7800 == 0 => {
             Outcome::Pass(format!(

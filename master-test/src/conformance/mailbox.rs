@@ -3,6 +3,7 @@
 //! mailbox helpers the other groups use.
 
 use super::*;
+use crate::registers;
 
 /// Sends a raw mailbox and waits for one answer; `None` when nothing came
 /// within `wait`.
@@ -222,7 +223,7 @@ pub(super) async fn mailbox_checks(r: &mut Run<'_>) {
     let _ = r.request(0x01).await;
     let _ = r.request(0x02).await;
     r.clock.sleep(Duration::from_millis(20)).await;
-    let o = match r.read::<u8>(0x080D).await {
+    let o = match r.read::<u8>(registers::SM1 + registers::SM_STATUS).await {
         Ok(st) if st & 0x08 == 0 => Outcome::Pass("SM1 empty".into()),
         Ok(st) => {
             let m = c.receive().await;

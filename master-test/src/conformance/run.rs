@@ -2,6 +2,7 @@
 //! acknowledges, the slave returned to PRE-OP.
 
 use super::*;
+use crate::registers;
 
 /// Collects results while the checks run.
 pub(super) struct Run<'a> {
@@ -77,8 +78,8 @@ impl<'a> Run<'a> {
     /// AL status (0x0130) and AL status code (0x0134).
     pub(super) async fn al(&self) -> Result<(u16, u16), String> {
         Ok((
-            self.read::<u16>(0x0130).await?,
-            self.read::<u16>(0x0134).await?,
+            self.read::<u16>(registers::AL_STATUS).await?,
+            self.read::<u16>(registers::AL_STATUS_CODE).await?,
         ))
     }
 
@@ -86,7 +87,8 @@ impl<'a> Run<'a> {
     /// reached or the error flag is set (3 s); returns the final status and
     /// code.
     pub(super) async fn request(&self, control: u16) -> Result<(u16, u16), String> {
-        self.write(0x0120, &control.to_le_bytes()).await?;
+        self.write(registers::AL_CONTROL, &control.to_le_bytes())
+            .await?;
         let start = self.clock.elapsed();
         loop {
             let (st, code) = self.al().await?;
@@ -103,7 +105,8 @@ impl<'a> Run<'a> {
     /// Acknowledges an error in `state` (control = state | 0x10) and
     /// returns the status afterwards.
     pub(super) async fn acknowledge(&self, state: u16) -> Result<(u16, u16), String> {
-        self.write(0x0120, &(state | 0x10).to_le_bytes()).await?;
+        self.write(registers::AL_CONTROL, &(state | 0x10).to_le_bytes())
+            .await?;
         let start = self.clock.elapsed();
         loop {
             let (st, code) = self.al().await?;

@@ -2,6 +2,7 @@
 //! error acknowledge, SM checks, the SM watchdog and its recovery.
 
 use super::*;
+use crate::registers;
 
 pub(super) async fn state_checks(r: &mut Run<'_>) {
     const INVALID: u16 = 0x0011;
@@ -86,12 +87,12 @@ pub(super) async fn state_checks(r: &mut Run<'_>) {
 
     // Mailbox SM checks at INIT -> PRE-OP.
     if let Some(g) = r.mailbox {
-        let good0 = r.read::<[u8; 8]>(0x0800).await.unwrap_or_default();
-        let good1 = r.read::<[u8; 8]>(0x0808).await.unwrap_or_default();
+        let good0 = r.read::<[u8; 8]>(registers::SM0).await.unwrap_or_default();
+        let good1 = r.read::<[u8; 8]>(registers::SM1).await.unwrap_or_default();
         let cases: [(&'static str, u16, [u8; 8], &str); 3] = [
             (
                 "state.sm-mailbox-start",
-                0x0800,
+                registers::SM0,
                 {
                     let mut b = good0;
                     b[0..2].copy_from_slice(&g.out.0.wrapping_add(0x40).to_le_bytes());
@@ -101,7 +102,7 @@ pub(super) async fn state_checks(r: &mut Run<'_>) {
             ),
             (
                 "state.sm-mailbox-length",
-                0x0808,
+                registers::SM1,
                 {
                     let mut b = good1;
                     b[2..4].copy_from_slice(&g.inp.1.saturating_sub(2).to_le_bytes());
@@ -111,7 +112,7 @@ pub(super) async fn state_checks(r: &mut Run<'_>) {
             ),
             (
                 "state.sm-mailbox-control",
-                0x0800,
+                registers::SM0,
                 {
                     let mut b = good0;
                     b[4] = 0x24; // 3-buffer mode instead of mailbox
@@ -134,8 +135,8 @@ pub(super) async fn state_checks(r: &mut Run<'_>) {
             r.record(id, "ETG.1000.6 6.4.1.1, Table 10", what, o);
             let _ = r.request(0x01).await;
             let _ = r.acknowledge(0x01).await;
-            let _ = r.write(0x0800, &good0).await;
-            let _ = r.write(0x0808, &good1).await;
+            let _ = r.write(registers::SM0, &good0).await;
+            let _ = r.write(registers::SM1, &good1).await;
         }
     } else {
         for id in [
@@ -168,12 +169,12 @@ pub(super) async fn state_checks(r: &mut Run<'_>) {
     // them: start, control and enable of the SII's SyncM category, length
     // of the PDOs assigned now.
     let found = (
-        r.read::<[u8; 8]>(0x0810).await.unwrap_or_default(),
-        r.read::<[u8; 8]>(0x0818).await.unwrap_or_default(),
+        r.read::<[u8; 8]>(registers::SM2).await.unwrap_or_default(),
+        r.read::<[u8; 8]>(registers::SM3).await.unwrap_or_default(),
     );
     let (sm2, sm3) = process_data_sms(r).await;
-    let _ = r.write(0x0810, &sm2).await;
-    let _ = r.write(0x0818, &sm3).await;
+    let _ = r.write(registers::SM2, &sm2).await;
+    let _ = r.write(registers::SM3, &sm3).await;
     let len = |b: &[u8; 8]| u16::from_le_bytes([b[2], b[3]]);
     let enabled = |b: &[u8; 8]| b[6] & 1 != 0 && len(b) > 0;
 
@@ -193,14 +194,14 @@ pub(super) async fn state_checks(r: &mut Run<'_>) {
     for (id, reg, sm, code, what) in [
         (
             "state.sm-output-length",
-            0x0810u16,
+            registers::SM2,
             sm2,
             0x001Du16,
             "SM2 (outputs) one byte longer than the mapping: PRE-OP -> SAFE-OP refused, 0x001D invalid output configuration",
         ),
         (
             "state.sm-input-length",
-            0x0818,
+            registers::SM3,
             sm3,
             0x001E,
             "SM3 (inputs) one byte longer than the mapping: PRE-OP -> SAFE-OP refused, 0x001E invalid input configuration",
@@ -233,8 +234,8 @@ pub(super) async fn state_checks(r: &mut Run<'_>) {
 
     watchdog_checks(r, sm2).await;
     let _ = r.request(0x02).await;
-    let _ = r.write(0x0810, &found.0).await;
-    let _ = r.write(0x0818, &found.1).await;
+    let _ = r.write(registers::SM2, &found.0).await;
+    let _ = r.write(registers::SM3, &found.1).await;
 }
 
 /// SM2 and SM3 register images (0x0810, 0x0818) for the process data the
@@ -289,8 +290,11 @@ pub(super) async fn watchdog_checks(r: &mut Run<'_>, sm2: [u8; 8]) {
     let start = u16::from_le_bytes([sm2[0], sm2[1]]);
     let len = usize::from(u16::from_le_bytes([sm2[2], sm2[3]]));
     let watchdog_on = sm2[4] & 0x40 != 0;
-    let divider = r.read::<u16>(0x0400).await.unwrap_or(0);
-    let wd = r.read::<u16>(0x0420).await.unwrap_or(0);
+    let divider = r
+        .read::<u16>(registers::WATCHDOG_DIVIDER)
+        .await
+        .unwrap_or(0);
+    let wd = r.read::<u16>(registers::SM_WATCHDOG).await.unwrap_or(0);
     let wd_time = Duration::from_nanos(40 * (u64::from(divider) + 2) * u64::from(wd));
     let ids = [
         ("state.safeop-to-op", "SAFE-OP -> OP while outputs arrive"),
@@ -323,7 +327,7 @@ pub(super) async fn watchdog_checks(r: &mut Run<'_>, sm2: [u8; 8]) {
     // SAFE-OP, outputs flowing, then OP.
     let _ = r.request(0x04).await;
     let mut reached = None;
-    let _ = r.write(0x0120, &0x08u16.to_le_bytes()).await;
+    let _ = r.write(registers::AL_CONTROL, &0x08u16.to_le_bytes()).await;
     let t0 = r.clock.elapsed();
     while (r.clock.elapsed() - t0) < Duration::from_secs(3) {
         send(r).await;
@@ -401,12 +405,12 @@ pub(super) async fn watchdog_checks(r: &mut Run<'_>, sm2: [u8; 8]) {
             send(r).await;
             r.clock.sleep(Duration::from_millis(1)).await;
         }
-        let _ = r.write(0x0120, &0x14u16.to_le_bytes()).await;
+        let _ = r.write(registers::AL_CONTROL, &0x14u16.to_le_bytes()).await;
         for _ in 0..5 {
             send(r).await;
             r.clock.sleep(Duration::from_millis(1)).await;
         }
-        let _ = r.write(0x0120, &0x08u16.to_le_bytes()).await;
+        let _ = r.write(registers::AL_CONTROL, &0x08u16.to_le_bytes()).await;
         let t0 = r.clock.elapsed();
         let mut last = (0, 0);
         loop {

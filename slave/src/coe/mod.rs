@@ -98,6 +98,12 @@ impl<const T: usize> CoeServer<T> {
         }
     }
 
+    /// Whether an SDO Information response is in progress (more fragments
+    /// to send).
+    pub fn has_fragment(&self) -> bool {
+        self.info.busy()
+    }
+
     /// The next fragment of an SDO Information response in progress (CoE
     /// header onwards), if any.
     pub fn next_fragment(&mut self, out: &mut [u8], view: ObjectView) -> Option<usize> {

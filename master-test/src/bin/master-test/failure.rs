@@ -63,6 +63,11 @@ pub fn input(m: impl Into<String>) -> Failure {
     Failure::Input(m.into())
 }
 
+/// The bytes of a file the user named, or the input error naming it.
+pub fn read_file(p: &std::path::Path) -> Result<Vec<u8>, Failure> {
+    std::fs::read(p).map_err(|e| input(format!("cannot read {}: {e}", p.display())))
+}
+
 impl From<ClientError> for Failure {
     fn from(e: ClientError) -> Self {
         if e.refused_by_device() {

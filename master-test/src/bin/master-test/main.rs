@@ -4,24 +4,27 @@
 //! process, the default) or, with `--iface IF`, on a network interface
 //! with ethercrab's raw socket: the `pam-slave` runner or real devices.
 //! See `master-test --help`.
+//!
+//! The shape: one module per command under [`cmd`] (its clap `Args` and
+//! its `run`), the options every command shares in [`options`] (checked
+//! by clap, turned into the target once), the target and its session in
+//! [`target`], failures and their exit statuses in [`failure`], output a
+//! closed pipe cannot crash in [`output`].
 
 #![deny(clippy::print_stdout)]
 
-mod conformance_cmd;
-mod demo;
-mod eeprom_cmd;
+mod cmd;
 mod failure;
-mod foe_cmd;
-mod hcs;
+mod options;
 mod output;
-mod scan;
-mod sdo;
+mod parse;
 mod target;
 
-use clap::{Parser, Subcommand};
-use failure::{Failure, input};
+use clap::Parser;
+use cmd::Cmd;
+use failure::Failure;
+use options::SharedOptions;
 use std::process::ExitCode;
-use target::Where;
 
 const AFTER_HELP: &str = "\
 Buses:
@@ -44,7 +47,7 @@ Exit status:
   130  stopped by Ctrl-C before the command finished (the message says what
        state the slaves were left in)";
 
-#[derive(Parser)]
+#[derive(Parser, Debug)]
 #[command(
     name = "master-test",
     version,
@@ -54,128 +57,16 @@ Exit status:
     after_help = AFTER_HELP
 )]
 struct Cli {
-    /// Network interface to run on (ethercrab raw socket; needs root or
-    /// CAP_NET_RAW). Without it: the built-in virtual bus.
-    #[arg(long, global = true, value_name = "IF")]
-    iface: Option<String>,
-    /// The device of the virtual bus (one slave): pam, io8, ... (see `esi
-    /// devices`); also the identity `firmware pack` writes. Default: pam.
-    #[arg(long, global = true, value_name = "NAME")]
-    device: Option<String>,
-    /// The virtual bus as a line of devices: `pam,io8,pam`, `pam*4`;
-    /// `pam@et1100`, `io8@lan9252` put a slave's firmware behind that SPI
-    /// driver and an emulated chip.
-    #[arg(long, global = true, value_name = "SPEC", conflicts_with = "device")]
-    line: Option<String>,
-    /// The virtual bus as the line of an ENI file (ETG.2100): each slave
-    /// from the catalog or a twin from an ESI file of --esi-dir.
-    #[arg(long, global = true, value_name = "FILE", conflicts_with_all = ["device", "line", "iface"])]
-    eni: Option<std::path::PathBuf>,
-    /// Directory of ESI files for --eni.
-    #[arg(long, global = true, value_name = "DIR", requires = "eni")]
-    esi_dir: Option<std::path::PathBuf>,
-    /// The slave to talk to, by position (0 = first after the master).
-    #[arg(long, global = true, value_name = "N", conflicts_with = "station")]
-    slave: Option<usize>,
-    /// The slave to talk to, by configured station address (0x1000 is the
-    /// first one ethercrab configures).
-    #[arg(long, global = true, value_name = "ADDR", value_parser = parse_u16)]
-    station: Option<u16>,
+    #[command(flatten)]
+    shared: SharedOptions,
     #[command(subcommand)]
     command: Option<Cmd>,
-}
-
-/// `0x1001` or `4097`.
-fn parse_u16(s: &str) -> Result<u16, String> {
-    let v = master_test::cli::parse_int(s)
-        .ok_or_else(|| format!("'{s}' is not a number (decimal, or hex with 0x)"))?;
-    u16::try_from(v).map_err(|_| format!("{v} is outside 0..=65535 (0x0000..=0xFFFF)"))
-}
-
-#[derive(Subcommand)]
-enum Cmd {
-    /// Bring PAM slaves to OP, parameterise over SDO, drive a set-point
-    /// (the default command).
-    Demo(demo::DemoArgs),
-    /// List the slaves: position, station, alias, identity, name, AL
-    /// state and status code, mailbox protocols, process data sizes.
-    Scan {
-        /// JSON (schema in docs/book/src/commissioning.md) instead of a table.
-        #[arg(long)]
-        json: bool,
-    },
-    /// Show the AL state of the slaves, or request one.
-    ///
-    /// INIT, PRE-OP and BOOT are requested from the selected slave (all
-    /// slaves without --slave/--station); SAFE-OP and OP from the whole
-    /// segment, since the master configures process data for all slaves
-    /// together. OP is held only while process data runs (see `watch`):
-    /// after this command a slave with a SyncManager watchdog falls back
-    /// to SAFE-OP.
-    State {
-        /// init, preop, safeop, op or boot; none: just show the states.
-        #[arg(value_parser = scan::parse_state)]
-        target: Option<scan::AlTarget>,
-    },
-    /// Live process data: bring the segment to OP and print the selected
-    /// slave's inputs, decoded by its PDO mapping, until --cycles or
-    /// Ctrl-C; then back to PRE-OP.
-    Watch(scan::WatchArgs),
-    /// Read or write one object entry over CoE SDO (slave in PRE-OP).
-    ///
-    /// Values are typed by the slave's own SDO Information (Get Entry
-    /// Description): data type, bit length, access, unit, range.
-    Sdo {
-        #[command(subcommand)]
-        op: sdo::SdoCmd,
-    },
-    /// Browse the live object dictionary (slave in PRE-OP).
-    Od {
-        #[command(subcommand)]
-        op: sdo::OdCmd,
-    },
-    /// File access over EtherCAT: firmware download in BOOT, file read.
-    Foe {
-        #[command(subcommand)]
-        op: foe_cmd::FoeCmd,
-    },
-    /// The slave's SII EEPROM over the ESC's EEPROM interface.
-    Eeprom {
-        #[command(subcommand)]
-        op: eeprom_cmd::EepromCmd,
-    },
-    /// The slave against its ESI.
-    Esi {
-        #[command(subcommand)]
-        op: eeprom_cmd::EsiCmd,
-    },
-    /// Check one slave against the ETG rules this tool knows: ESC, SII,
-    /// state machine, mailbox, CoE, FoE (a table of check, expectation
-    /// with its ETG reference, observation, verdict; exit status 1 on any
-    /// failure).
-    ///
-    /// The slave is left in PRE-OP. The checks write: AL control, the
-    /// SyncManager registers (restored), every writable object entry (with
-    /// the value it had), and with --foe-file the file in BOOT.
-    Conformance(conformance_cmd::ConformanceArgs),
-    /// HCS telegrams (CMD 3 read, CMD 6 write, CMD 15 multi-write)
-    /// through the telegram channel of an HCS DMA-22(A) node (objects
-    /// 0x2000/0x2001), e.g. `--device dma22 hcs read --module 2 0x07`.
-    Hcs {
-        #[command(subcommand)]
-        op: hcs::HcsCmd,
-    },
-    /// Firmware image tools (no bus).
-    Firmware {
-        #[command(subcommand)]
-        op: foe_cmd::FirmwareCmd,
-    },
 }
 
 fn main() -> ExitCode {
     output::install_ctrlc();
     let cli = Cli::parse();
-    let result = run(cli);
+    let result = cli.command.unwrap_or_default().run(&cli.shared);
     match result {
         Ok(()) => ExitCode::SUCCESS,
         // Nobody reads the output any more: a quiet, successful end.
@@ -187,85 +78,14 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(cli: Cli) -> Result<(), Failure> {
-    let device = match &cli.device {
-        Some(d) => Some(device_catalog::find(d).map_err(|e| input(e.to_string()))?),
-        None => None,
-    };
-    let line = match (&cli.line, device) {
-        (Some(l), _) => {
-            device_catalog::parse_line(l).map_err(|e| input(format!("--line: {e}")))?;
-            l.clone()
-        }
-        (None, Some(d)) => d.key.to_string(),
-        (None, None) => "pam".to_string(),
-    };
-    if cli.iface.is_some() && (cli.line.is_some() || cli.device.is_some()) {
-        let what = if cli.line.is_some() {
-            "--line"
-        } else {
-            "--device"
-        };
-        if !matches!(cli.command, Some(Cmd::Firmware { .. })) {
-            return Err(input(format!(
-                "{what} describes the virtual bus; with --iface the slaves are whatever \
-                 is on the interface"
-            )));
-        }
-    }
-    let mut w = Where {
-        iface: cli.iface,
-        line,
-        slave: cli.slave,
-        station: cli.station,
-        pcap: None,
-        eni: cli.eni.map(|e| (e, cli.esi_dir)),
-    };
-    let cmd = cli.command.unwrap_or(Cmd::Demo(demo::DemoArgs::default()));
-    match cmd {
-        Cmd::Demo(args) => {
-            if w.eni.is_some() {
-                return Err(input(
-                    "the demo drives PAMs of its own; use scan, state, sdo, watch or od with --eni",
-                ));
-            }
-            if cli.line.is_none() && cli.device.is_none() {
-                w.line = format!("pam*{}", args.slaves);
-            } else if args.slaves != 1 {
-                return Err(input("--slaves cannot be combined with --line or --device"));
-            }
-            w.pcap.clone_from(&args.pcap);
-            // A long line's group is large (see master_test::LongGroup):
-            // the demo runs on a thread with a big stack.
-            std::thread::Builder::new()
-                .name("demo".into())
-                .stack_size(64 << 20)
-                .spawn(move || smol::block_on(demo::run(&w, &args)))
-                .map_err(|e| Failure::Comm(format!("cannot start the demo thread: {e}")))?
-                .join()
-                .unwrap_or_else(|_| Err(Failure::Comm("the demo thread panicked".into())))
-        }
-        Cmd::Scan { json } => smol::block_on(scan::scan(&w, json)),
-        Cmd::State { target } => smol::block_on(scan::state(&w, target)),
-        Cmd::Watch(args) => smol::block_on(scan::watch(&w, &args)),
-        Cmd::Sdo { op } => smol::block_on(sdo::sdo(&w, op)),
-        Cmd::Od { op } => smol::block_on(sdo::od(&w, op)),
-        Cmd::Foe { op } => smol::block_on(foe_cmd::foe(&w, op)),
-        Cmd::Eeprom { op } => smol::block_on(eeprom_cmd::eeprom(&w, op)),
-        Cmd::Esi { op } => smol::block_on(eeprom_cmd::esi(&w, op)),
-        Cmd::Conformance(args) => smol::block_on(conformance_cmd::conformance(&w, &args)),
-        Cmd::Hcs { op } => smol::block_on(hcs::hcs(&w, op)),
-        Cmd::Firmware { op } => {
-            let dev = device.unwrap_or(&device_catalog::DEVICES[0]);
-            foe_cmd::firmware(dev, op)
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use clap::CommandFactory;
+
+    fn parse(args: &[&str]) -> Result<Cli, clap::Error> {
+        Cli::try_parse_from(std::iter::once("master-test").chain(args.iter().copied()))
+    }
 
     #[test]
     fn cli_definition_is_consistent() {
@@ -273,14 +93,61 @@ mod tests {
     }
 
     #[test]
-    fn station_addresses_parse_in_hex_and_decimal() {
-        assert_eq!(parse_u16("0x1001"), Ok(0x1001));
-        assert_eq!(parse_u16("4097"), Ok(0x1001));
-        assert!(
-            parse_u16("0x10000")
-                .unwrap_err()
-                .contains("outside 0..=65535")
-        );
-        assert!(parse_u16("abc").unwrap_err().contains("not a number"));
+    fn without_a_command_the_demo_runs() {
+        let cli = parse(&["--line", "pam*2"]).unwrap();
+        assert!(cli.command.is_none());
+        assert!(matches!(cli.command.unwrap_or_default(), Cmd::Demo(_)));
+    }
+
+    #[test]
+    fn shared_options_stand_before_or_after_the_command() {
+        for args in [
+            &[
+                "--line",
+                "pam,io8",
+                "--slave",
+                "1",
+                "sdo",
+                "read",
+                "0x1008:00",
+            ][..],
+            &[
+                "sdo",
+                "read",
+                "0x1008:00",
+                "--line",
+                "pam,io8",
+                "--slave",
+                "1",
+            ],
+            &[
+                "sdo",
+                "--slave",
+                "1",
+                "read",
+                "--line",
+                "pam,io8",
+                "0x1008:00",
+            ],
+        ] {
+            let cli = parse(args).unwrap();
+            assert_eq!(cli.shared.line.as_deref(), Some("pam,io8"), "{args:?}");
+            assert_eq!(cli.shared.slave, Some(1), "{args:?}");
+            assert!(matches!(cli.command, Some(Cmd::Sdo(_))), "{args:?}");
+        }
+    }
+
+    #[test]
+    fn bad_arguments_are_usage_errors_with_exit_status_2() {
+        for args in [
+            &["--device", "nope", "scan"][..],
+            &["--station", "x", "scan"],
+            &["--line", "pam", "--device", "io8"],
+            &["scan", "--no-such-flag"],
+            &["demo", "--current", "5000"],
+        ] {
+            let e = parse(args).expect_err("refused");
+            assert_eq!(e.exit_code(), 2, "{args:?}: {e}");
+        }
     }
 }

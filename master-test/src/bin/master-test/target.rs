@@ -6,7 +6,8 @@ use master_test::eeprom;
 use master_test::mailbox::{MailboxClient, MailboxGeometry};
 use master_test::{BusError, Group};
 
-/// Where and to whom: the global options of every bus command.
+/// Where and to whom: the target of a bus command, made from the shared
+/// options by [`crate::options::SharedOptions::target`] only.
 #[derive(Debug, Clone, Default)]
 pub struct Where {
     /// Network interface; `None`: the built-in virtual bus.

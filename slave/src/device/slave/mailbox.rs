@@ -23,17 +23,20 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             return Ok(());
         }
         let (_, inp) = self.mailbox_layout();
-        if let Some((len, buf)) = self.pending.take() {
+        if let Some(len) = self.pending.take() {
             let n = usize::from(inp.1).min(MBX);
-            let mut frame = [0u8; MBX];
-            if let (Some(dst), Some(src)) = (frame.get_mut(..len), buf.get(..len)) {
-                dst.copy_from_slice(src);
+            // The whole SM1 buffer goes out: zeros after the response.
+            if let Some(tail) = self.tx.get_mut(len.min(n)..n) {
+                tail.fill(0);
             }
-            if let Some(f) = frame.get(..n) {
+            if let Some(f) = self.tx.get(..n) {
                 self.esc.write(inp.0, f)?;
                 self.sm1_writes = self.sm1_writes.wrapping_add(1);
             }
-            self.last_sent = Some((len, frame));
+            // What was sent is kept for the repeat service (swapped in
+            // place: no buffer-sized copy on the stack).
+            core::mem::swap(&mut self.tx, &mut self.sent);
+            self.last_sent = Some(len);
         }
         Ok(())
     }
@@ -49,13 +52,10 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         if request == pdi & smr::PDI_REPEAT_ACK {
             return Ok(());
         }
-        if !self.sm_full(1)?
-            && let Some((_, frame)) = &self.last_sent
-        {
+        if self.last_sent.is_some() && !self.sm_full(1)? {
             let (_, inp) = self.mailbox_layout();
             let n = usize::from(inp.1).min(MBX);
-            let copy = *frame;
-            if let Some(f) = copy.get(..n) {
+            if let Some(f) = self.sent.get(..n) {
                 self.esc.write(inp.0, f)?;
                 self.sm1_writes = self.sm1_writes.wrapping_add(1);
             }
@@ -81,20 +81,26 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         if !self.sm_full(0)? {
             // Nothing new: continue a response that spans several mailboxes.
             let (_, inp) = self.mailbox_layout();
+            let emergency = self.emergencies_enabled && !self.emergencies.is_empty();
+            if !self.mailbox.has_pending() && !emergency {
+                return Ok(());
+            }
             let max = usize::from(inp.1).min(MBX);
-            let mut response = [0u8; MBX];
-            let mut produced = response
+            // `tx` is free: nothing is pending.
+            self.tx.fill(0);
+            let mut produced = self
+                .tx
                 .get_mut(..max)
                 .and_then(|r| self.mailbox.next_pending(r, view));
-            if produced.is_none() && self.emergencies_enabled && !self.emergencies.is_empty() {
-                produced = response.get_mut(..max).and_then(|r| {
+            if produced.is_none() && emergency {
+                produced = self.tx.get_mut(..max).and_then(|r| {
                     let body = r.get_mut(crate::wire::mailbox::HEADER_LEN..)?;
                     let n = self.emergencies.pop_into(body)?;
                     self.mailbox.frame_coe(r, n)
                 });
             }
             if let Some(len) = produced {
-                self.pending = Some((len, response));
+                self.pending = Some(len);
                 self.deliver_pending()?;
             }
             return Ok(());
@@ -106,7 +112,8 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             return Ok(());
         };
         self.esc.read(out.0, req)?;
-        let mut response = [0u8; MBX];
+        // The response is built in `tx` (free: nothing is pending).
+        self.tx.fill(0);
         let max = usize::from(inp.1).min(MBX);
         let state = self.al.state;
         let version = self.firmware_version();
@@ -126,7 +133,7 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             busy: false,
         });
         let now_ns = self.now_ns;
-        let produced = match response.get_mut(..max) {
+        let produced = match self.tx.get_mut(..max) {
             // Disjoint field borrows: no copy of the mailbox server.
             Some(resp) => self.mailbox.handle(
                 req,
@@ -142,7 +149,7 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             None => None,
         };
         if let Some(len) = produced {
-            self.pending = Some((len, response));
+            self.pending = Some(len);
             self.deliver_pending()?;
         }
         Ok(())

@@ -104,10 +104,15 @@ pub struct Slave<
     outputs: ProcessImage<PDO>,
     inputs: ProcessImage<PDO>,
     mailbox: MailboxServer<SDO>,
-    /// A response waiting for SM1 to become free.
-    pending: Option<(usize, [u8; MBX])>,
-    /// The last response written to SM1, for the repeat service.
-    last_sent: Option<(usize, [u8; MBX])>,
+    /// The length of a response waiting in `tx` for SM1 to become free.
+    pending: Option<usize>,
+    /// The response being built or waiting (`pending`).
+    tx: [u8; MBX],
+    /// The length of the last response written to SM1 (in `sent`), for
+    /// the repeat service.
+    last_sent: Option<usize>,
+    /// The last response written to SM1.
+    sent: [u8; MBX],
     emergencies: Emergencies,
     emergencies_enabled: bool,
     pdi_failures: u32,
@@ -223,7 +228,9 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             inputs: ProcessImage::default(),
             mailbox: MailboxServer::new(),
             pending: None,
+            tx: [0; MBX],
             last_sent: None,
+            sent: [0; MBX],
             emergencies: Emergencies::default(),
             emergencies_enabled: true,
             pdi_failures: 0,

@@ -14,9 +14,16 @@ use master_test::mailbox::{ClientError, MailboxClient};
 
 const NO_CHANNEL: &str = "the node has no HCS telegram channel (0x2000/0x2001)";
 
+/// Options of `hcs`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    #[command(subcommand)]
+    op: Op,
+}
+
 /// `hcs` subcommands.
-#[derive(clap::Subcommand)]
-pub enum HcsCmd {
+#[derive(clap::Subcommand, Debug, Clone)]
+pub enum Op {
     /// CMD 3: read 1..=8 parameter words of a module, from ID onwards.
     Read {
         /// Module address (E22), 1..=5.
@@ -200,11 +207,12 @@ fn show(answer: &[u8]) -> Result<(), Failure> {
 }
 
 /// Runs an `hcs` subcommand.
-pub async fn hcs(w: &Where, op: HcsCmd) -> Result<(), Failure> {
+pub async fn run(w: &Where, args: Args) -> Result<(), Failure> {
+    let op = args.op;
     // Everything is checked before anything is sent.
     let build = |tadr: u8| -> Result<Option<RequestRepr>, Failure> {
         Ok(Some(match &op {
-            HcsCmd::Read { module, id, words } => {
+            Op::Read { module, id, words } => {
                 let r = ReadRequest {
                     tadr,
                     sadr: *module,
@@ -214,13 +222,13 @@ pub async fn hcs(w: &Where, op: HcsCmd) -> Result<(), Failure> {
                 r.check().map_err(|e| input(format!("CMD 3: {e}")))?;
                 RequestRepr::Read(r)
             }
-            HcsCmd::Write { module, id, value } => RequestRepr::Write(WriteParameter {
+            Op::Write { module, id, value } => RequestRepr::Write(WriteParameter {
                 tadr,
                 sadr: *module,
                 id: number("ID", id, 0, 0xFFFF)? as u16,
                 value: number("value", value, -32768, 65535)? as u16,
             }),
-            HcsCmd::Multi {
+            Op::Multi {
                 values,
                 values2,
                 control,
@@ -248,12 +256,12 @@ pub async fn hcs(w: &Where, op: HcsCmd) -> Result<(), Failure> {
                         .map_err(|e| input(format!("CMD 15: {e}")))?,
                 )
             }
-            HcsCmd::Raw { .. } => return Ok(None),
+            Op::Raw { .. } => return Ok(None),
         }))
     };
     build(0)?;
     let raw = match &op {
-        HcsCmd::Raw { bytes } => Some(hex_bytes(bytes)?),
+        Op::Raw { bytes } => Some(hex_bytes(bytes)?),
         _ => None,
     };
     let s = Session::open(w).await?;

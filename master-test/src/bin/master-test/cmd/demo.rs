@@ -1,6 +1,7 @@
 //! `demo`: PAM slaves to OP, SDO parameters, a set-point, the result.
 
 use crate::failure::{Failure, input};
+use crate::options::SharedOptions;
 use crate::output::{long_command, outln, stop_requested};
 use crate::target::{Where, connect, initialised};
 use master_test::bus::Bus;
@@ -60,7 +61,7 @@ pub const MAX_CYCLES: u32 = 3_600_000;
 
 /// Options of `demo`.
 #[derive(clap::Args, Debug, Clone)]
-pub struct DemoArgs {
+pub struct Args {
     /// Number of PAM slaves on the virtual line, 1..=1024 (or use
     /// --line); a progress bar shows the bring-up of long lines.
     #[arg(long, default_value_t = 1,
@@ -83,9 +84,9 @@ pub struct DemoArgs {
     pub pcap: Option<std::path::PathBuf>,
 }
 
-impl Default for DemoArgs {
+impl Default for Args {
     fn default() -> Self {
-        DemoArgs {
+        Args {
             slaves: 1,
             current: 1500,
             command: 5000,
@@ -168,9 +169,32 @@ fn line_length(w: &Where) -> usize {
     device_catalog::parse_line(&w.line).map_or(0, |l| l.len())
 }
 
-/// Runs the demo: a line of up to [`MAX_SUBDEVICES`] in the tools' group,
+/// Runs `demo`: without --line or --device on a line of --slaves PAMs,
+/// on a thread with a big stack (a long line's group is large, see
+/// [`master_test::LongGroup`]).
+pub fn run(shared: &SharedOptions, args: Args) -> Result<(), Failure> {
+    let mut w = shared.target(|| format!("pam*{}", args.slaves))?;
+    if w.eni.is_some() {
+        return Err(input(
+            "the demo drives PAMs of its own; use scan, state, sdo, watch or od with --eni",
+        ));
+    }
+    if shared.names_virtual_line() && args.slaves != 1 {
+        return Err(input("--slaves cannot be combined with --line or --device"));
+    }
+    w.pcap.clone_from(&args.pcap);
+    std::thread::Builder::new()
+        .name("demo".into())
+        .stack_size(64 << 20)
+        .spawn(move || smol::block_on(demo(&w, &args)))
+        .map_err(|e| Failure::Comm(format!("cannot start the demo thread: {e}")))?
+        .join()
+        .unwrap_or_else(|_| Err(Failure::Comm("the demo thread panicked".into())))
+}
+
+/// The demo: a line of up to [`MAX_SUBDEVICES`] in the tools' group,
 /// longer ones (up to [`LONG_LINE`]) in a long group.
-pub async fn run(w: &Where, a: &DemoArgs) -> Result<(), Failure> {
+async fn demo(w: &Where, a: &Args) -> Result<(), Failure> {
     if w.iface.is_some() && a.pcap.is_some() {
         return Err(input(
             "--pcap captures the virtual bus; on an interface use tshark or tcpdump",
@@ -196,7 +220,7 @@ pub async fn run(w: &Where, a: &DemoArgs) -> Result<(), Failure> {
 /// The demo on an initialised group of up to `N` slaves.
 async fn drive<const N: usize, const P: usize>(
     w: &Where,
-    a: &DemoArgs,
+    a: &Args,
     bus: Bus,
     group: ethercrab::SubDeviceGroup<
         N,

@@ -1,4 +1,5 @@
-//! `eeprom read/write` and `esi check` against the live slave.
+//! `eeprom read/write`: the slave's SII EEPROM over the ESC's EEPROM
+//! interface.
 
 use crate::failure::{Failure, input};
 use crate::output::{self, outln};
@@ -7,6 +8,13 @@ use ecat_slave::sii::SiiReader;
 use master_test::eeprom;
 use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
+
+/// Options of `eeprom`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    #[command(subcommand)]
+    op: Op,
+}
 
 /// How an SII image is written out.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -20,8 +28,8 @@ pub enum Format {
 }
 
 /// `eeprom` subcommands.
-#[derive(clap::Subcommand)]
-pub enum EepromCmd {
+#[derive(clap::Subcommand, Debug, Clone)]
+pub enum Op {
     /// Read the whole SII (header and every category up to the end
     /// marker).
     Read {
@@ -46,20 +54,6 @@ pub enum EepromCmd {
     },
 }
 
-/// `esi` subcommands.
-#[derive(clap::Subcommand)]
-pub enum EsiCmd {
-    /// Compare the live slave's SII (read over the EEPROM interface) with
-    /// an ESI: identity, name, mailbox, SyncManagers, FMMUs, PDOs, DC.
-    /// Exit 1 on mismatches.
-    Check {
-        /// The ESI XML file; default: the ESI generated for the catalog
-        /// device with the slave's identity.
-        #[arg(long)]
-        esi: Option<PathBuf>,
-    },
-}
-
 /// A hex dump: offset, 16 bytes.
 fn dump(image: &[u8]) -> String {
     let mut out = String::new();
@@ -71,10 +65,10 @@ fn dump(image: &[u8]) -> String {
 }
 
 /// Runs an `eeprom` command.
-pub async fn eeprom(w: &Where, op: EepromCmd) -> Result<(), Failure> {
-    match op {
-        EepromCmd::Read { output, format } => read(w, output.as_deref(), format).await,
-        EepromCmd::Write { file, force } => write(w, &file, force).await,
+pub async fn run(w: &Where, args: Args) -> Result<(), Failure> {
+    match args.op {
+        Op::Read { output, format } => read(w, output.as_deref(), format).await,
+        Op::Write { file, force } => write(w, &file, force).await,
     }
 }
 
@@ -178,62 +172,6 @@ async fn write(w: &Where, file: &Path, force: bool) -> Result<(), Failure> {
         sel.label()
     );
     Ok(())
-}
-
-/// Runs an `esi` command.
-pub async fn esi(w: &Where, op: EsiCmd) -> Result<(), Failure> {
-    let EsiCmd::Check { esi } = op;
-    let given = match &esi {
-        Some(p) => Some(
-            String::from_utf8(
-                std::fs::read(p).map_err(|e| input(format!("cannot read {}: {e}", p.display())))?,
-            )
-            .map_err(|_| input(format!("{}: not an ESI XML file (not UTF-8)", p.display())))?,
-        ),
-        None => None,
-    };
-    let s = Session::open(w).await?;
-    let sel = s.select(w).await?;
-    let (xml, source) = match (given, &esi, sel.device) {
-        (Some(x), Some(p), _) => (x, p.display().to_string()),
-        (None, _, Some(d)) => {
-            let x = ecat_esi::esi::generate(d.description)
-                .map_err(|e| input(format!("cannot generate the ESI: {e}")))?;
-            let x = String::from_utf8(x).map_err(|_| input("generated ESI is not UTF-8"))?;
-            (
-                x,
-                format!("the generated ESI of {}", d.description.names.type_name),
-            )
-        }
-        _ => {
-            return Err(input(format!(
-                "{} is not a catalog device (vendor {:#x} product {:#x}): give its ESI \
-                 with --esi FILE",
-                sel.label(),
-                sel.identity.vendor_id,
-                sel.identity.product_id
-            )));
-        }
-    };
-    let image = eeprom::read_all(s.md(), sel.station).await?;
-    let mismatches = ecat_esi::check::check(&xml, &image)
-        .map_err(|e| input(format!("cannot check {source}: {e}")))?;
-    if mismatches.is_empty() {
-        outln!(
-            "{} ({} bytes of SII) agrees with {source}",
-            sel.label(),
-            image.len()
-        );
-        return Ok(());
-    }
-    for m in &mismatches {
-        outln!("{m}");
-    }
-    Err(Failure::Mismatch(format!(
-        "{} mismatch(es) between {} and {source}",
-        mismatches.len(),
-        sel.label()
-    )))
 }
 
 #[cfg(test)]

@@ -1,16 +1,16 @@
-//! `master-test conformance`: the open conformance checker against one
-//! slave (see [`master_test::conformance`]).
+//! `conformance`: the open conformance checker against one slave (see
+//! [`master_test::conformance`]).
 
 use crate::failure::{Failure, input};
-use crate::foe_cmd::parse_password;
 use crate::output::outln;
+use crate::parse::parse_password;
 use crate::target::{Session, Where};
 use master_test::conformance::{self, FoeOptions, Group, Options};
 use std::path::PathBuf;
 
 /// Options of `conformance`.
-#[derive(clap::Args, Debug)]
-pub struct ConformanceArgs {
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
     /// The device's ESI file, for the SII and dictionary consistency
     /// checks (default: the generated ESI when the slave is a device of
     /// the catalog; otherwise those checks do not apply).
@@ -37,7 +37,7 @@ pub struct ConformanceArgs {
 
 /// Runs the checks and prints the table; exit status 1 when a check
 /// failed.
-pub async fn conformance(w: &Where, args: &ConformanceArgs) -> Result<(), Failure> {
+pub async fn run(w: &Where, args: Args) -> Result<(), Failure> {
     let read = |p: &PathBuf| {
         std::fs::read(p).map_err(|e| input(format!("cannot read {}: {e}", p.display())))
     };
