@@ -18,6 +18,7 @@ exits 1 on the first disagreement.
     soem_interop.py safety_after_power_cycle IFACE
     soem_interop.py board IFACE ESI.xml EEPROM.bin GOOD.efw BAD_CRC.efw BOOT_OUT BOOT_IN
     soem_interop.py board_after_restart IFACE VERSION
+    soem_interop.py servo402 IFACE
 
 phase1: discovery, SDO, SDO Information, complete access, SII, state
 machine, SM watchdog, 1000 cycles, an ended session followed by a second
@@ -70,6 +71,14 @@ back to the inputs, the SM watchdog to SAFE-OP and back, and FoE in BOOT
 BOOT_IN are the bootstrap mailbox as `start:length` (hex).
 board_after_restart (after QEMU restarted on the same bridge, i.e. a
 board reset with its flash kept): 0x100A is VERSION, OP and 100 cycles.
+servo402 (one CiA 402 servo drive): SOEM writes the PDO assignment and
+the mode (0x6060 = 8, CSP) in PRE-OP, configures DC (config_dc, SYNC0
+every 1 ms), reaches OP DC-synchronous, walks the drive's state machine
+to Operation enabled (0x0006, 0x0007, 0x000F, the target at the actual
+position first), runs a ramp of target positions and checks that the
+position follows (following error within its window, the position on
+the target after the ramp, no fault), then a quick stop to Switch on
+disabled and the drive disabled before leaving OP.
 """
 
 import struct
@@ -906,6 +915,88 @@ def board_after_restart(iface, version):
     m.close()
 
 
+# servo402's fixed PDOs: 0x1600 controlword, target position, target
+# velocity, target torque, modes of operation; 0x1A00 statusword,
+# position, velocity, torque, modes of operation display, following
+# error, error code.
+SERVO_OUT = struct.Struct("<HiihB")
+SERVO_IN = struct.Struct("<HiihbiH")
+# Statusword state coding (CiA 402, mask 0x6F / 0x4F).
+SWITCH_ON_DISABLED, READY, SWITCHED_ON, ENABLED = 0x40, 0x21, 0x23, 0x27
+
+
+def servo402(iface):
+    m, n = open_master(iface)
+    check(n == 1, f"SOEM config_init found {n} slave(s) (1 expected)")
+    s = m.slaves[0]
+    check(s.name == "SERVO402", f"SII name {s.name!r}")
+    modes = struct.unpack("<I", s.sdo_read(0x6502, 0))[0]
+    check(modes & 0x380 == 0x380, f"0x6502 supported drive modes {modes:#x}: CSP, CSV, CST")
+    # The master's PDO configuration in PRE-OP: the assignment (the
+    # mapping objects are fixed until the core takes written mappings).
+    for index, pdo in ((0x1C12, 0x1600), (0x1C13, 0x1A00)):
+        s.sdo_write(index, 0, bytes([0]))
+        s.sdo_write(index, 1, struct.pack("<H", pdo))
+        s.sdo_write(index, 0, bytes([1]))
+    s.sdo_write(0x6060, 0, struct.pack("<b", 8))
+    check(struct.unpack("<b", s.sdo_read(0x6061, 0))[0] == 8, "0x6061 shows CSP")
+    check(bool(m.config_dc()), "config_dc: the drive has DC")
+    set_sm_watchdog(m, LONG_WATCHDOG_MS)
+    cycle_ns = 1_000_000
+    s.dc_sync(True, cycle_ns)
+    m.config_map()
+    check((len(s.output), len(s.input)) == (13, 19),
+          f"process image {len(s.output)} bytes out, {len(s.input)} in (13, 19)")
+    check(to_op(m), "OP, DC-synchronous")
+    sync = struct.unpack("<H", s.sdo_read(0x1C32, 1))[0]
+    check(sync == 2, f"0x1C32:01 sync mode {sync} (2: DC SYNC0)")
+
+    def exchange(controlword, target, n=1):
+        for _ in range(n):
+            s.output = SERVO_OUT.pack(controlword, target, 0, 0, 8)
+            m.send_processdata()
+            m.receive_processdata(RECEIVE_TIMEOUT_US)
+            time.sleep(0.001)
+        return SERVO_IN.unpack(bytes(s.input))
+
+    def command(controlword, target, want, mask=0x6F):
+        for _ in range(500):
+            sw = exchange(controlword, target)[0]
+            if sw & mask == want:
+                break
+        return sw
+
+    sw, pos, *_ = exchange(0, 0, 10)
+    check(sw & 0x4F == SWITCH_ON_DISABLED, f"statusword {sw:#06x}: Switch on disabled")
+    target = pos
+    for cw, want in ((0x0006, READY), (0x0007, SWITCHED_ON), (0x000F, ENABLED)):
+        sw = command(cw, target, want)
+        check(sw & 0x6F == want, f"controlword {cw:#06x}: statusword {sw:#06x}")
+    check(sw & 0x1000 != 0, "CSP: the target position is used (bit 12)")
+    start, worst, err = pos, 0, 0
+    # 20 inc per cycle; the drive follows on its own clock.
+    for _ in range(1000):
+        target += 20
+        sw, pos, vel, tq, md, fe, err = exchange(0x000F, target)
+        worst = max(worst, abs(fe))
+        if sw & 0x6F != ENABLED or err:
+            break
+    check(sw & 0x6F == ENABLED and err == 0, f"the ramp ran in Operation enabled: {sw:#06x}, error {err:#06x}")
+    log(f"      ramp of {target - start} inc: following error up to {worst} inc")
+    check(worst <= 5000, f"following error within the 5000 inc window ({worst})")
+    sw, pos, vel, tq, md, fe, err = exchange(0x000F, target, 100)
+    check(abs(target - pos) <= 10 and vel == 0, f"position {pos} on the target {target}, velocity {vel}")
+    check(pos - start >= 19_000, f"the axis moved {pos - start} inc")
+    sw = command(0x0002, target, SWITCH_ON_DISABLED, 0x4F)
+    check(sw & 0x4F == SWITCH_ON_DISABLED, f"quick stop: statusword {sw:#06x}, Switch on disabled")
+    sw, *_, err = exchange(0, target, 5)
+    check(err == 0, f"no fault after the quick stop ({err:#06x})")
+    m.state = pysoem.INIT_STATE
+    m.write_state()
+    m.state_check(pysoem.INIT_STATE, 2_000_000)
+    m.close()
+
+
 def main():
     if len(sys.argv) < 3:
         print(__doc__)
@@ -933,6 +1024,8 @@ def main():
         board(*sys.argv[2:9])
     elif sys.argv[1] == "board_after_restart":
         board_after_restart(*sys.argv[2:4])
+    elif sys.argv[1] == "servo402":
+        servo402(*sys.argv[2:3])
     else:
         print(__doc__)
         return 2

@@ -42,6 +42,13 @@ const SCOPES: &[Scope] = &[
         test_only: &["testing"],
     },
     Scope {
+        dir: "profiles/cia402/src",
+        doc: "lib.rs",
+        top_level: true,
+        path: "",
+        test_only: &[],
+    },
+    Scope {
         dir: "slave/src/od",
         doc: "mod.rs",
         top_level: false,

@@ -24,6 +24,7 @@ mod power_cut;
 mod qemu;
 mod safety;
 mod sdo;
+mod servo402;
 mod shared;
 mod sii;
 mod soem;

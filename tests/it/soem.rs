@@ -467,6 +467,15 @@ fn soem_brings_a_dma22_node_with_three_modules_to_op_after_writing_0xf030() {
     soem_phase("h", "dma22", "dma22", &[], &["dma22"]);
 }
 
+/// The servo402 CiA 402 drive through SOEM (the script's `servo402`
+/// phase): the PDO assignment and CSP written in PRE-OP, DC with SYNC0
+/// every 1 ms, OP, the drive's state machine to Operation enabled, a
+/// target ramp the position follows, a quick stop to Switch on disabled.
+#[test]
+fn soem_drives_servo402_to_operation_enabled_in_csp_on_sync0_and_the_position_follows() {
+    soem_phase("w", "servo402", "servo402", &[], &["servo402"]);
+}
+
 /// A line built from an ENI (`pam-slave --eni`, the script's `twins`
 /// phase): EK1100, EL2004, EL2828 twins from their ESI files, an EL1008
 /// twin counting, the PAM built in, and a CoE twin from an ESI (the IO8's,

@@ -28,3 +28,8 @@ pub struct DistributedClocks;
 #[cfg(doctest)]
 #[doc = include_str!("../../docs/book/src/spi-drivers.md")]
 pub struct SpiDrivers;
+
+/// Book: "CiA 402 drives" (the twin hook on a twin of servo402's ESI).
+#[cfg(doctest)]
+#[doc = include_str!("../../docs/book/src/cia402.md")]
+pub struct Cia402Drives;

@@ -119,6 +119,12 @@ pub const DEVICES: &[DeviceEntry] = &[
         make: make::<io8_example::Io8>,
     },
     DeviceEntry {
+        key: "servo402",
+        summary: "servo402 example: a CiA 402 servo drive (CSP/CSV/CST, PP/PV/HM, DC SYNC0)",
+        description: &servo402_example::DEVICE,
+        make: make::<servo402_example::Servo402>,
+    },
+    DeviceEntry {
         key: "dma22",
         summary: "HCS DMA-22(A) node, modular: 3 DMA-22(A) modules in mode 3 (manual 5.4.2)",
         description: &hcs_dma22::device::DEVICE,
