@@ -32,7 +32,7 @@ cd "$(dirname "$0")/.."
 
 mode="${1:-smoke}"
 shift || true
-all_targets=(line_frames mailbox sii esi efw hcs_telegram twin)
+all_targets=(line_frames mailbox sii esi efw hcs_telegram twin pam_invariants)
 if [ $# -gt 0 ]; then targets=("$@"); else targets=("${all_targets[@]}"); fi
 
 sanitizer="${FUZZ_SANITIZER:-none}"
@@ -40,7 +40,7 @@ log_dir="${FUZZ_LOG_DIR:-fuzz/logs}"
 
 # Largest input per target: several frames, a bootstrap mailbox, a 4 KiB
 # SII image as Intel HEX, an ESI of a small device, an HCS telegram (at
-# most 28 bytes) in a process-data buffer.
+# most 28 bytes) in a process-data buffer, up to 128 master actions.
 max_len() {
     case "$1" in
         line_frames) echo 16384 ;;
@@ -50,6 +50,7 @@ max_len() {
         efw) echo 8192 ;;
         hcs_telegram) echo 128 ;;
         twin) echo 65536 ;;
+        pam_invariants) echo 1024 ;;
         *) echo 4096 ;;
     esac
 }

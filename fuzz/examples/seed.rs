@@ -17,6 +17,13 @@
 //! - `esi`: the generated ESIs (the PAM's without its 155 KB dictionary
 //!   and with a dictionary of one object, the IO8's whole). The ETG schema
 //!   files of `shared/esi-schema` are not copied into the repository.
+//! - `pam_invariants`: the named master sessions of
+//!   `pam_199_p_etc::invariants::seeds` (bring-up, frames stopping,
+//!   independent mode, updates cut and rolled back, the vendor password,
+//!   cut saves, PDI faults, the watchdog disabled, complete access,
+//!   power-stage faults, unreadable boot records), encoded with
+//!   `invariants::encode`. `cargo run --example seed -- pam_invariants`
+//!   writes only these (no ethercrab sessions).
 //! - `efw`: `.efw` images packed with the library (`master-test firmware
 //!   pack` does the same), one with a header extension, one for another
 //!   product, and a boot state record.
@@ -152,6 +159,18 @@ async fn session_mailbox(pcap: &Path) -> Result<(), Error> {
 fn main() -> Result<(), Error> {
     let fuzz = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let seeds = fuzz.join("seeds");
+    let only: Vec<String> = std::env::args().skip(1).collect();
+
+    // --- pam_invariants: named master sessions ---------------------------
+    if only.is_empty() || only.iter().any(|t| t == "pam_invariants") {
+        let dir = seeds.join("pam_invariants");
+        for (name, actions) in pam_199_p_etc::invariants::seeds() {
+            write(&dir, name, &pam_199_p_etc::invariants::encode(&actions))?;
+        }
+    }
+    if !only.is_empty() && only.iter().all(|t| t == "pam_invariants") {
+        return Ok(());
+    }
     let tmp = std::env::temp_dir().join(format!("ecat-fuzz-seed-{}", std::process::id()));
     std::fs::create_dir_all(&tmp)?;
 

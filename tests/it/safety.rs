@@ -250,3 +250,40 @@ fn an_unused_sm2_may_be_enabled_with_length_0_but_not_with_a_length() {
         }
     });
 }
+
+/// Found by invariant I1 (docs/SAFETY.md P2): in OP the cyclic outputs
+/// own the entries the assigned RxPDO maps. An SDO write of ENABLE there
+/// drove the valve until the next cycle overwrote it; it is refused with
+/// 0x08000022 and the valve stays off. Unmapped outputs are still stored.
+#[test]
+fn an_sdo_write_of_a_mapped_output_in_op_is_refused() {
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md: &Md = &bus.maindevice;
+        let group = bus.init().await.expect("PRE-OP");
+        let group = group.into_op(md).await.expect("OP");
+        let sd = group.subdevice(md, 0).expect("slave");
+        {
+            let mut out = sd.outputs_raw_mut();
+            out[0] = 0; // ENABLE off
+            out[1..5].copy_from_slice(&5000i32.to_le_bytes());
+        }
+        for _ in 0..50 {
+            bus.clock.advance(Duration::from_millis(1));
+            group.tx_rx(md).await.expect("cycle");
+        }
+        let e = sd
+            .sdo_write(0x7000, 1, 1u8)
+            .await
+            .expect_err("ENABLE is mapped in OP");
+        assert_eq!(abort_code(&e), Some(0x0800_0022));
+        sd.sdo_write(0x7010, 1, 1u8)
+            .await
+            .expect("0x7010 is not mapped in directional mode");
+        for _ in 0..20 {
+            bus.clock.advance(Duration::from_millis(1));
+            group.tx_rx(md).await.expect("cycle");
+        }
+        assert_eq!(setpoints(&bus, 0), (0, 0), "solenoids off");
+    });
+}

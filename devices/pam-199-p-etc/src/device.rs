@@ -100,6 +100,22 @@ pub fn function_set(od: &Od) -> usize {
     if od.get(0xF800, 2) == Some(2) { 1 } else { 0 }
 }
 
+/// Whether `index:sub` is mapped by an RxPDO of the assignment 0x1C12.
+fn rx_mapped(od: &Od, index: u16, sub: u8) -> bool {
+    if !(0x7000..=0x7FFF).contains(&index) {
+        return false;
+    }
+    let count = od.get(0x1C12, 0).unwrap_or(0).clamp(0, 254) as u8;
+    (1..=count).any(|k| {
+        let pdo = od.get(0x1C12, k).unwrap_or(0) as u16;
+        let entries = od.get(pdo, 0).unwrap_or(0).clamp(0, 254) as u8;
+        (1..=entries).any(|e| {
+            let m = od.get(pdo, e).unwrap_or(0) as u32;
+            (m >> 16) as u16 == index && (m >> 8) as u8 == sub
+        })
+    })
+}
+
 /// The PAM-199-P-ETC's behaviour, driving the solenoids through a
 /// [`PowerStage`] and keeping its parameters in an [`NvStorage`].
 pub struct Pam<P: PowerStage = SimPowerStage, N: NvStorage = MemNv<STORAGE_SIZE>> {
@@ -290,6 +306,12 @@ impl<P: PowerStage + Send + 'static, N: NvStorage + Send + 'static> Application 
 
     fn sdo_download(&mut self, od: &mut Od, d: &Download<'_>) -> Result<Write, SdoAbortCode> {
         let index = d.index;
+        // In OP the cyclic outputs own the mapped output objects: an SDO
+        // write there would drive the valve until the next cycle
+        // overwrote it (docs/SAFETY.md P2, found by invariant I1).
+        if d.state == AlState::Op && d.changes.iter().any(|(sub, _)| rx_mapped(od, index, *sub)) {
+            return Err(SdoAbortCode::InvalidState);
+        }
         // 0xF801: PASSWORD unlocks (or with 0 locks) the manufacturer
         // settings; SAVE / DEFAULT / LOADBACK run when written with 1.
         if index == 0xF801 {

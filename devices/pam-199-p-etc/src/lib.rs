@@ -28,6 +28,8 @@
 pub mod app;
 mod device;
 pub mod diagnosis;
+#[cfg(any(test, feature = "invariants"))]
+pub mod invariants;
 pub mod od;
 #[cfg(test)]
 mod tests;

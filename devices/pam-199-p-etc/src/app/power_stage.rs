@@ -394,6 +394,12 @@ impl Coil {
         };
     }
 
+    /// No setpoint, no current, controller reset: a sub-step changes
+    /// nothing.
+    fn at_rest(&self) -> bool {
+        self.setpoint_ma == 0 && self.i == 0.0 && self.integ == 0.0 && self.duty == 0.0
+    }
+
     fn measured_ma(&self) -> u16 {
         // `as` saturates (and maps NaN to 0).
         (self.i * 1000.0 + 0.5) as u16
@@ -558,6 +564,12 @@ impl PowerStage for SimPowerStage {
         let n = total / u64::from(SUB_STEP_US);
         self.pending_us = u32::try_from(total % u64::from(SUB_STEP_US)).unwrap_or(0);
         let n = n.min(u64::from(MAX_SUB_STEPS));
+        if self.a.at_rest() && self.b.at_rest() {
+            // Nothing demanded, no current: every sub-step would leave
+            // both coils as they are (only the dither phase advances).
+            self.t_us = self.t_us.wrapping_add(n * u64::from(SUB_STEP_US));
+            return;
+        }
         let dt = SUB_STEP_US as f32 * 1e-6;
         let (supply, r, l) = (self.supply_v, self.r_ohm, self.l_h);
         for _ in 0..n {
@@ -753,5 +765,27 @@ mod tests {
         b.step(30_000);
         assert_eq!(a.measured_ma(Solenoid::A), b.measured_ma(Solenoid::A));
         a.step(u32::MAX); // capped, no hang, no panic
+    }
+
+    #[test]
+    fn a_stage_at_rest_skips_its_sub_steps_with_the_same_result() {
+        let mut fast = SimPowerStage::new();
+        fast.step(12_345);
+        // The slow path, forced by a setpoint that is taken back at once.
+        let mut slow = SimPowerStage::new();
+        slow.set_current(Solenoid::A, 1, Dither::OFF, 2_500, PiGains::default());
+        slow.set_current(Solenoid::A, 0, Dither::OFF, 2_500, PiGains::default());
+        slow.a.duty = 0.0;
+        for _ in 0..12_345 / 50 {
+            slow.a.sub_step(0, 24.0, 6.0, 0.03, 50e-6);
+            slow.b.sub_step(0, 24.0, 6.0, 0.03, 50e-6);
+        }
+        assert_eq!(fast.a, slow.a);
+        assert_eq!(fast.b, slow.b);
+        assert_eq!(fast.t_us, 12_300);
+        // From rest a setpoint still drives the coil.
+        fast.set_current(Solenoid::B, 800, Dither::OFF, 2_500, PiGains::default());
+        run(&mut fast, 100);
+        assert!(fast.measured_ma(Solenoid::B) > 780);
     }
 }

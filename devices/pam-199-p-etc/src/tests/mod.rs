@@ -5,6 +5,7 @@
 #![allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
 
 mod complete;
+mod invariants;
 mod params;
 mod pdo;
 mod sdo_info;
