@@ -33,7 +33,9 @@ use ecat_slave::wire::mailbox::{HEADER_LEN as MBX_HEADER, Mailbox, MailboxRepr, 
 use super::action::{
     Action, Coil, Image, Outputs, PDOS, PdiRegion, Request, SmSetting, StageEvent, Target, Value,
 };
-use super::model::{Invariant, Observation, PassContext, Shadow, Unlock, Violation, mapping};
+use super::model::{
+    Invariant, Observation, PassContext, Shadow, Unlock, Violation, mapping, pdo_bits,
+};
 use crate::app::power_stage::{Fault, Solenoid};
 use crate::od::DICT;
 use crate::{DEVICE, PRODUCT_CODE, Pam, REVISION, VENDOR_ID, VENDOR_PASSWORD};
@@ -493,13 +495,7 @@ impl<D: Device> Harness<D> {
         let od = self.slave.slave().od();
         let n = od.get(assign, 0).unwrap_or(0).clamp(0, 254) as u8;
         let bits: u32 = (1..=n)
-            .map(|s| {
-                let pdo = od.get(assign, s).unwrap_or(0) as u16;
-                mapping(pdo)
-                    .iter()
-                    .map(|m| u32::from(*m as u8))
-                    .sum::<u32>()
-            })
+            .map(|s| pdo_bits(od.get(assign, s).unwrap_or(0) as u16))
             .sum();
         bits.div_ceil(8) as u16
     }
@@ -1470,12 +1466,7 @@ fn default_len(assign: u16) -> u16 {
             DefaultValue::Int(v) => Some(v as u16),
             DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
         })
-        .map(|pdo| {
-            mapping(pdo)
-                .iter()
-                .map(|m| u32::from(*m as u8))
-                .sum::<u32>()
-        })
+        .map(pdo_bits)
         .sum();
     bits.div_ceil(8) as u16
 }

@@ -587,15 +587,14 @@ impl Shadow {
 /// Bytes of the image an assignment makes, from the mapping objects' fixed
 /// contents (manual 7.1; padding included).
 pub fn image_bytes(assign: &[i64]) -> usize {
-    let bits: usize = assigned(assign)
-        .map(|pdo| {
-            mapping(pdo)
-                .iter()
-                .map(|m| usize::from(*m as u8))
-                .sum::<usize>()
-        })
-        .sum();
-    bits.div_ceil(8)
+    let bits: u32 = assigned(assign).map(pdo_bits).sum();
+    bits.div_ceil(8) as usize
+}
+
+/// Bits a PDO of the PAM maps: the lengths (`0xIIIISSLL` low byte) of its
+/// mapping entries summed.
+pub fn pdo_bits(pdo: u16) -> u32 {
+    mapping(pdo).iter().map(|m| u32::from(*m as u8)).sum()
 }
 
 /// The mapping entries (`0xIIIISSLL`) of a PDO of the PAM, from its
