@@ -353,6 +353,10 @@ impl<D: Device> Harness<D> {
             full_pass_ns: FULL_PASS_NS + MS,
         };
         self.shadow.consume(&before, &after, self.stalled);
+        // A pass that reached the ESC wrote the AL status again first.
+        if !ctx.failed && !self.stalled {
+            self.shadow.status_stale = false;
+        }
         if let Some((inv, detail)) = self.shadow.check_pass(&before, &after, &ctx) {
             let detail = format!("{detail} (t = {} ms)", self.now_ns / MS);
             self.violate(inv, detail);

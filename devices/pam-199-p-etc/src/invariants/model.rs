@@ -194,10 +194,9 @@ pub struct Shadow {
     pub last_save_sent: Option<u64>,
     /// (version text, unconfirmed trial boots in a row).
     pub trials: Option<(String, u8)>,
-    /// A pass failed since the firmware last wrote its AL status on an AL
-    /// control request: the registers may still show the state before
-    /// the failure (the core does not write them again once the PDI is
-    /// back; reported in issue 29's invariant notes, a core change).
+    /// The last pass failed (its AL status write may have failed with the
+    /// PDI): the registers may still show the state before the failure
+    /// until a pass reaches the ESC again, which writes them first.
     pub status_stale: bool,
     /// A write of 0xF801:01 got no answer: it may be served later.
     pub password_outstanding: bool,

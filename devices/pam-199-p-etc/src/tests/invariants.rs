@@ -783,13 +783,10 @@ fn invariant_i6_a_late_save_answer_is_not_taken_for_the_next_one() {
 /// Found by I5 with strict AL status checks: a PDI failure in OP leaves
 /// the firmware in SAFE-OP + ERR 0x0001, but its AL status write failed
 /// with the PDI, and once the PDI works again nothing writes it: the
-/// master reads OP without error until its next AL control request. The
-/// fix belongs in the core (`Slave::poll_with`: write the AL status again
-/// at the first successful pass after a failure), which this branch may
-/// not touch; the harness tolerates the stale registers until the next
-/// AL control request (`Shadow::status_stale`).
+/// master reads OP without error until its next AL control request.
+/// Fixed in the core (`Slave::poll_with` writes the AL status again at the
+/// first pass that reaches the ESC after the failure).
 #[test]
-#[ignore = "needs the core fix described above (slave/src/device/slave.rs)"]
 fn invariant_i5_the_al_status_registers_show_the_state_after_a_pdi_failure() {
     let mut h = Harness::new();
     h.run(&[
@@ -819,12 +816,9 @@ fn invariant_i5_the_al_status_registers_show_the_state_after_a_pdi_failure() {
 /// enabled with length 0 passes PRE-OP → SAFE-OP (C5), but a master that
 /// then enables SM2 with 254 bytes in OP is not answered with 0x001D: the
 /// core's supervision (`Slave::supervise`) checks the SMs of non-empty
-/// images only. Nothing is driven (no outputs are mapped), so the harness
-/// checks an empty image's SM at the transition only; the fix (the same
-/// rule in the supervision as in `check_process_data`) is in
-/// slave/src/device/slave.rs, which this branch may not touch.
+/// images only. Fixed in the core: the supervision applies the rule of
+/// `check_process_data` (an unused SM is disabled or has length 0).
 #[test]
-#[ignore = "needs the core fix described above (slave/src/device/slave.rs)"]
 fn invariant_i2_an_unused_sm2_enabled_in_op_ends_op() {
     let mut h = Harness::new();
     h.run(&[

@@ -116,6 +116,10 @@ pub struct Slave<
     emergencies: Emergencies,
     emergencies_enabled: bool,
     pdi_failures: u32,
+    /// The AL status registers could not be written in a PDI failure:
+    /// written again at the first pass that reaches the ESC, so the master
+    /// never reads a state the firmware has left.
+    status_unwritten: bool,
     now_ns: u64,
     /// Time of the last full pass (every register checked).
     full_pass_ns: Option<u64>,
@@ -234,6 +238,7 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             emergencies: Emergencies::default(),
             emergencies_enabled: true,
             pdi_failures: 0,
+            status_unwritten: false,
             now_ns: 0,
             full_pass_ns: None,
             sm1_quiet: false,
@@ -266,6 +271,7 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         self.last_sent = None;
         self.emergencies = Emergencies::default();
         self.pdi_failures = 0;
+        self.status_unwritten = false;
         self.now_ns = 0;
         self.full_pass_ns = None;
         self.sm1_quiet = false;
@@ -429,8 +435,11 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         if first && self.emergencies_enabled && state != AlState::Init && state != AlState::Boot {
             self.emergencies.pdi_failure(e);
         }
-        let _ = self.esc.write_u16(reg::AL_STATUS_CODE, self.al.code.code());
-        let _ = self.esc.write_u16(reg::AL_STATUS, self.al.register());
+        let code = self.esc.write_u16(reg::AL_STATUS_CODE, self.al.code.code());
+        let status = self.esc.write_u16(reg::AL_STATUS, self.al.register());
+        if code.is_err() || status.is_err() {
+            self.status_unwritten = true;
+        }
     }
 
     /// How many polls ended in a PDI failure since power-on.
@@ -449,6 +458,15 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         // and no full pass due, a pass is one PDI read (plus the inputs in
         // SAFE-OP/OP) and the application's tick.
         let events = self.esc.al_event()?;
+        if self.status_unwritten {
+            // The ESC answers again after a PDI failure whose AL status
+            // write was lost: the master must see SAFE-OP + ERR 0x0001 now,
+            // not at its next AL control request.
+            self.esc
+                .write_u16(reg::AL_STATUS_CODE, self.al.code.code())?;
+            self.esc.write_u16(reg::AL_STATUS, self.al.register())?;
+            self.status_unwritten = false;
+        }
         let sm1 = reg::al_event_sm(1);
         let relevant = if self.sm1_quiet {
             events & !sm1
@@ -619,16 +637,26 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         if matches!(self.al.state, AlState::SafeOp | AlState::Op) {
             let sm2 = read_sm(&mut self.esc, 2)?;
             let sm3 = read_sm(&mut self.esc, 3)?;
-            let out_ok = self.outputs.byte_len() == 0
-                || (sm2.3
+            // The rule of the PRE-OP -> SAFE-OP check
+            // (`Checks::check_process_data`): an unused SM is disabled or
+            // enabled with length 0; enabling it with a length ends the
+            // state as any changed process-data SM does.
+            let out_ok = if self.outputs.byte_len() == 0 {
+                !sm2.3 || sm2.1 == 0
+            } else {
+                sm2.3
                     && sm2.0 == self.layout.pd_out
                     && usize::from(sm2.1) == self.outputs.byte_len()
-                    && sm2.2 & 0x0F == SM_CONTROL[2] & 0x0F);
-            let in_ok = self.inputs.byte_len() == 0
-                || (sm3.3
+                    && sm2.2 & 0x0F == SM_CONTROL[2] & 0x0F
+            };
+            let in_ok = if self.inputs.byte_len() == 0 {
+                !sm3.3 || sm3.1 == 0
+            } else {
+                sm3.3
                     && sm3.0 == self.layout.pd_in
                     && usize::from(sm3.1) == self.inputs.byte_len()
-                    && sm3.2 & 0x0F == SM_CONTROL[3] & 0x0F);
+                    && sm3.2 & 0x0F == SM_CONTROL[3] & 0x0F
+            };
             if !out_ok {
                 return self.local_error(AlState::PreOp, AlStatusCode::InvalidOutputConfig);
             }
