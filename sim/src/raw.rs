@@ -190,6 +190,9 @@ pub fn run(
     let send = |tx: &std::sync::Mutex<Tx>, frame: &[u8]| -> Result<(), RunnerError> {
         let mut tx = tx.lock().unwrap_or_else(|e| e.into_inner());
         match tx.send_to(frame, None) {
+            // A full transmit queue loses the frame, as a wire would; the
+            // master's retry decides.
+            Some(Err(e)) if is_queue_full(&e) => Ok(()),
             Some(Err(source)) => Err(RunnerError::Io {
                 context: format!("sending on {}", iface.name),
                 source,
@@ -204,8 +207,18 @@ pub fn run(
         .as_ref()
         .map(|i| i.name.clone())
         .unwrap_or_default();
-    let reply = |out_tx: &mut Option<Tx>, up: bool, frame: &mut [u8]| -> Result<(), RunnerError> {
-        match out_tx.as_mut().filter(|_| up) {
+    //
+    // A frame port 1 cannot take is never fatal: the kernel refuses a
+    // send while the next runner's cable is being pulled (ENOBUFS from the
+    // veth's queue, ENETDOWN, ENXIO for a vanished interface) before the
+    // link watch has seen it go. With the link gone the ESC closes the
+    // loop and the frame turns around to the master; with the link still
+    // up the frame is lost as on a wire, and the master's retry decides.
+    let reply = |out_tx: &mut Option<Tx>,
+                 port1: &mut PortWatch,
+                 frame: &mut [u8]|
+     -> Result<(), RunnerError> {
+        match out_tx.as_mut().filter(|_| port1.up) {
             Some(o) => {
                 if let Some(b) = frame.get_mut(6) {
                     *b &= !0x02;
@@ -215,10 +228,10 @@ pub fn run(
                     *b |= 0x02;
                 }
                 match r {
-                    Some(Err(source)) => Err(RunnerError::Io {
-                        context: format!("forwarding on {out_name}"),
-                        source,
-                    }),
+                    Some(Err(_)) if link_is_down(&out_name) => {
+                        port1.lost();
+                        send(&tx, frame)
+                    }
                     _ => Ok(()),
                 }
             }
@@ -247,6 +260,9 @@ pub fn run(
                 if let Some(up) = port1.poll() {
                     set_last_port1(&mut chain, up);
                 }
+                if port1.take_lost() {
+                    set_last_port1(&mut chain, false);
+                }
                 let mut due = Vec::new();
                 held.retain(|(at, f)| {
                     let ready = *at <= t;
@@ -256,7 +272,7 @@ pub fn run(
                     !ready
                 });
                 for mut f in due {
-                    reply(&mut out_tx, port1.up, &mut f)?;
+                    reply(&mut out_tx, &mut port1, &mut f)?;
                 }
                 match rx.next() {
                     Ok(frame) => {
@@ -303,10 +319,10 @@ pub fn run(
                                 held.push((Instant::now() + REORDER_HOLD, buf.clone()))
                             }
                             _ => {
-                                reply(&mut out_tx, port1.up, &mut buf)?;
+                                reply(&mut out_tx, &mut port1, &mut buf)?;
                                 if let Some(mut again) = request {
                                     chain.process_frame_at(&mut again, arrived);
-                                    reply(&mut out_tx, port1.up, &mut again)?;
+                                    reply(&mut out_tx, &mut port1, &mut again)?;
                                 }
                             }
                         }
@@ -453,7 +469,9 @@ fn relay_back(
             Ok(frame) => {
                 if is_processed(frame) {
                     let mut tx = tx.lock().unwrap_or_else(|e| e.into_inner());
-                    if let Some(Err(source)) = tx.send_to(frame, None) {
+                    if let Some(Err(source)) = tx.send_to(frame, None)
+                        && !is_queue_full(&source)
+                    {
                         return Err(RunnerError::Io {
                             context: "relaying a returning frame to the master".into(),
                             source,
@@ -487,11 +505,14 @@ fn relay_back(
 }
 
 /// Whether port 1 (the forwarding interface) has a link, checked every
-/// 100 ms (carrier: the interface is up and its peer too).
+/// 100 ms (carrier: the interface is up and its peer too), or at once
+/// when a frame could not go out on it.
 struct PortWatch {
     name: Option<String>,
     up: bool,
     checked: Option<Instant>,
+    /// Set by [`PortWatch::lost`] until the line's DL status shows it.
+    lost: bool,
 }
 
 impl PortWatch {
@@ -500,7 +521,21 @@ impl PortWatch {
             name,
             up: false,
             checked: None,
+            lost: false,
         }
+    }
+
+    /// A send on port 1 failed and its link is gone: the loop closes now,
+    /// not at the next periodic check.
+    fn lost(&mut self) {
+        self.up = false;
+        self.lost = true;
+        self.checked = Some(Instant::now());
+    }
+
+    /// Whether [`PortWatch::lost`] closed the port since the last call.
+    fn take_lost(&mut self) -> bool {
+        std::mem::take(&mut self.lost)
     }
 
     /// Checks the link when due; returns the new state when it changed
@@ -523,6 +558,12 @@ impl PortWatch {
         self.up = up;
         changed.then_some(up)
     }
+}
+
+/// Whether a send failed only because the interface's queue was full
+/// (ENOBUFS): the frame is lost, the socket still works.
+fn is_queue_full(e: &io::Error) -> bool {
+    e.raw_os_error() == Some(105)
 }
 
 /// Whether interface `name` is down or has no carrier (or is gone).

@@ -152,6 +152,18 @@ pub fn wait_for_runner(host_if: &str) {
     wait_for_line(host_if, None);
 }
 
+/// Ethernet (broadcast, from a master), EtherCAT header (one datagram of
+/// 10 + 2 + 2 bytes, type 1), BRD 0x0000 of 2 bytes, working counter.
+pub fn brd_frame() -> Vec<u8> {
+    let mut frame = vec![0xFFu8; 6];
+    frame.extend_from_slice(&[0x10, 0, 0, 0, 0, 1, 0x88, 0xA4]);
+    frame.extend_from_slice(&[14, 0x10]);
+    frame.extend_from_slice(&[0x07, 0x5A, 0, 0, 0, 0, 2, 0, 0, 0]);
+    frame.extend_from_slice(&[0, 0, 0, 0]);
+    frame.resize(60, 0);
+    frame
+}
+
 /// [`wait_for_runner`] until `slaves` slaves answer (the BRD's working
 /// counter), e.g. after a cable between chained runners was pulled or
 /// plugged back; `None`: any answer.
@@ -169,14 +181,7 @@ pub fn wait_for_line(host_if: &str, slaves: Option<u16>) {
     else {
         panic!("raw socket on {host_if}");
     };
-    // Ethernet (broadcast, from a master), EtherCAT header (one datagram
-    // of 10 + 2 + 2 bytes, type 1), BRD 0x0000 of 2 bytes, working counter.
-    let mut frame = vec![0xFFu8; 6];
-    frame.extend_from_slice(&[0x10, 0, 0, 0, 0, 1, 0x88, 0xA4]);
-    frame.extend_from_slice(&[14, 0x10]);
-    frame.extend_from_slice(&[0x07, 0x5A, 0, 0, 0, 0, 2, 0, 0, 0]);
-    frame.extend_from_slice(&[0, 0, 0, 0]);
-    frame.resize(60, 0);
+    let frame = brd_frame();
     let start = std::time::Instant::now();
     let mut last = None;
     while start.elapsed() < Duration::from_secs(60) {

@@ -224,6 +224,22 @@ fn three_runners_chained_by_forward_are_one_line_for_ethercrab_and_soem() {
             .expect("SDO to C after the repair");
         assert_eq!(v, 0x00C7_03F3);
     });
+    // Full transmit queues on both of A's ports (a token bucket that holds
+    // one frame): the kernel refuses most sends with ENOBUFS, as it did
+    // once under load in CI, which ended runner A. A frame a port cannot
+    // take is lost, as on a wire, and the runner goes on.
+    let a_ns = guards[0].name.clone();
+    for port in [&ifs[0], &ifs[1]] {
+        tc(&[
+            "-n", &a_ns, "qdisc", "add", "dev", port, "root", "tbf", "rate", "8kbit", "burst",
+            "1600", "limit", "100",
+        ]);
+    }
+    burst(&host, 300);
+    for port in [&ifs[0], &ifs[1]] {
+        tc(&["-n", &a_ns, "qdisc", "del", "dev", port, "root"]);
+    }
+    crate::common::wait_for_line(&host, Some(4));
     for g in &mut guards {
         let runner = g.runner.as_mut().expect("runner");
         assert!(
@@ -232,4 +248,37 @@ fn three_runners_chained_by_forward_are_one_line_for_ethercrab_and_soem() {
             g.name
         );
     }
+}
+
+/// Sends `n` BRD frames from the master's end as fast as the socket takes
+/// them, without waiting for answers.
+fn burst(host_if: &str, n: usize) {
+    let ifaces = pnet_datalink::interfaces();
+    let nic = ifaces
+        .iter()
+        .find(|i| i.name == host_if)
+        .unwrap_or_else(|| panic!("no interface {host_if}"));
+    let Ok(pnet_datalink::Channel::Ethernet(mut tx, _rx)) =
+        pnet_datalink::channel(nic, pnet_datalink::Config::default())
+    else {
+        panic!("raw socket on {host_if}");
+    };
+    let frame = crate::common::brd_frame();
+    for _ in 0..n {
+        let _ = tx.send_to(&frame, None);
+    }
+}
+
+/// Runs `tc` (iproute2) and panics with its message when it fails.
+fn tc(args: &[&str]) {
+    let out = Command::new("tc")
+        .args(args)
+        .output()
+        .expect("tc (iproute2)");
+    assert!(
+        out.status.success(),
+        "tc {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr).trim()
+    );
 }
