@@ -5,7 +5,7 @@
 #   bash scripts/footprint.sh
 #
 # For each device (and an empty baseline) it builds the no_std staticlib of
-# examples/firmware (opt-level "s", LTO, panic=abort, codegen-units=1; see
+# examples/firmware (opt-level "z", LTO, panic=abort, codegen-units=1; see
 # its Cargo.toml), links it with the C harness (gcc -Os, --gc-sections,
 # -no-pie), runs the harness (a simulated master drives the firmware through
 # INIT, PRE-OP with SDO / SDO Information / complete access, SAFE-OP, OP,
@@ -73,7 +73,7 @@ for tool in cargo rustc "$CC" nm size objdump; do
 done
 HOST=$(rustc -vV | sed -n 's/^host: //p')
 
-echo "== Build (host target $HOST; profile.release of $MANIFEST: opt-level \"s\", lto, panic = \"abort\", codegen-units = 1)"
+echo "== Build (host target $HOST; profile.release of $MANIFEST: opt-level \"z\", lto, panic = \"abort\", codegen-units = 1)"
 for dev in "${DEVICES[@]}"; do
     features=()
     [ -z "${FEATURES[$dev]}" ] || features=(--features "${FEATURES[$dev]}")

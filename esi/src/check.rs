@@ -313,7 +313,11 @@ fn check_selected(
         .filter_map(esi_fmmu)
         .map(str::to_string)
         .collect();
-    d.cmp("FMMU usage", esi_fmmus, sii_fmmus);
+    // An ESI without <Fmmu> (optional in ETG.2000) says nothing about
+    // the FMMUs: the configurator assigns them.
+    if !esi_fmmus.is_empty() {
+        d.cmp("FMMU usage", esi_fmmus, sii_fmmus);
+    }
 
     // PDOs.
     for (direction, tag) in [(PdoDirection::Rx, "RxPdo"), (PdoDirection::Tx, "TxPdo")] {
@@ -477,6 +481,26 @@ mod tests {
         sii[at] = sii[at].wrapping_add(1);
         let m = check(&esi, &sii).unwrap();
         assert!(m.iter().any(|m| m.what == "SM2 length"), "{m:#?}");
+    }
+
+    #[test]
+    fn an_esi_without_fmmus_agrees_with_the_fmmus_of_any_sii() {
+        let (esi, sii) = ours();
+        assert!(esi.contains("<Fmmu>"));
+        let bare: String = esi
+            .lines()
+            .filter(|l| !l.trim_start().starts_with("<Fmmu>"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        assert!(!bare.contains("<Fmmu>"));
+        let m = check(&bare, &sii).unwrap();
+        assert!(m.is_empty(), "{m:#?}");
+        // With its FMMUs, a changed usage is still reported.
+        let mut changed = sii.clone();
+        let at = category_data(&changed, CategoryType::Fmmu);
+        changed[at] = 0x03;
+        let m = check(&esi, &changed).unwrap();
+        assert!(m.iter().any(|m| m.what == "FMMU usage"), "{m:#?}");
     }
 
     #[test]

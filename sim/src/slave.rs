@@ -95,9 +95,30 @@ impl<A: Application> SoftSlave<A> {
 
     /// A slave whose standard mailboxes have another layout (the SII it
     /// serves says so, so masters configure SM0/SM1 accordingly).
+    ///
+    /// The ESC has an ET1100's 8 KiB of process RAM unless a buffer of the
+    /// layout starts beyond it; then it has the 60 KiB of an ESC IP core
+    /// on an FPGA (the EL6695, for one, puts its inputs at 0x8E00).
     pub fn with_layout(app: A, layout: MemoryLayout) -> Self {
         let sii = app.description().sii_image_for(&layout);
-        let mut inner = Slave::new(SoftEsc::new(&sii), app);
+        let starts = [
+            layout.mbx_out.0,
+            layout.mbx_in.0,
+            layout.boot_out.0,
+            layout.boot_in.0,
+            layout.pd_out,
+            layout.pd_in,
+        ];
+        // Room for a buffer's three copies behind its start.
+        let size = if starts
+            .iter()
+            .any(|&a| usize::from(a) + 0x100 > crate::esc::MEM_SIZE)
+        {
+            crate::esc::MAX_MEM_SIZE
+        } else {
+            crate::esc::MEM_SIZE
+        };
+        let mut inner = Slave::new(SoftEsc::with_memory(&sii, size), app);
         inner.set_layout(layout);
         SoftSlave {
             inner,

@@ -132,6 +132,11 @@ fn normalize_assignment(
     left_out: &[u16],
     warnings: &mut Vec<Warning>,
 ) {
+    let mapping: Vec<u16> = objects
+        .iter()
+        .map(|o| o.index)
+        .filter(|i| (0x1600..=0x1BFF).contains(i))
+        .collect();
     let Some(o) = objects.iter_mut().find(|o| o.index == index) else {
         return;
     };
@@ -140,6 +145,22 @@ fn normalize_assignment(
     }
     let mut list = assigned(std::slice::from_ref(o), index);
     list.retain(|p| !left_out.contains(p));
+    // A PDO the device does not have (Beckhoff's EL3632 defaults 0x1C13 to
+    // 0x1A73, an oversampling PDO its ESI does not list): the PDOs the
+    // ESI assigns to the SM instead, as a configurator starts from them.
+    // (A modular device's slot PDOs are made later, from its modules.)
+    let modular = dev.source.child("Slots").is_some();
+    if !modular && list.iter().any(|p| !mapping.contains(p)) {
+        let sm = if index == 0x1C12 { 2 } else { 3 };
+        list = dev
+            .rx_pdos
+            .iter()
+            .chain(&dev.tx_pdos)
+            .filter(|p| p.sm == Some(sm) && !left_out.contains(&p.index))
+            .map(|p| p.index)
+            .filter(|p| mapping.contains(p))
+            .collect();
+    }
     let now = list_defaults(o);
     let want: Vec<i64> = list.iter().map(|p| i64::from(*p)).collect();
     if now == want {
@@ -148,7 +169,7 @@ fn normalize_assignment(
     warnings.push(Warning {
         at: dev.at.clone(),
         message: format!(
-            "{index:#06x} defaults to {now:x?}: {want:x?} assumed (no empty places, no PDO the twin leaves out)"
+            "{index:#06x} defaults to {now:x?}: {want:x?} assumed (no empty places, no PDO the twin leaves out or the device does not have)"
         ),
     });
     let mut entries: Vec<Entry> = o.entries.iter().map(copy).collect();
@@ -1013,6 +1034,7 @@ fn modular(
             });
         }
     }
+    modular_objects(slots_el, slots, distance, objects, warnings);
     objects.sort_by_key(|o| o.index);
     Ok(Some(ModularLayout {
         slots,
@@ -1021,6 +1043,89 @@ fn modular(
         ranges: Box::leak(ranges.into_boxed_slice()),
         modules: Box::leak(types.into_boxed_slice()),
     }))
+}
+
+/// The objects of ETG.5001 a modular device must have (0xF000 modular
+/// device profile, 0xF030 configured and 0xF050 detected module ident
+/// list), made for a file that has Slots but leaves them out (the ETG's
+/// own CiA 402 Modules/Slots example does): as the HCS DMA-22 node
+/// describes them, each with a warning naming the Slots element.
+fn modular_objects(
+    slots_el: &crate::xml::Element,
+    slots: u8,
+    distance: u16,
+    objects: &mut Vec<Object>,
+    warnings: &mut Vec<Warning>,
+) {
+    use ecat_slave::od::Access;
+    use ecat_slave::od::modules::{CONFIGURED_MODULES, DETECTED_MODULES, MODULAR_DEVICE_PROFILE};
+    let ident_list = |access: Access| -> &'static [Entry] {
+        let mut l = vec![Entry {
+            access,
+            min: Some(0),
+            max: Some(i64::from(slots)),
+            ..sub0(slots)
+        }];
+        if access == Access::RwPreOp {
+            l[0].default = DefaultValue::Int(0);
+        }
+        for k in 1..=slots {
+            l.push(Entry {
+                access,
+                ..constant(k, leak(&format!("SubIndex {k:03}")), DataType::UInt32, 0)
+            });
+        }
+        Box::leak(l.into_boxed_slice())
+    };
+    let made: [(u16, &'static str, ObjectCode, &'static [Entry]); 3] = [
+        (
+            MODULAR_DEVICE_PROFILE,
+            "Modular device profile",
+            ObjectCode::Record,
+            Box::leak(Box::new([
+                sub0(2),
+                constant(
+                    1,
+                    "Module index distance",
+                    DataType::UInt16,
+                    i64::from(distance),
+                ),
+                constant(
+                    2,
+                    "Maximum number of modules",
+                    DataType::UInt16,
+                    i64::from(slots),
+                ),
+            ])),
+        ),
+        (
+            CONFIGURED_MODULES,
+            "Configured module ident list",
+            ObjectCode::Array,
+            ident_list(Access::RwPreOp),
+        ),
+        (
+            DETECTED_MODULES,
+            "Detected module ident list",
+            ObjectCode::Array,
+            ident_list(Access::Ro),
+        ),
+    ];
+    for (index, name, code, entries) in made {
+        if objects.iter().any(|o| o.index == index) {
+            continue;
+        }
+        warnings.push(Warning::new(
+            slots_el,
+            format!("object {index:#06x} '{name}' of a modular device (ETG.5001) is missing: made with {slots} slots"),
+        ));
+        objects.push(Object {
+            index,
+            name,
+            code,
+            entries,
+        });
+    }
 }
 
 /// The module idents of a modular device's slots: each `Slot`'s default
@@ -1621,5 +1726,57 @@ mod tests {
             ));
         }
         assert_eq!(od.get(0x6000, 1), Some(3));
+    }
+
+    #[test]
+    fn a_modular_device_without_its_etg5001_objects_gets_them_with_a_warning() {
+        let slots = crate::xml::parse("<Slots SlotIndexIncrement=\"#x800\"/>").unwrap();
+        let mut objects = vec![record(0xF050, "Detected (the ESI's own)", vec![sub0(0)])];
+        let mut warnings = Vec::new();
+        modular_objects(&slots, 2, 0x800, &mut objects, &mut warnings);
+        let idx: Vec<u16> = objects.iter().map(|o| o.index).collect();
+        assert_eq!(idx, [0xF050, 0xF000, 0xF030], "the ESI's own 0xF050 kept");
+        assert_eq!(objects[0].name, "Detected (the ESI's own)");
+        let f000 = &objects[1];
+        assert_eq!(f000.entries[1].default, DefaultValue::Int(0x800));
+        assert_eq!(f000.entries[2].default, DefaultValue::Int(2));
+        let f030 = &objects[2];
+        assert_eq!(f030.entries.len(), 3, "subindex 0 and one per slot");
+        assert_eq!(
+            f030.entries[0].default,
+            DefaultValue::Int(0),
+            "nothing configured"
+        );
+        assert_eq!(f030.entries[1].access, ecat_slave::od::Access::RwPreOp);
+        assert_eq!(warnings.len(), 2);
+        assert!(
+            warnings[1].to_string().contains("0xf030"),
+            "{}",
+            warnings[1]
+        );
+    }
+
+    #[test]
+    fn an_assignment_default_naming_a_pdo_the_device_lacks_becomes_the_esis_sm_pdos() {
+        let dict = r##"<Profile><Dictionary><DataTypes>
+<DataType><Name>DT1C13</Name><BitSize>48</BitSize>
+<SubItem><SubIdx>0</SubIdx><Name>SubIndex 000</Name><Type>USINT</Type><BitSize>8</BitSize><BitOffs>0</BitOffs><Flags><Access>ro</Access></Flags></SubItem>
+<SubItem><SubIdx>1</SubIdx><Name>SubIndex 001</Name><Type>UINT</Type><BitSize>16</BitSize><BitOffs>16</BitOffs><Flags><Access>ro</Access></Flags></SubItem>
+<SubItem><SubIdx>2</SubIdx><Name>SubIndex 002</Name><Type>UINT</Type><BitSize>16</BitSize><BitOffs>32</BitOffs><Flags><Access>ro</Access></Flags></SubItem>
+</DataType></DataTypes><Objects>
+<Object><Index>#x1c13</Index><Name>TxPDO assign</Name><Type>DT1C13</Type><BitSize>48</BitSize><Info>
+<SubItem><Name>SubIndex 000</Name><Info><DefaultData>02</DefaultData></Info></SubItem>
+<SubItem><Name>SubIndex 001</Name><Info><DefaultData>731a</DefaultData></Info></SubItem>
+<SubItem><Name>SubIndex 002</Name><Info><DefaultData>001a</DefaultData></Info></SubItem>
+</Info></Object></Objects></Dictionary></Profile>"##;
+        let pdos = format!("{}{dict}", pdo("TxPdo", 0x1A00, Some(3), &[], 0x6000));
+        let (desc, _, warnings) = describe_with_warnings(&dev_with(&pdos)).unwrap();
+        assert_eq!(desc.process_data.sets[0].tx, [0x1A00]);
+        assert!(
+            warnings
+                .iter()
+                .any(|w| w.message.starts_with("0x1c13 defaults to [1a73, 1a00]")),
+            "{warnings:?}"
+        );
     }
 }

@@ -399,7 +399,27 @@ fn value_info(info: Option<&Element>, s: &Scalar) -> Result<ValueInfo, EsiError>
                 _ => f.to_bits() as i64,
             }));
         }
-        number(c, "value").map(Some)
+        let v = number(c, "value")?;
+        // A hex value of a signed type is its bit pattern in the type's
+        // size (Teknic writes INT's -2 as #xFFFE): sign-extended, as
+        // TwinCAT reads it. Decimal values are taken as written.
+        // An enumeration with negative values has a signed base type
+        // (Teknic's DT0802EN16 on INT).
+        let signed = match s.ty {
+            DataType::Enum(e) => e.values.iter().any(|(v, _)| *v < 0),
+            t => t.is_signed(),
+        };
+        let hex = c
+            .text
+            .trim()
+            .get(..2)
+            .is_some_and(|p| p.eq_ignore_ascii_case("#x"));
+        let bits = u32::from(s.bits).clamp(1, 64);
+        if hex && signed && bits < 64 && (v as u64) >> bits == 0 {
+            let shift = 64 - bits;
+            return Ok(Some((v << shift) >> shift));
+        }
+        Ok(Some(v))
     };
     if s.ty.is_bytes() {
         let default = match s.ty {
@@ -663,12 +683,23 @@ fn parse_object(
                             at: At::of(s.el),
                             what: "<SubIdx>",
                         })?;
-                        let sc = sized(types.scalar(&s.type_name, s.el)?, s.bits);
+                        let mut sc = sized(types.scalar(&s.type_name, s.el)?, s.bits);
+                        // A BOOL of a whole byte (ATI's F/T sensor): the
+                        // core serves it so.
+                        if matches!(sc.ty, DataType::Bool) && s.bits == 8 {
+                            sc.bits = 8;
+                        }
                         if s.bits != 0 && s.bits != sc.bits {
-                            return Err(bad(
+                            // A size its type cannot have (ATI's F/T
+                            // sensor gives a DINT 1 bit, the next item's
+                            // BitOffs 32 bits later): the type's size, as
+                            // the offsets show it.
+                            warnings.push(Warning::new(
                                 s.el,
-                                "BitSize (not the type's size)",
-                                &s.bits.to_string(),
+                                format!(
+                                    "object {index:#06x}:{sub:02x}: BitSize {} is not the size of its type {} ({} bits): the type's size is used",
+                                    s.bits, s.type_name, sc.bits
+                                ),
                             ));
                         }
                         let gap =
@@ -921,11 +952,18 @@ mod tests {
             "<SubIdx>1</SubIdx><Name>Vendor ID</Name><Type>UDINT</Type><BitSize>32",
             "<SubIdx>1</SubIdx><Name>Vendor ID</Name><Type>UDINT</Type><BitSize>16",
         );
+        let (objs, _, w) = parse(&xml::parse(&t).unwrap()).unwrap();
+        let id = &objs
+            .iter()
+            .find(|o| o.object.index == 0x1018)
+            .unwrap()
+            .object;
+        assert_eq!(id.entries[1].bit_len, 32, "the type's size");
         assert!(
-            parsed(&t)
-                .unwrap_err()
+            w.iter().any(|w| w
                 .to_string()
-                .contains("bad BitSize (not the type's size) '16'")
+                .contains("BitSize 16 is not the size of its type UDINT")),
+            "{w:?}"
         );
         let t = DICT.replace(
             "<Name>DT0800EN02</Name><BitSize>2</BitSize>",
@@ -1040,6 +1078,34 @@ mod tests {
             let t = TYPES.replace(from, to);
             let _ = parse(&xml::parse(&t).unwrap());
         }
+    }
+
+    #[test]
+    fn hex_values_of_a_signed_type_are_its_bit_pattern() {
+        let text = r##"<Dictionary><DataTypes/><Objects>
+    <Object><Index>#x605A</Index><Name>Quick stop option code</Name><Type>INT</Type><BitSize>16</BitSize>
+    <Info><MinValue>#xFFFE</MinValue><MaxValue>#x0006</MaxValue><DefaultValue>#xFFFF</DefaultValue></Info>
+    <Flags><Access>rw</Access></Flags></Object>
+    <Object><Index>#x2000</Index><Name>Decimal</Name><Type>INT</Type><BitSize>16</BitSize>
+    <Info><MinValue>-5</MinValue><MaxValue>65535</MaxValue><DefaultValue>3</DefaultValue></Info>
+    <Flags><Access>rw</Access></Flags></Object>
+    <Object><Index>#x2001</Index><Name>Unsigned</Name><Type>UINT</Type><BitSize>16</BitSize>
+    <Info><MaxValue>#xFFFE</MaxValue></Info><Flags><Access>rw</Access></Flags></Object>
+</Objects></Dictionary>"##;
+        let (objs, _, _) = parse(&xml::parse(text).unwrap()).unwrap();
+        let e = |i: u16| {
+            &objs
+                .iter()
+                .find(|o| o.object.index == i)
+                .unwrap()
+                .object
+                .entries[0]
+        };
+        let qs = e(0x605A);
+        assert_eq!((qs.min, qs.max), (Some(-2), Some(6)));
+        assert_eq!(qs.default, DefaultValue::Int(-1));
+        assert_eq!(e(0x2000).min, Some(-5), "decimal as written");
+        assert_eq!(e(0x2001).max, Some(0xFFFE), "unsigned hex unchanged");
     }
 
     #[test]

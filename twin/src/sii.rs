@@ -11,14 +11,17 @@
 //! `Physics`), FMMU, SyncM, TxPDO and RxPDO categories.
 
 use ecat_slave::sii::{
-    self, SiiConfig, SiiGeneral, SiiIdentity, SiiMailbox, SiiPdo, SiiPdoEntry, SiiSyncManager,
-    SmType,
+    self, FmmuUsage, SiiConfig, SiiGeneral, SiiIdentity, SiiMailbox, SiiPdo, SiiPdoEntry,
+    SiiSyncManager, SmType,
 };
 
 use crate::esi::{EsiDevice, EsiPdo};
 
 /// Bytes of EEPROM the software ESC emulates.
 pub const EEPROM_BYTES: usize = ecat_slave::sii::SII_SIZE;
+/// The largest EEPROM a twin gets when its image needs more than
+/// [`EEPROM_BYTES`] (the software ESC emulates up to this).
+pub const MAX_EEPROM_BYTES: usize = ecat_sim::esc::MAX_SII_SIZE;
 
 /// Why the SII image cannot be made.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -186,15 +189,19 @@ fn encode(dev: &EsiDevice) -> Result<Vec<u8>, SiiBuildError> {
     // An image that does not fit the emulated EEPROM with the names of
     // the PDO entries fits without them (what an EEPROM of a vendor's
     // device often leaves out too): the master names entries from the ESI.
-    encode_with(dev, true, true)
-        .or_else(|_| encode_with(dev, false, true))
-        .or_else(|_| encode_with(dev, false, false))
+    // An image that needs more than that even without them gets a larger
+    // EEPROM, with its names (Beckhoff's EL1259, 8196 bytes without them).
+    encode_with(dev, true, true, EEPROM_BYTES)
+        .or_else(|_| encode_with(dev, false, true, EEPROM_BYTES))
+        .or_else(|_| encode_with(dev, false, false, EEPROM_BYTES))
+        .or_else(|_| encode_with(dev, true, true, MAX_EEPROM_BYTES))
 }
 
 fn encode_with(
     dev: &EsiDevice,
     entry_names: bool,
     pdo_names: bool,
+    eeprom_bytes: usize,
 ) -> Result<Vec<u8>, SiiBuildError> {
     let cd = &dev.config_data;
     // A loaded ESI's size fits (EsiFile::parse refuses larger ones).
@@ -216,6 +223,19 @@ fn encode_with(
     let tx = sii_pdos(&dev.tx_pdos, entry_names, pdo_names);
     let rx_pdos = to_pdos(&rx);
     let tx_pdos = to_pdos(&tx);
+    // An ESI without <Fmmu> (ETG.2000: optional; Beckhoff's CU2508 has
+    // none) leaves the FMMUs to the configurator, which takes them in the
+    // usual order: outputs, inputs, mailbox status. The EEPROM needs them
+    // (ethercrab maps the process data only through a listed FMMU).
+    let fmmus = if dev.fmmus.is_empty() && (!dev.rx_pdos.is_empty() || !dev.tx_pdos.is_empty()) {
+        let mut f = vec![FmmuUsage::Outputs, FmmuUsage::Inputs];
+        if rx_size != 0 {
+            f.push(FmmuUsage::SyncMStatus);
+        }
+        f
+    } else {
+        dev.fmmus.clone()
+    };
     let cfg = SiiConfig {
         pdi_control: word(cd, 0),
         pdi_config: word(cd, 1),
@@ -239,7 +259,7 @@ fn encode_with(
         // The image may need more than the EEPROM the ESI declares (a
         // 128-byte `ByteSize` with categories): the emulated EEPROM holds
         // it all, the header keeps the declared size (word 0x3E below).
-        eeprom_kbit: kbit.max(u16::try_from(EEPROM_BYTES / 128).unwrap_or(u16::MAX)),
+        eeprom_kbit: kbit.max(u16::try_from(eeprom_bytes / 128).unwrap_or(u16::MAX)),
         general: SiiGeneral {
             group: fit_name(&dev.group_type),
             image: "",
@@ -252,7 +272,7 @@ fn encode_with(
             current_on_ebus: dev.ebus_current_ma,
             physical_port: physical_port(&dev.physics),
         },
-        fmmus: &dev.fmmus,
+        fmmus: &fmmus,
         sync_managers: &sms,
         tx_pdos: &tx_pdos,
         rx_pdos: &rx_pdos,
@@ -262,6 +282,21 @@ fn encode_with(
         device: dev.label(),
         source,
     })?;
+    // ConfigData covers the first 7 words (ETG.2000: bytes 0..13, the
+    // checksum excluded): the reserved words 5 and 6 are the ESI's too
+    // (Microchip's SAMD51 sample gives C040 in word 5), and the checksum
+    // covers them.
+    if cd.len() > 10 {
+        for k in 10..14 {
+            if let (Some(b), Some(v)) = (out.get_mut(k), cd.get(k)) {
+                *b = *v;
+            }
+        }
+        let crc = out.get(..14).map_or(0, sii::crc8);
+        if let Some(c) = out.get_mut(14) {
+            *c = crc;
+        }
+    }
     // SII word 0x3E: EEPROM size in kbit - 1 (ETG.2010): the declared
     // size, or the size the image needs when it is more (an EEPROM chip
     // larger than the ESI's ByteSize).
@@ -270,6 +305,7 @@ fn encode_with(
     if let Some(w) = out.get_mut(0x7C..0x7E) {
         w.copy_from_slice(&kbit.max(needed).saturating_sub(1).to_le_bytes());
     }
+    out.truncate(end.next_multiple_of(128).max(EEPROM_BYTES));
     out.resize(EEPROM_BYTES.max(out.len()), 0xFF);
     Ok(out)
 }
@@ -322,6 +358,77 @@ mod tests {
         let g = r.general().unwrap().unwrap();
         assert_eq!(g.current_on_ebus, -2000);
         assert_eq!(g.physical_port, 0x0131);
+    }
+
+    #[test]
+    fn config_data_of_seven_words_fills_the_reserved_words_and_the_checksum_covers_them() {
+        let text = DEV.replace(
+            "<ConfigData>000D0000000000000000</ConfigData>",
+            "<ConfigData>050E00CC8813FF00000040C00000</ConfigData>",
+        );
+        let f = EsiFile::parse(&text).unwrap();
+        let img = image(&f.devices[0], None).unwrap();
+        assert_eq!(
+            &img[..14],
+            &[
+                5, 0x0E, 0, 0xCC, 0x88, 0x13, 0xFF, 0, 0, 0, 0x40, 0xC0, 0, 0
+            ]
+        );
+        assert_eq!(img[14], sii::crc8(&img[..14]));
+        assert!(SiiReader::new(&img).is_ok());
+    }
+
+    /// `n` fixed TxPDOs of 8 BOOL entries each, with names, in SM0, and no
+    /// `<Fmmu>`.
+    fn with_tx_pdos(n: u16) -> String {
+        let mut pdos = String::from(
+            r##"<Sm StartAddress="#x1000" ControlByte="#x20" Enable="1">Inputs</Sm>"##,
+        );
+        for p in 0..n {
+            pdos += &format!(
+                r##"<TxPdo Fixed="1" Sm="0"><Index>#x{:x}</Index><Name>Channel {p} inputs</Name>"##,
+                0x1A00 + p
+            );
+            for e in 1..=8 {
+                pdos += &format!(
+                    r##"<Entry><Index>#x{:x}</Index><SubIndex>{e}</SubIndex><BitLen>1</BitLen><Name>Input {e}</Name><DataType>BOOL</DataType></Entry>"##,
+                    0x6000 + p
+                );
+            }
+            pdos += "</TxPdo>";
+        }
+        DEV.replace("<Eeprom>", &format!("{pdos}<Eeprom>"))
+    }
+
+    #[test]
+    fn an_esi_without_fmmus_gets_the_usual_ones_in_the_sii() {
+        let f = EsiFile::parse(&with_tx_pdos(1)).unwrap();
+        assert!(f.refused.is_empty(), "{:?}", f.refused);
+        assert!(f.devices[0].fmmus.is_empty());
+        let img = image(&f.devices[0], None).unwrap();
+        let r = SiiReader::new(&img).unwrap();
+        let usage: Vec<FmmuUsage> = r.fmmus().unwrap().collect();
+        assert_eq!(usage, [FmmuUsage::Outputs, FmmuUsage::Inputs]);
+        // Without process data, no FMMU is made up.
+        let f = EsiFile::parse(DEV).unwrap();
+        let img = image(&f.devices[0], None).unwrap();
+        assert_eq!(SiiReader::new(&img).unwrap().fmmus().unwrap().count(), 0);
+    }
+
+    #[test]
+    fn an_image_beyond_the_emulated_eeprom_gets_a_larger_one_with_its_names() {
+        let f = EsiFile::parse(&with_tx_pdos(120)).unwrap();
+        let img = image(&f.devices[0], None).unwrap();
+        assert!(img.len() > EEPROM_BYTES && img.len() <= MAX_EEPROM_BYTES);
+        assert_eq!(img.len() % 128, 0);
+        let r = SiiReader::new(&img).unwrap();
+        let pdos = r.pdos(sii::PdoDirection::Tx).unwrap();
+        assert_eq!(pdos.count(), 120);
+        let strings = r.strings().unwrap();
+        let strings: Vec<&str> = strings.iter().filter_map(|(_, s)| s.ok()).collect();
+        assert!(strings.contains(&"Input 8"), "names kept");
+        let size_kbit = u16::from_le_bytes([img[0x7C], img[0x7D]]) + 1;
+        assert!(usize::from(size_kbit) * 128 >= img.len(), "word 0x3E");
     }
 
     #[test]

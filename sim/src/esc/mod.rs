@@ -44,8 +44,12 @@ use fmmu::FmmuConfig;
 use physical::ReadMode;
 use sm::SmConfig;
 
-/// Size of the ESC address space modelled: 4 KiB registers + 8 KiB process RAM.
+/// Size of the ESC address space modelled by default: 4 KiB registers +
+/// 8 KiB process RAM, as an ET1100.
 pub const MEM_SIZE: usize = 0x3000;
+/// The largest address space an ESC has: 4 KiB registers + 60 KiB process
+/// RAM (ESCs on FPGAs, e.g. Beckhoff's EL6695 puts SM3 at 0x8E00).
+pub const MAX_MEM_SIZE: usize = 0x1_0000;
 /// Number of SyncManagers implemented.
 pub const SM_COUNT: usize = 8;
 /// Number of FMMUs implemented.
@@ -55,6 +59,10 @@ pub const FMMU_COUNT: usize = 8;
 pub const ESC_CONFIG_DEVICE_EMULATION: u8 = 0x01;
 
 pub use ecat_slave::sii::SII_SIZE;
+/// The largest EEPROM the software ESC emulates (512 Kbit): an image
+/// longer than [`SII_SIZE`] (a vendor's terminal with hundreds of PDO
+/// entries) gets an EEPROM of its own length, up to this.
+pub const MAX_SII_SIZE: usize = 0x1_0000;
 /// Longest datagram payload the ESC processes (an Ethernet frame's worth).
 pub const MAX_DATAGRAM: usize = 1500;
 
@@ -76,8 +84,12 @@ pub enum FrameOutcome {
 
 /// The software ESC.
 pub struct SoftEsc {
-    mem: [u8; MEM_SIZE],
-    sii: [u8; SII_SIZE],
+    /// Registers and process RAM ([`MEM_SIZE`] bytes unless the device
+    /// needs more, [`SoftEsc::with_memory`]).
+    mem: Vec<u8>,
+    /// The EEPROM: [`SII_SIZE`] bytes, or an image's length up to
+    /// [`MAX_SII_SIZE`].
+    sii: Vec<u8>,
     sms: [SmConfig; SM_COUNT],
     fmmus: [FmmuConfig; FMMU_COUNT],
     /// Bit n set: FMMU n enabled (fast skip in logical addressing).
@@ -135,12 +147,21 @@ impl core::fmt::Debug for SoftEsc {
 
 impl SoftEsc {
     /// Creates an ESC in its power-on state, loading the SII image `sii`
-    /// (truncated to [`SII_SIZE`], the rest reads 0xFF) and taking the
+    /// (as [`SoftEsc::program_sii`] does; the rest reads 0xFF) and taking the
     /// station alias and PDI configuration from it.
     pub fn new(sii: &[u8]) -> Self {
+        Self::with_memory(sii, MEM_SIZE)
+    }
+
+    /// [`SoftEsc::new`] with an address space of `size` bytes (registers
+    /// and process RAM; clamped to [`MEM_SIZE`]..=[`MAX_MEM_SIZE`] and
+    /// rounded up to whole KiB), shown in the RAM size register 0x0006:
+    /// for devices whose SyncManagers lie beyond an ET1100's 8 KiB.
+    pub fn with_memory(sii: &[u8], size: usize) -> Self {
+        let size = size.clamp(MEM_SIZE, MAX_MEM_SIZE).next_multiple_of(1024);
         let mut esc = SoftEsc {
-            mem: [0; MEM_SIZE],
-            sii: [0xFF; SII_SIZE],
+            mem: vec![0; size],
+            sii: Vec::new(),
             sms: [SmConfig::default(); SM_COUNT],
             fmmus: [FmmuConfig::default(); FMMU_COUNT],
             fmmu_active: 0,
@@ -164,20 +185,19 @@ impl SoftEsc {
             sync0_pulses: 0,
             sync0_last: None,
         };
-        let n = sii.len().min(SII_SIZE);
-        if let (Some(dst), Some(src)) = (esc.sii.get_mut(..n), sii.get(..n)) {
-            dst.copy_from_slice(src);
-        }
+        esc.program_sii(sii);
         esc.power_on();
         esc
     }
 
-    /// Programs a whole SII image into the EEPROM (truncated to
-    /// [`SII_SIZE`], the rest erased to 0xFF), as a configurator writes a
-    /// device's EEPROM; the ESC loads it at its next power-on.
+    /// Programs a whole SII image into the EEPROM (of [`SII_SIZE`] bytes,
+    /// or the image's length up to [`MAX_SII_SIZE`]; the rest erased to
+    /// 0xFF), as a configurator writes a device's EEPROM; the ESC loads it
+    /// at its next power-on.
     pub fn program_sii(&mut self, image: &[u8]) {
-        self.sii = [0xFF; SII_SIZE];
-        let n = image.len().min(SII_SIZE);
+        let n = image.len().min(MAX_SII_SIZE);
+        self.sii.clear();
+        self.sii.resize(n.next_multiple_of(128).max(SII_SIZE), 0xFF);
         if let (Some(dst), Some(src)) = (self.sii.get_mut(..n), image.get(..n)) {
             dst.copy_from_slice(src);
         }
@@ -200,7 +220,7 @@ impl SoftEsc {
     /// Resets every register to its power-on value (as a power cycle does);
     /// process RAM is cleared, the SII image is kept.
     pub fn power_on(&mut self) {
-        self.mem = [0; MEM_SIZE];
+        self.mem.fill(0);
         self.sms = [SmConfig::default(); SM_COUNT];
         self.fmmus = [FmmuConfig::default(); FMMU_COUNT];
         self.fmmu_active = 0;
@@ -215,7 +235,8 @@ impl SoftEsc {
         self.set_u8(reg::REVISION, 0x02);
         self.set_u8(reg::FMMU_COUNT, FMMU_COUNT as u8);
         self.set_u8(reg::SM_COUNT, SM_COUNT as u8);
-        self.set_u8(reg::RAM_SIZE, ((MEM_SIZE - 0x1000) / 1024) as u8);
+        let ram_kib = (self.mem.len() - 0x1000) / 1024;
+        self.set_u8(reg::RAM_SIZE, u8::try_from(ram_kib).unwrap_or(u8::MAX));
         // Ports 0 and 1 MII, ports 2 and 3 not implemented.
         self.set_u8(reg::PORT_DESCRIPTOR, 0x0F);
         // Bit-oriented FMMUs, LRW and read/write commands supported; DC

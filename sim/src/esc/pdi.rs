@@ -102,7 +102,7 @@ impl Esc for SoftEsc {
         if self.pdi_fault.is_some_and(|f| f.hits(a, b, false)) {
             return Err(EscError::Interface);
         }
-        if b as usize > MEM_SIZE {
+        if b as usize > self.mem.len() {
             return Err(EscError::OutOfRange {
                 addr,
                 len: buf.len(),
@@ -166,7 +166,7 @@ impl Esc for SoftEsc {
         if self.pdi_fault.is_some_and(|f| f.hits(a, b, true)) {
             return Err(EscError::Interface);
         }
-        if b as usize > MEM_SIZE {
+        if b as usize > self.mem.len() {
             return Err(EscError::OutOfRange {
                 addr,
                 len: data.len(),

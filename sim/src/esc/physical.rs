@@ -49,7 +49,7 @@ impl SoftEsc {
             }
         }
         // Copy out: bytes beyond the modelled memory read as zero.
-        let mem_end = (b as usize).min(MEM_SIZE);
+        let mem_end = (b as usize).min(self.mem.len());
         let from = (a as usize).min(mem_end);
         let src = self.mem.get(from..mem_end).unwrap_or(&[]);
         match mode {
@@ -121,7 +121,7 @@ impl SoftEsc {
                 complete |= 1 << n;
             }
         }
-        let mem_end = (b as usize).min(MEM_SIZE);
+        let mem_end = (b as usize).min(self.mem.len());
         let from = (a as usize).min(mem_end);
         if let (Some(dst), Some(src)) = (
             self.mem.get_mut(from..mem_end),

@@ -34,7 +34,7 @@ impl SoftEsc {
                 let slot = usize::try_from(word)
                     .ok()
                     .and_then(|w| w.checked_mul(2))
-                    .filter(|b| b + 1 < SII_SIZE);
+                    .filter(|b| b + 1 < self.sii.len());
                 match (ctrl & 0x0001 != 0, slot) {
                     (true, Some(b)) => {
                         if let Some(s) = self.sii.get_mut(b..b + 2) {

@@ -94,7 +94,7 @@ fn read_write_commands_count_three_and_return_old_data() {
 #[test]
 fn access_wrapping_past_ffff_is_not_executed_or_counted() {
     let mut e = esc();
-    let before = e.mem;
+    let before = e.mem.clone();
     let (mut f, r) = frame(&[(Command::Apwr, phys(0, 0xFFFE), &[1, 2, 3, 4])]);
     e.process_frame(&mut f);
     assert_eq!(wkc(&f, &r[0]), 0);
@@ -103,6 +103,41 @@ fn access_wrapping_past_ffff_is_not_executed_or_counted() {
     e.process_frame(&mut f);
     assert_eq!(wkc(&f, &r[0]), 0);
     assert_eq!(&f[r[0].clone()], &[9, 9]);
+}
+
+#[test]
+fn an_esc_with_60_kib_of_ram_serves_buffers_beyond_an_et1100s() {
+    let mut small = esc();
+    assert_eq!(small.mem_u8(reg::RAM_SIZE), 8);
+    let mut big = SoftEsc::with_memory(&[], MAX_MEM_SIZE);
+    assert_eq!(big.mem_u8(reg::RAM_SIZE), 60);
+    // The EL6695 puts its inputs at 0x8E00: the PDI reaches it on the big
+    // ESC only, and a master's write lands there.
+    assert!(big.write(0x8E00, &[1, 2]).is_ok());
+    assert!(matches!(
+        small.write(0x8E00, &[1, 2]),
+        Err(EscError::OutOfRange { .. })
+    ));
+    let (mut f, r) = frame(&[(Command::Aprd, phys(0, 0x8E00), &[0, 0])]);
+    big.process_frame(&mut f);
+    assert_eq!((wkc(&f, &r[0]), &f[r[0].clone()]), (1, &[1u8, 2][..]));
+    // Sizes are clamped to what an ESC can have.
+    assert_eq!(SoftEsc::with_memory(&[], 0).mem.len(), MEM_SIZE);
+    assert_eq!(SoftEsc::with_memory(&[], 1 << 20).mem.len(), MAX_MEM_SIZE);
+}
+
+#[test]
+fn an_image_longer_than_the_default_eeprom_is_served_whole() {
+    let mut image = vec![0u8; SII_SIZE + 300];
+    for (i, b) in image.iter_mut().enumerate() {
+        *b = (i % 253) as u8;
+    }
+    let e = SoftEsc::new(&image);
+    assert_eq!(e.sii().len(), (SII_SIZE + 300).next_multiple_of(128));
+    assert_eq!(&e.sii()[..image.len()], &image[..]);
+    assert!(e.sii()[image.len()..].iter().all(|b| *b == 0xFF));
+    let short = SoftEsc::new(&[1, 2]);
+    assert_eq!(short.sii().len(), SII_SIZE, "the default EEPROM");
 }
 
 #[test]

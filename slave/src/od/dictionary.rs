@@ -428,7 +428,10 @@ const fn check_entry(
             }
         }
         DefaultValue::Int(v) => {
-            if e.bit_len != natural_bits(&e.data_type) {
+            // A BOOLEAN is one bit, or a whole byte (ATI's F/T sensor and
+            // other SSC-based devices describe it so; TwinCAT accepts it).
+            let byte_bool = matches!(e.data_type, DataType::Bool) && e.bit_len == 8;
+            if e.bit_len != natural_bits(&e.data_type) && !byte_bool {
                 return Err(DescriptionError::BitLength { index, sub });
             }
             if let (Some(lo), Some(hi)) = (e.min, e.max)
@@ -806,6 +809,40 @@ mod tests {
         );
         assert!(!BAD_B.validate().unwrap_err().message().is_empty());
         let _ = BAD_B_N;
+    }
+
+    const BYTE_BOOL: &[Object] = &[Object {
+        index: 0x2000,
+        name: "x",
+        code: ObjectCode::Var,
+        entries: &[Entry {
+            bit_len: 8,
+            ..var("x", DataType::Bool, PdoMapping::None, 1)
+        }],
+    }];
+    crate::dictionary!(BYTE_B, BYTE_B_N = BYTE_BOOL, &[]);
+    const WIDE_BOOL: &[Object] = &[Object {
+        index: 0x2000,
+        name: "x",
+        code: ObjectCode::Var,
+        entries: &[Entry {
+            bit_len: 16,
+            ..var("x", DataType::Bool, PdoMapping::None, 1)
+        }],
+    }];
+    crate::dictionary!(WIDE_B, WIDE_B_N = WIDE_BOOL, &[]);
+
+    #[test]
+    fn a_bool_of_one_byte_is_valid_but_not_of_two() {
+        assert_eq!(BYTE_B.validate(), Ok(()));
+        assert_eq!(
+            WIDE_B.validate(),
+            Err(DescriptionError::BitLength {
+                index: 0x2000,
+                sub: 0
+            })
+        );
+        let _ = (BYTE_B_N, WIDE_B_N);
     }
 
     #[test]

@@ -485,6 +485,34 @@ mod tests {
         assert_eq!(w(u64::MAX), Err(SdoAbortCode::ValueRange));
     }
 
+    /// CiA 402's quick stop option code (0x605A, INTEGER16) as Teknic's
+    /// ESI describes it: an enumeration with negative members.
+    const SIGNED: crate::od::EnumDesc = crate::od::EnumDesc {
+        index: 0x0802,
+        name: "DT0802EN16",
+        bit_len: 16,
+        values: &[
+            (-2, "Position hold"),
+            (-1, "Dynamic brake"),
+            (0, "Coast"),
+            (2, "Decelerate"),
+        ],
+    };
+
+    #[test]
+    fn an_enumeration_with_negative_members_takes_their_bit_patterns() {
+        let e = crate::od::build::setting(1, "Quick stop", DataType::Enum(&SIGNED), -1, "");
+        assert_eq!(e.bit_len, 16);
+        assert!(e.data_type.is_signed());
+        let w = |v: i16| Od::check(&e, &v.to_le_bytes(), AlState::PreOp);
+        assert_eq!(w(-1), Ok(-1), "0xFFFF is -1");
+        assert_eq!(w(-2), Ok(-2));
+        assert_eq!(w(2), Ok(2));
+        assert_eq!(w(-3), Err(SdoAbortCode::ValueRange));
+        assert_eq!(w(1), Err(SdoAbortCode::ValueRange));
+        assert!(!DataType::Enum(&WIDE).is_signed());
+    }
+
     #[test]
     fn pdo_assignment_is_writable_only_in_preop() {
         let mut s = store();

@@ -173,8 +173,21 @@ impl DataType {
         })
     }
 
-    /// Whether values of this type are signed integers.
+    /// Whether values of this type are signed integers. An enumeration is
+    /// signed when one of its values is negative (its base type is: CiA
+    /// 402's quick stop option code 0x605A is an INTEGER16 with -1 and -2
+    /// among its values), so its bits are sign-extended on the wire.
     pub const fn is_signed(&self) -> bool {
+        if let DataType::Enum(e) = self {
+            let mut rest = e.values;
+            while let [(v, _), tail @ ..] = rest {
+                if *v < 0 {
+                    return true;
+                }
+                rest = tail;
+            }
+            return false;
+        }
         matches!(
             self,
             DataType::Int8
