@@ -140,6 +140,32 @@ pub fn sii_flags(dict: &Dictionary, pdo: u16) -> u16 {
     }
 }
 
+/// Whether `mapping` (`index << 16 | sub << 8 | bits`) may stand in a PDO
+/// of direction `dir` of `dict`: padding (index 0, 1 to 64 bits), or an
+/// entry that exists, is no gap, may be mapped in that direction and has
+/// exactly `bits` bits; else 0x06040041 (the object cannot be mapped).
+pub fn check_mapping_value(
+    dict: &Dictionary,
+    dir: Direction,
+    mapping: u32,
+) -> Result<(), crate::wire::coe::SdoAbortCode> {
+    let index = (mapping >> 16) as u16;
+    let sub = ((mapping >> 8) & 0xFF) as u8;
+    let bits = (mapping & 0xFF) as u8;
+    let ok = if index == 0 {
+        (1..=64).contains(&bits)
+    } else {
+        dict.find_entry(index, sub).is_some_and(|(_, e)| {
+            e.pdo.allows(dir.mapping()) && !e.gap && e.bit_len == u16::from(bits) && bits != 0
+        })
+    };
+    if ok {
+        Ok(())
+    } else {
+        Err(crate::wire::coe::SdoAbortCode::CannotMap)
+    }
+}
+
 /// Bit mask of the PDO sets (of `pd`) that contain `pdo`.
 pub fn sets_of(pd: &ProcessData, pdo: u16) -> u32 {
     let mut mask = 0u32;

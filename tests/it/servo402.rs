@@ -449,43 +449,10 @@ fn leaving_op_in_operation_enabled_brakes_the_axis_and_ends_in_fault() {
     });
 }
 
-/// The twin hook (issue 28 (a)): what a twin of a vendor's CiA 402 drive
-/// adds to its `EsiApp`, here around a twin built from servo402's own
-/// generated ESI. `Cia402Axis::new` on the twin's run-time dictionary,
-/// `Cia402Axis::tick` after the twin's own tick, `check_download` before
-/// its SDO handling; the twin's input rule must leave the objects the
-/// axis `owns` alone (`Hold` here).
-struct Twin402 {
-    inner: ecat_twin::coe_twin::EsiApp,
-    axis: ecat_cia402::Cia402Axis,
-}
-
-impl ecat_slave::device::Application for Twin402 {
-    fn description(&self) -> &'static ecat_slave::device::DeviceDescription {
-        self.inner.description()
-    }
-    type Values = [i64; ecat_twin::coe_twin::TWIN_ENTRIES];
-    fn power_on(&mut self, od: &mut ecat_slave::od::Od) {
-        self.inner.power_on(od);
-    }
-    fn sdo_download(
-        &mut self,
-        od: &mut ecat_slave::od::Od,
-        d: &ecat_slave::device::Download<'_>,
-    ) -> Result<ecat_slave::device::Write, ecat_slave::SdoAbortCode> {
-        self.axis.check_download(d)?;
-        self.inner.sdo_download(od, d)
-    }
-    fn tick(&mut self, t: &mut ecat_slave::device::Tick<'_>) {
-        self.inner.tick(t);
-        self.axis.tick(t, None);
-    }
-    fn power_cycle(&mut self) {
-        self.inner.power_cycle();
-        self.axis.reset();
-    }
-}
-
+/// A twin of a CiA 402 drive's ESI (here servo402's own generated one)
+/// runs the profile on its own: `EsiApp` finds the axis (ProfileNo 402,
+/// 0x6040/0x6041), checks downloads with it and ticks it after the input
+/// rule, so ethercrab enables it in CSP and the position follows.
 #[test]
 fn a_twin_of_a_cia402_esi_with_the_profile_hook_is_enabled_in_csp_and_follows_a_ramp() {
     let xml = ecat_esi::generate(&servo402_example::DEVICE).expect("ESI");
@@ -496,10 +463,9 @@ fn a_twin_of_a_cia402_esi_with_the_profile_hook_is_enabled_in_csp_and_follows_a_
         ecat_cia402::Cia402Axis::is_cia402(desc.dictionary),
         "ProfileNo 402, 0x6040/0x6041"
     );
-    let app = Twin402 {
-        inner: ecat_twin::coe_twin::EsiApp::new(desc, ecat_twin::InputRule::Hold),
-        axis: ecat_cia402::Cia402Axis::new(desc.dictionary).expect("a CiA 402 axis"),
-    };
+    // The twin runs the profile on its own: one axis, as the ESI says.
+    let app = ecat_twin::coe_twin::EsiApp::new(desc, ecat_twin::InputRule::Hold);
+    assert_eq!(app.axes(), 1, "a CiA 402 axis");
     let slave = ecat_sim::SoftSlave::with_layout(app, layout);
     let chain = Chain::with_slaves(vec![Box::new(slave)]);
     let bus = VirtualBus::with_chain(chain, Clock::frames(), None).expect("bus");
@@ -518,4 +484,116 @@ fn a_twin_of_a_cia402_esi_with_the_profile_hook_is_enabled_in_csp_and_follows_a_
             "{last:?}"
         );
     });
+}
+
+/// Flexible PDO mapping (ETG.1000.6, ETG.1020): in PRE-OP ethercrab writes
+/// a mapping of its own (outputs: controlword, target position, modes of
+/// operation; inputs: statusword, position), every refusal the core owes
+/// on the way answered with its abort code; ethercrab then reads the new
+/// mapping over CoE, sizes the images from it (7 and 6 bytes instead of
+/// 13 and 19), reaches OP and enables CSP, and the position follows.
+#[test]
+fn ethercrab_writes_its_own_mapping_in_preop_and_runs_csp_on_it() {
+    smol::block_on(async {
+        let bus = VirtualBus::line("servo402", Clock::frames()).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("PRE-OP");
+        let sd = group.subdevice(md, 0).expect("servo402");
+        let code = |r: Result<(), ethercrab::error::Error>| {
+            r.err().as_ref().and_then(crate::common::abort_code)
+        };
+        let map = |index: u16, bits: u32| u32::from(index) << 16 | bits;
+        // An entry while subindex 0 is not 0.
+        let r = sd.sdo_write(0x1600, 1, map(0x6040, 16)).await;
+        assert_eq!(code(r), Some(0x0601_0003));
+        sd.sdo_write(0x1600, 0, 0u8).await.expect("subindex 0 to 0");
+        // The statusword is no output; a wrong length; a parameter.
+        for bad in [map(0x6041, 16), map(0x6040, 32), map(0x6065, 32)] {
+            let r = sd.sdo_write(0x1600, 1, bad).await;
+            assert_eq!(code(r), Some(0x0604_0041), "{bad:#010x}");
+        }
+        for (sub, m) in [
+            (1u8, map(0x6040, 16)),
+            (2, map(0x607A, 32)),
+            (3, map(0x6060, 8)),
+            (4, 0),
+        ] {
+            sd.sdo_write(0x1600, sub, m).await.expect("mapping entry");
+        }
+        // A count over the cleared place, beyond the capacity.
+        assert_eq!(code(sd.sdo_write(0x1600, 0, 4u8).await), Some(0x0604_0043));
+        assert_eq!(code(sd.sdo_write(0x1600, 0, 9u8).await), Some(0x0609_0031));
+        sd.sdo_write(0x1600, 0, 3u8).await.expect("three entries");
+        sd.sdo_write(0x1A00, 0, 0u8).await.expect("subindex 0 to 0");
+        sd.sdo_write(0x1A00, 1, map(0x6041, 16))
+            .await
+            .expect("statusword");
+        sd.sdo_write(0x1A00, 2, map(0x6064, 32))
+            .await
+            .expect("position");
+        sd.sdo_write(0x1A00, 0, 2u8).await.expect("two entries");
+        let back: u32 = sd.sdo_read(0x1600, 2).await.expect("read back");
+        assert_eq!(back, map(0x607A, 32));
+        let group = master_test::into_op_cyclic(group, md, CYCLE)
+            .await
+            .expect("OP with the written mapping");
+        let sd = group.subdevice(md, 0).expect("servo402");
+        assert_eq!(
+            (sd.outputs_raw().len(), sd.inputs_raw().len()),
+            (7, 6),
+            "the images of the written mapping"
+        );
+        // The mapping is fixed outside PRE-OP.
+        let r = sd.sdo_write(0x1600, 0, 0u8).await;
+        assert_eq!(code(r), Some(0x0800_0022));
+        let (_, start) = custom_cycle(&bus, &group, 0, 0).await;
+        for (cw, want) in [
+            (control::SHUTDOWN, PowerState::ReadyToSwitchOn),
+            (control::SWITCH_ON, PowerState::SwitchedOn),
+            (control::ENABLE_OPERATION, PowerState::OperationEnabled),
+        ] {
+            let mut reached = false;
+            for _ in 0..20 {
+                let (sw, _) = custom_cycle(&bus, &group, cw, start).await;
+                if PowerState::from_statusword(sw) == Some(want) {
+                    reached = true;
+                    break;
+                }
+            }
+            assert!(reached, "controlword {cw:#06x}: no {want:?}");
+        }
+        // A ramp of 20 increments per cycle for 300 cycles: the position
+        // follows it.
+        let mut target = start;
+        let mut position = start;
+        for _ in 0..300 {
+            target += 20;
+            (_, position) = custom_cycle(&bus, &group, control::ENABLE_OPERATION, target).await;
+        }
+        assert!(
+            (target - position).abs() < 200 && position > start + 5000,
+            "target {target}, position {position}, start {start}"
+        );
+    });
+}
+
+/// One free-run cycle of the mapping written in
+/// `ethercrab_writes_its_own_mapping_in_preop_and_runs_csp_on_it`:
+/// controlword, target position and CSP out; statusword and position in.
+async fn custom_cycle(bus: &VirtualBus, group: &FreeGroup, cw: u16, target: i32) -> (u16, i32) {
+    let md = &*bus.maindevice;
+    let sd = group.subdevice(md, 0).expect("servo402");
+    {
+        let mut o = sd.outputs_raw_mut();
+        o[0..2].copy_from_slice(&cw.to_le_bytes());
+        o[2..6].copy_from_slice(&target.to_le_bytes());
+        o[6] = 8; // CSP
+    }
+    group.tx_rx(md).await.expect("cycle");
+    bus.clock.advance(CYCLE);
+    let i = sd.inputs_raw();
+    (
+        u16::from_le_bytes([i[0], i[1]]),
+        i32::from_le_bytes([i[2], i[3], i[4], i[5]]),
+    )
 }

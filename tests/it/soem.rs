@@ -358,7 +358,7 @@ fn soem_through_pysoem_drives_8_runner_slaves_over_a_veth_pair() {
 /// `tag`, runs the script's `phase` with `phase_args` after the host-side
 /// interface, keeps its output as `target/interop-logs/soem-{name}.log`
 /// and asserts that every check passed.
-fn soem_phase(tag: &str, name: &str, line: &str, runner_args: &[&str], phase: &[&str]) {
+pub(crate) fn soem_phase(tag: &str, name: &str, line: &str, runner_args: &[&str], phase: &[&str]) {
     soem_power_cycled_phases(tag, name, line, runner_args, &[phase]);
 }
 
@@ -468,7 +468,9 @@ fn soem_brings_a_dma22_node_with_three_modules_to_op_after_writing_0xf030() {
 }
 
 /// The servo402 CiA 402 drive through SOEM (the script's `servo402`
-/// phase): the PDO assignment and CSP written in PRE-OP, DC with SYNC0
+/// phase): a PDO mapping of SOEM's own written in its configuration hook
+/// (the refusals on the way checked by abort code), the assignment and
+/// CSP in PRE-OP, the images sized from the written mapping, DC with SYNC0
 /// every 1 ms, OP, the drive's state machine to Operation enabled, a
 /// target ramp the position follows, a quick stop to Switch on disabled.
 #[test]

@@ -1381,6 +1381,11 @@ pub struct EsiApp {
     /// type for the loopback).
     inputs: Vec<(usize, u16, Option<usize>)>,
     ticks: u64,
+    /// A drive's axes (CiA 402: profile 402 in 0x1000, or 0x6040/0x6041,
+    /// one per axis at n × 0x800): the profile's state machine and axis
+    /// model answer its controlword and set points, so a master enables
+    /// the twin as it enables the drive.
+    axes: Vec<ecat_cia402::Cia402Axis>,
 }
 
 impl EsiApp {
@@ -1418,13 +1423,30 @@ impl EsiApp {
                 (f, bits, pick.map(|(_, of)| of))
             })
             .collect();
+        let dict = desc.dictionary;
+        let axes = if ecat_cia402::Cia402Axis::is_cia402(dict) {
+            ecat_cia402::Cia402Axis::axes_of(dict)
+                .filter_map(|n| {
+                    ecat_cia402::Cia402Axis::with_axis(dict, n, ecat_cia402::AxisModel::default())
+                        .ok()
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         EsiApp {
             desc,
             rule,
             modules: Vec::new(),
             inputs,
             ticks: 0,
+            axes,
         }
+    }
+
+    /// How many CiA 402 axes the twin runs (0: not a drive).
+    pub fn axes(&self) -> usize {
+        self.axes.len()
     }
 
     /// The same with these modules plugged (a modular device; see
@@ -1448,7 +1470,34 @@ impl Application for EsiApp {
         }
     }
 
+    fn sdo_download(
+        &mut self,
+        _od: &mut ecat_slave::od::store::Od,
+        d: &ecat_slave::device::Download<'_>,
+    ) -> Result<ecat_slave::device::Write, ecat_slave::SdoAbortCode> {
+        for axis in &self.axes {
+            axis.check_download(d)?;
+        }
+        Ok(ecat_slave::device::Write::Store)
+    }
+
+    fn power_cycle(&mut self) {
+        for axis in &mut self.axes {
+            axis.reset();
+        }
+    }
+
     fn tick(&mut self, tick: &mut Tick<'_>) {
+        self.tick_inputs(tick);
+        // After the input rule: a drive's actual values are the axis's.
+        for axis in &mut self.axes {
+            axis.tick(tick, None);
+        }
+    }
+}
+
+impl EsiApp {
+    fn tick_inputs(&mut self, tick: &mut Tick<'_>) {
         self.ticks = self.ticks.wrapping_add(1);
         match self.rule {
             InputRule::Hold => {}

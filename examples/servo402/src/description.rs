@@ -147,8 +147,8 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
         coe: CoeServices {
             sdo_info: true,
             pdo_assign: true,
-            // Fixed mappings for now (objects module documentation).
-            pdo_config: false,
+            // The profile's mappings are writable in PRE-OP.
+            pdo_config: true,
             complete_access: true,
         },
         foe: true,

@@ -167,12 +167,37 @@ pub(super) async fn coe_checks(r: &mut Run<'_>, esi: Option<&str>) {
     } else {
         let (mut failed, mut refused) = (Vec::new(), Vec::new());
         let mut n = 0;
+        // A writable PDO mapping is rewritten as ETG.1020 orders it:
+        // subindex 0 to 0, the entries, subindex 0 back (0x06010003 for an
+        // entry written while subindex 0 is not 0).
+        let mapping = |i: u16| (0x1600..0x1C00).contains(&i);
+        let count_of = |i: u16| {
+            values
+                .iter()
+                .find(|(x, s, _, _)| *x == i && *s == 0)
+                .map(|(_, _, v, _)| v.clone())
+        };
+        let mut open: Option<(u16, Vec<u8>)> = None;
         for (index, sub, v, access) in &values {
+            if let Some((i, count)) = open.take_if(|(i, _)| i != index)
+                && let Err(err) = c.sdo_download(i, 0, false, &count).await
+            {
+                failed.push(format!("{i:#06x}:00 back to {count:02x?}: {err}"));
+            }
             if !writable(*access)
                 || matches!(index, 0x1010 | 0x1011)
-                || *sub == 0 && *index >= 0x1600 && *index < 0x1C00
+                || *sub == 0 && mapping(*index)
             {
                 continue;
+            }
+            if mapping(*index)
+                && open.is_none()
+                && let Some(count) = count_of(*index)
+            {
+                if let Err(err) = c.sdo_download(*index, 0, false, &[0]).await {
+                    failed.push(format!("{index:#06x}:00 = 0: {err}"));
+                }
+                open = Some((*index, count));
             }
             n += 1;
             match c.sdo_download(*index, *sub, false, v).await {
@@ -194,6 +219,11 @@ pub(super) async fn coe_checks(r: &mut Run<'_>, esi: Option<&str>) {
                 }
                 Err(err) => failed.push(format!("{index:#06x}:{sub:02x} = {v:02x?}: {err}")),
             }
+        }
+        if let Some((i, count)) = open.take()
+            && let Err(err) = c.sdo_download(i, 0, false, &count).await
+        {
+            failed.push(format!("{i:#06x}:00 back to {count:02x?}: {err}"));
         }
         let note = if refused.is_empty() {
             String::new()

@@ -39,15 +39,17 @@
 //! knows already. The DMA-22 device concatenates its per-slot copies the
 //! same way.
 //!
-//! The mapping objects are fixed (RO) for now. A drive normally lets the
-//! master write its mapping in PRE-OP (ETG.1020 "PDO configuration");
-//! when the core can, [`RX_PDO`] and [`TX_PDO`] become writable here and
-//! every drive built on the profile gets it. The mappable objects are the
-//! ones [`RX_PDO`]/[`TX_PDO`] map; the parameters are not mappable, since
+//! The mapping objects are writable in PRE-OP (flexible mapping, ETG.1020
+//! "PDO configuration"): a master sets subindex 0 to 0, writes the
+//! entries, then the count; the core checks each step (0x06010003,
+//! 0x06040041-43) and PRE-OP→SAFE-OP the SM lengths against the new
+//! images. Every drive built on the profile gets it. The mappable objects
+//! are the ones [`RX_PDO`]/[`TX_PDO`] map by default; the parameters are
+//! not mappable, since
 //! the core sets every RxPDO-mappable entry to 0 when OP is left
 //! (docs/SAFETY.md C2), which a parameter must survive.
 
-use ecat_slave::od::build::{input, map_to, output, ranged, sub_name, sub0, var};
+use ecat_slave::od::build::{input, map_rw, mapping_count, output, ranged, sub_name, var};
 use ecat_slave::od::{DataType, DefaultValue, Entry, Object, ObjectCode, PdoMapping};
 
 use crate::drive::Parameters;
@@ -233,30 +235,44 @@ pub const OBJECTS: &[Object] = &[
 
 /// 0x1600, the RxPDO of the cyclic synchronous modes (what a typical
 /// ETG.6010 drive maps for CSP/CSV/CST): controlword, target position,
-/// target velocity, target torque, modes of operation; 13 bytes.
+/// target velocity, target torque, modes of operation; 13 bytes. Writable
+/// in PRE-OP (flexible mapping, ETG.1020): up to 8 entries of the
+/// profile's RxPDO-mappable objects; subindices 6-8 are free places.
 #[rustfmt::skip]
 pub const RX_PDO: Object = Object { index: 0x1600, name: "Drive outputs", code: Record, entries: &[
-    sub0(5),
-    map_to(1, sub_name(1), index::CONTROLWORD, 0, 16),
-    map_to(2, sub_name(2), index::TARGET_POSITION, 0, 32),
-    map_to(3, sub_name(3), index::TARGET_VELOCITY, 0, 32),
-    map_to(4, sub_name(4), index::TARGET_TORQUE, 0, 16),
-    map_to(5, sub_name(5), index::MODES_OF_OPERATION, 0, 8),
+    mapping_count(5, 8),
+    map_rw(1, sub_name(1), mapping(index::CONTROLWORD, 16)),
+    map_rw(2, sub_name(2), mapping(index::TARGET_POSITION, 32)),
+    map_rw(3, sub_name(3), mapping(index::TARGET_VELOCITY, 32)),
+    map_rw(4, sub_name(4), mapping(index::TARGET_TORQUE, 16)),
+    map_rw(5, sub_name(5), mapping(index::MODES_OF_OPERATION, 8)),
+    map_rw(6, sub_name(6), 0),
+    map_rw(7, sub_name(7), 0),
+    map_rw(8, sub_name(8), 0),
 ] };
 
 /// 0x1A00, the TxPDO: statusword, position, velocity, torque, modes of
-/// operation display, following error, error code; 19 bytes.
+/// operation display, following error, error code; 19 bytes. Writable in
+/// PRE-OP like [`RX_PDO`]: up to 10 entries; subindices 8-10 are free.
 #[rustfmt::skip]
 pub const TX_PDO: Object = Object { index: 0x1A00, name: "Drive inputs", code: Record, entries: &[
-    sub0(7),
-    map_to(1, sub_name(1), index::STATUSWORD, 0, 16),
-    map_to(2, sub_name(2), index::POSITION_ACTUAL, 0, 32),
-    map_to(3, sub_name(3), index::VELOCITY_ACTUAL, 0, 32),
-    map_to(4, sub_name(4), index::TORQUE_ACTUAL, 0, 16),
-    map_to(5, sub_name(5), index::MODES_DISPLAY, 0, 8),
-    map_to(6, sub_name(6), index::FOLLOWING_ERROR_ACTUAL, 0, 32),
-    map_to(7, sub_name(7), index::ERROR_CODE, 0, 16),
+    mapping_count(7, 10),
+    map_rw(1, sub_name(1), mapping(index::STATUSWORD, 16)),
+    map_rw(2, sub_name(2), mapping(index::POSITION_ACTUAL, 32)),
+    map_rw(3, sub_name(3), mapping(index::VELOCITY_ACTUAL, 32)),
+    map_rw(4, sub_name(4), mapping(index::TORQUE_ACTUAL, 16)),
+    map_rw(5, sub_name(5), mapping(index::MODES_DISPLAY, 8)),
+    map_rw(6, sub_name(6), mapping(index::FOLLOWING_ERROR_ACTUAL, 32)),
+    map_rw(7, sub_name(7), mapping(index::ERROR_CODE, 16)),
+    map_rw(8, sub_name(8), 0),
+    map_rw(9, sub_name(9), 0),
+    map_rw(10, sub_name(10), 0),
 ] };
+
+/// The mapping value of subindex 0 of `index` with `bits` bits.
+const fn mapping(index: u16, bits: u8) -> u32 {
+    (index as u32) << 16 | bits as u32
+}
 
 /// [`RX_PDO`] and [`TX_PDO`] as one part for [`join`].
 pub const PDO_MAPPINGS: &[Object] = &[RX_PDO, TX_PDO];

@@ -123,6 +123,23 @@ pub const fn map(sub: u8, name: &'static str, mapping: u32) -> Entry {
     )
 }
 
+/// Subindex 0 of a writable PDO mapping object (flexible mapping,
+/// ETG.1000.6 / ETG.1020): `count` entries mapped by default, writable in
+/// PRE-OP, at most `capacity` (the object's highest subindex). The
+/// core checks what a master writes (`0x06010003`, `0x06040041`..`43`).
+pub const fn mapping_count(count: u8, capacity: u8) -> Entry {
+    assign_count(count, capacity)
+}
+
+/// A writable PDO mapping entry (UINT32, RW in PRE-OP) holding `mapping`
+/// (`index << 16 | sub << 8 | bits`; 0 for a free place of the object).
+pub const fn map_rw(sub: u8, name: &'static str, mapping: u32) -> Entry {
+    Entry {
+        access: Access::RwPreOp,
+        ..map(sub, name, mapping)
+    }
+}
+
 /// A PDO mapping entry that maps `index:subindex` of `bits` bits (the
 /// mapping value packed for you).
 pub const fn map_to(sub: u8, name: &'static str, index: u16, subindex: u8, bits: u8) -> Entry {

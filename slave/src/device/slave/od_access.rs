@@ -94,6 +94,80 @@ impl<A: Application> OdAccess<'_, A> {
         Ok(())
     }
 
+    /// The core's rules for a writable PDO mapping object (0x1600-0x17FF,
+    /// 0x1A00-0x1BFF whose entries the description makes writable;
+    /// ETG.1000.6 5.6.7.4.7, ETG.1020 "PDO mapping"): the entries change
+    /// only while subindex 0 is 0 (0x06010003), each names an entry that
+    /// exists and may be mapped in the PDO's direction with its own bit
+    /// length, or padding (0x06040041); subindex 0 goes back up only over
+    /// entries that are all set (0x06040043), at most what a process image
+    /// holds (0x06040042). A complete access writes subindex 0 together
+    /// with the entries, so its entries are judged as the new count says.
+    fn check_mapping(
+        &self,
+        index: u16,
+        complete_access: bool,
+        changes: &[(u8, i64)],
+    ) -> Result<(), SdoAbortCode> {
+        let dir = if (0x1600..=0x17FF).contains(&index) {
+            Direction::Outputs
+        } else if (0x1A00..=0x1BFF).contains(&index) {
+            Direction::Inputs
+        } else {
+            return Ok(());
+        };
+        let dict = self.od.dictionary();
+        let Some((_, o)) = dict.find(index) else {
+            return Ok(());
+        };
+        if matches!(o.code, crate::od::ObjectCode::Var) {
+            return Ok(());
+        }
+        // A mapping changes in PRE-OP only, whatever access a vendor's
+        // ESI gives its entries (a twin's `rw`).
+        if self.state != AlState::PreOp {
+            return Err(SdoAbortCode::InvalidState);
+        }
+        let new = |s: u8| -> i64 {
+            changes
+                .iter()
+                .find(|(x, _)| *x == s)
+                .map(|(_, v)| *v)
+                .or_else(|| self.od.get(index, s))
+                .unwrap_or(0)
+        };
+        let entries_written = changes.iter().any(|(s, _)| *s != 0);
+        if entries_written && !complete_access && self.od.get(index, 0).unwrap_or(0) != 0 {
+            return Err(SdoAbortCode::SubindexCannotBeWritten);
+        }
+        // 0 clears a place (checked when the count covers it).
+        for (s, v) in changes.iter().filter(|(s, v)| *s != 0 && *v != 0) {
+            if !(complete_access && i64::from(*s) > new(0)) {
+                crate::pdo::check_mapping_value(dict, dir, *v as u32)?;
+            }
+        }
+        let count = new(0);
+        if count > i64::from(o.max_sub()) {
+            return Err(SdoAbortCode::ValueTooHigh);
+        }
+        if changes.iter().any(|(s, _)| *s == 0) && count > 0 {
+            let mut bits = 0u32;
+            for s in 1..=count.clamp(0, 255) as u8 {
+                let m = new(s) as u32;
+                if m == 0 {
+                    return Err(SdoAbortCode::ParameterIncompatible);
+                }
+                crate::pdo::check_mapping_value(dict, dir, m)?;
+                bits += m & 0xFF;
+            }
+            if count as usize > crate::pdo::MAX_MAPPED || bits as usize > crate::pdo::MAX_IMAGE * 8
+            {
+                return Err(SdoAbortCode::PdoLengthExceeded);
+            }
+        }
+        Ok(())
+    }
+
     fn hand_over(
         &mut self,
         index: u16,
@@ -101,6 +175,7 @@ impl<A: Application> OdAccess<'_, A> {
         complete_access: bool,
         changes: &[(u8, i64)],
     ) -> Result<(), SdoAbortCode> {
+        self.check_mapping(index, complete_access, changes)?;
         self.check_assignment(index, changes)?;
         self.check_module_list(index, changes)?;
         let d = Download {
