@@ -38,7 +38,7 @@ if [ -f "$shared/esi-schema/EtherCATInfo.xsd" ]; then
         exit 1
     }
     ESI_SCHEMA_DIR="$(cd "$shared/esi-schema" && pwd)" \
-        cargo test -q -p integration-tests --test integration -- --ignored shared:: etg_schema
+        cargo test -q -p integration-tests --test integration -- --ignored etg_schema
 else
     missing "$shared/esi-schema/EtherCATInfo.xsd (the ETG.2000 schema)"
 fi

@@ -411,10 +411,22 @@ fn check_selected(
         b.resize(r.config_data().len(), 0);
         crate::esi::hex_binary(&b)
     });
+    // The station alias (word 4, bytes 8-9) is the configurator's to
+    // write into a device (ETG.2010 2.2, ETG.2100 `Identification`): an
+    // ESI that leaves it 0 agrees with any alias.
+    let mut sii_config = r.config_data();
+    let esi_alias = text("ConfigData").and_then(hex_binary).map_or(0, |b| {
+        b.get(8..10).map_or(0, |w| u16::from_le_bytes([w[0], w[1]]))
+    });
+    if esi_alias == 0
+        && let Some(w) = sii_config.get_mut(8..10)
+    {
+        w.fill(0);
+    }
     d.cmp(
         "Eeprom ConfigData (SII bytes 0..13)",
-        config.unwrap_or_else(|| crate::esi::hex_binary(&r.config_data())),
-        crate::esi::hex_binary(&r.config_data()),
+        config.unwrap_or_else(|| crate::esi::hex_binary(&sii_config)),
+        crate::esi::hex_binary(&sii_config),
     );
     // No BootStrap: no bootstrap mailbox (zeros in the SII).
     let boot = match bytes_at("BootStrap") {
@@ -504,6 +516,23 @@ mod tests {
     }
 
     #[test]
+    fn a_station_alias_the_configurator_wrote_agrees_with_an_esi_that_leaves_it_0() {
+        let (esi, mut sii) = ours();
+        sii[8..10].copy_from_slice(&42u16.to_le_bytes());
+        fix_crc(&mut sii);
+        let m = check(&esi, &sii).unwrap();
+        assert!(m.is_empty(), "{m:#?}");
+        // Another PDI control word is still a difference.
+        sii[0] ^= 0x01;
+        fix_crc(&mut sii);
+        let m = check(&esi, &sii).unwrap();
+        assert!(
+            m.iter().any(|m| m.what.starts_with("Eeprom ConfigData")),
+            "{m:#?}"
+        );
+    }
+
+    #[test]
     fn pdo_moved_to_no_sync_manager_is_reported() {
         let (esi, mut sii) = ours();
         // First RxPDO (0x1600): SM byte at header offset 3.
@@ -579,7 +608,7 @@ mod tests {
     #[test]
     fn changed_config_data_is_reported() {
         let (esi, mut sii) = ours();
-        sii[8] ^= 0x01; // station alias low byte
+        sii[2] ^= 0x01; // PDI configuration low byte
         fix_crc(&mut sii);
         let m = check(&esi, &sii).unwrap();
         assert!(

@@ -1,8 +1,10 @@
 //! The ESI corpus runner (`master-test esi corpus DIR`): every device of
 //! every ESI file of a folder as a twin on the virtual bus, brought to OP
 //! by ethercrab, its SII (read over the EEPROM interface) checked against
-//! its ESI device (`ecat_esi::check`) and its SDO Information against the
-//! ESI's dictionary; a table (file, type, revision, result, reason) and a
+//! its ESI device (`ecat_esi::check`), its SDO Information against the
+//! ESI's dictionary and its behaviour with the conformance checker (ESC,
+//! SII, state machine, mailbox and CoE groups; an ESC in device emulation
+//! judged as such); a table (file, type, revision, result, reason) and a
 //! JUnit report.
 //!
 //! What is compared over SDO Information, per object of the ESI's
@@ -44,6 +46,8 @@ pub enum Outcome {
     Sii,
     /// Its SDO Information differs from the ESI's dictionary.
     SdoInfo,
+    /// A check of `master-test conformance` failed on it.
+    Conformance,
     /// Not an EtherCAT device: `Invisible` and without a product code
     /// (Beckhoff's end caps, shield and power terminals have no ESC), so
     /// there is nothing on the wire to simulate. Not counted in the rate.
@@ -60,6 +64,7 @@ impl Outcome {
             Outcome::Op => "op",
             Outcome::Sii => "sii",
             Outcome::SdoInfo => "sdo-info",
+            Outcome::Conformance => "conformance",
             Outcome::Passive => "passive",
         }
     }
@@ -220,6 +225,27 @@ fn run_device(file: &str, text: &str, dev: &EsiDevice) -> (Outcome, String, usiz
             compare_sdo_info(&mut c, objects, &warnings)
                 .await
                 .map_err(|e| (Outcome::SdoInfo, e))?;
+        }
+        // The conformance checker's behaviour checks (ESC, SII, state
+        // machine, mailbox, CoE; an ESC in device emulation judged as
+        // such). Its ESI checks are the ones above, so it runs without it.
+        let opts = crate::conformance::Options {
+            only: Vec::new(),
+            esi: None,
+            foe: None,
+            clock: bus.clock.clone(),
+        };
+        let report = crate::conformance::run(md, station, &dev.type_name, &opts).await;
+        let failed: Vec<&str> = report.failed().map(|c| c.id).collect();
+        if !failed.is_empty() {
+            let first = report
+                .failed()
+                .next()
+                .map_or(String::new(), |c| c.observed.clone());
+            return Err((
+                Outcome::Conformance,
+                format!("conformance: {} failed (first: {first})", failed.join(", ")),
+            ));
         }
         // Where a transition stops: the AL status code the slave set.
         let al_code = || async {
@@ -389,6 +415,7 @@ pub fn summary(rows: &[Row]) -> String {
         Outcome::Op,
         Outcome::Sii,
         Outcome::SdoInfo,
+        Outcome::Conformance,
     ] {
         let n = rows.iter().filter(|r| r.outcome == o).count();
         if n > 0 {

@@ -476,8 +476,16 @@ impl<'a> MailboxClient<'a> {
         complete_access: bool,
         data: &[u8],
     ) -> Result<(), ClientError> {
-        self.sdo_download_with(index, sub, complete_access, data, data.len() > 4)
-            .await
+        // Nothing (an empty string) has no expedited form: a normal
+        // download of size 0.
+        self.sdo_download_with(
+            index,
+            sub,
+            complete_access,
+            data,
+            data.is_empty() || data.len() > 4,
+        )
+        .await
     }
 
     /// Like [`MailboxClient::sdo_download`], forcing the normal/segmented

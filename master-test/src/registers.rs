@@ -22,6 +22,11 @@ pub const STATION_ALIAS: u16 = R::ConfiguredStationAlias as u16;
 /// error counters of ports 0-3; a write clears them). ethercrab does not
 /// name it.
 pub const RX_ERROR_COUNTER: u16 = 0x0300;
+/// ESC configuration, `u8` (0x0141, loaded from SII word 0's high
+/// byte): bit 0 "device emulation", the AL status follows AL control
+/// without a firmware (ESC-only devices such as digital I/O terminals).
+/// ethercrab does not name it.
+pub const ESC_CONFIGURATION: u16 = 0x0141;
 /// DL status, `u16` (0x0110, ETG.1000.4 Table 34).
 pub const DL_STATUS: u16 = R::DlStatus as u16;
 /// AL control, `u16` (0x0120, ETG.1000.4 Table 35): requested state,

@@ -222,6 +222,77 @@ fn failed(report: &conformance::Report) -> BTreeSet<&'static str> {
     report.failed().map(|c| c.id).collect()
 }
 
+/// Issue 28: the checker on twins. Every slave of the test ENI's line
+/// (twins of an EK1100, EL2004, EL2828 and EL1008 from ESI files, and a
+/// PAM) passes with its ESI; the ESC-only terminals run in device
+/// emulation (0x0141 bit 0), so they are judged by what such an ESC
+/// promises (the AL status follows AL control) instead of refusals, and
+/// they do.
+#[test]
+fn every_twin_of_the_eni_line_passes_the_checker_device_emulation_judged_as_such() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/testdata");
+    let eni = root.join("machine.xml");
+    let esi_dir = root.join("esi");
+    let rules = ecat_twin::InputRules::default();
+    let line = device_catalog::twins::from_eni(&eni, Some(&esi_dir), &rules).expect("the line");
+    let n = line.slaves.len();
+    assert_eq!(n, 5);
+    let chain = ecat_sim::chain::Chain::with_slaves(line.slaves);
+    let bus = VirtualBus::with_chain(chain, Clock::frames(), None).expect("bus");
+    let esi_of = |name: &str| -> Option<String> {
+        for f in std::fs::read_dir(&esi_dir).expect("ESI folder") {
+            let text = std::fs::read_to_string(f.expect("entry").path()).expect("ESI");
+            if text.contains(&format!(">{name}</Type>")) {
+                return Some(text);
+            }
+        }
+        None
+    };
+    let mut emulated = 0;
+    smol::block_on(async {
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("PRE-OP");
+        for (k, sd) in group.iter(md).enumerate() {
+            let name = sd.name().to_string();
+            let esi = if name == "PAM-199-P-ETC" {
+                Some(
+                    String::from_utf8(ecat_esi::generate(&pam_199_p_etc::DEVICE).expect("ESI"))
+                        .expect("UTF-8"),
+                )
+            } else {
+                esi_of(&name)
+            };
+            let opts = Options {
+                only: Vec::new(),
+                esi,
+                foe: None,
+                clock: bus.clock.clone(),
+            };
+            let station = 0x1000 + k as u16;
+            let report = conformance::run(md, station, &name, &opts).await;
+            assert!(failed(&report).is_empty(), "{name}:\n{}", report.to_text());
+            let text = report.to_text();
+            if text.contains("device emulation") {
+                emulated += 1;
+                assert!(
+                    report
+                        .checks
+                        .iter()
+                        .filter(
+                            |c| c.id.ends_with("-refused") && c.id != "state.preop-to-boot-refused"
+                        )
+                        .all(|c| c.verdict == Verdict::Pass),
+                    "{name}: {text}"
+                );
+            }
+        }
+    });
+    assert_eq!(
+        emulated, 4,
+        "the four ESC-only terminals run in device emulation"
+    );
+}
+
 #[test]
 fn every_catalog_device_passes_the_checker_on_the_virtual_bus() {
     for device in device_catalog::DEVICES {

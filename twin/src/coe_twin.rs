@@ -872,6 +872,36 @@ fn complete(dev: &EsiDevice, objects: &mut Vec<Object>, warnings: &mut Vec<Warni
             }
         }
     }
+    // A PDO left out of the sets keeps its mapping as the vendor wrote it
+    // (Beckhoff's 32-bit views of 64-bit time stamps), which the core's
+    // mapping rules would refuse as written back: such a mapping is fixed.
+    for index in &conflicting {
+        let Some(pos) = objects.iter().position(|o| o.index == *index) else {
+            continue;
+        };
+        let o = &objects[pos];
+        if o.code == ObjectCode::Var || !o.entries.iter().any(|e| e.access.writable()) {
+            continue;
+        }
+        note(
+            &dev.at,
+            format!(
+                "PDO {index:#06x} is left out of the PDO sets: its mapping object is read-only"
+            ),
+        );
+        let entries: Vec<Entry> = o
+            .entries
+            .iter()
+            .map(|e| Entry {
+                access: ecat_slave::od::Access::Ro,
+                ..copy(e)
+            })
+            .collect();
+        objects[pos] = Object {
+            entries: Box::leak(entries.into_boxed_slice()),
+            ..objects[pos]
+        };
+    }
     objects.sort_by_key(|o| o.index);
     warnings.append(&mut outside);
     conflicting

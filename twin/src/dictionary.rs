@@ -424,7 +424,20 @@ fn value_info(info: Option<&Element>, s: &Scalar) -> Result<ValueInfo, EsiError>
     if s.ty.is_bytes() {
         let default = match s.ty {
             DataType::VisibleString => {
-                let text = info.text_at("DefaultString").unwrap_or("");
+                // `DefaultString`, or the string's bytes as `DefaultData`
+                // (Beckhoff's 0x1008 of STRING(n)).
+                let from_data = match info.child("DefaultData") {
+                    Some(d) => {
+                        let b = hex_binary(&d.text).ok_or_else(|| bad(d, "hexBinary", &d.text))?;
+                        let end = b.iter().position(|c| *c == 0).unwrap_or(b.len());
+                        Some(String::from_utf8_lossy(b.get(..end).unwrap_or(&[])).into_owned())
+                    }
+                    None => None,
+                };
+                let text = info
+                    .text_at("DefaultString")
+                    .or(from_data.as_deref())
+                    .unwrap_or("");
                 // Cut to the string's length (at a character boundary).
                 let max = usize::from(s.bits / 8);
                 let mut end = text.len().min(max);
@@ -1078,6 +1091,31 @@ mod tests {
             let t = TYPES.replace(from, to);
             let _ = parse(&xml::parse(&t).unwrap());
         }
+    }
+
+    #[test]
+    fn a_string_default_given_as_data_is_its_text() {
+        let text = r##"<Dictionary><DataTypes/><Objects>
+    <Object><Index>#x1008</Index><Name>Device name</Name><Type>STRING(6)</Type><BitSize>48</BitSize>
+    <Info><DefaultData>454c32303134</DefaultData></Info><Flags><Access>ro</Access></Flags></Object>
+    <Object><Index>#x1009</Index><Name>Hardware version</Name><Type>STRING(2)</Type><BitSize>16</BitSize>
+    <Info><DefaultData>3030</DefaultData><DefaultString>01</DefaultString></Info><Flags><Access>ro</Access></Flags></Object>
+</Objects></Dictionary>"##;
+        let (objs, _, _) = parse(&xml::parse(text).unwrap()).unwrap();
+        let e = |i: u16| {
+            &objs
+                .iter()
+                .find(|o| o.object.index == i)
+                .unwrap()
+                .object
+                .entries[0]
+        };
+        assert_eq!(e(0x1008).default, DefaultValue::Str("EL2014"));
+        assert_eq!(
+            e(0x1009).default,
+            DefaultValue::Str("01"),
+            "DefaultString first"
+        );
     }
 
     #[test]

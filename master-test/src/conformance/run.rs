@@ -11,6 +11,12 @@ pub(super) struct Run<'a> {
     pub(super) sii: Vec<u8>,
     pub(super) mailbox: Option<MailboxGeometry>,
     pub(super) bootstrap: Option<MailboxGeometry>,
+    /// ESC configuration 0x0141 bit 0: the ESC runs the AL state machine
+    /// itself, copying AL control into AL status (Beckhoff ESC datasheet,
+    /// section II, register 0x0141; an ESC-only device without a
+    /// microcontroller). It refuses nothing, so the state group checks
+    /// that promise instead of refusals.
+    pub(super) device_emulation: bool,
     pub(super) checks: Vec<CheckResult>,
     pub(super) group: Group,
     pub(super) emergencies: Vec<Vec<u8>>,
@@ -179,12 +185,17 @@ pub async fn run(md: &MainDevice<'_>, station: u16, label: &str, opts: &Options)
     };
     let sii = eeprom::read_all(md, station).await.unwrap_or_default();
     let (mailbox, bootstrap) = eeprom::mailboxes(&sii);
+    let emulation = ethercrab::Command::fprd(station, registers::ESC_CONFIGURATION)
+        .receive::<u8>(md)
+        .await
+        .is_ok_and(|c| c & 0x01 != 0);
     let mut r = Run {
         md,
         station,
         sii,
         mailbox,
         bootstrap,
+        device_emulation: emulation,
         checks: Vec::new(),
         group: Group::Esc,
         emergencies: Vec::new(),

@@ -153,21 +153,42 @@ pub(super) async fn sii_checks(r: &mut Run<'_>, esi: Option<&str>) {
         .iter()
         .find(|(i, _)| *i == 1)
         .map(|(_, s)| s.clone());
-    let o = match (&name_1008, &general_name) {
-        (None, _) => Outcome::NotApplicable("0x1008 not readable (no CoE)".into()),
-        (Some(_), None) => Outcome::Fail("no General category".into()),
-        (Some(n), Some(g)) if !g.is_empty() && string_1.as_deref() == Some(n.as_str()) => {
-            Outcome::Pass(format!("string 1 \"{n}\" = 0x1008; General name \"{g}\""))
+    // ETG.2010 asks for a General category that names the device; it does
+    // not ask 0x1008 to equal a string of the SII (Beckhoff: 0x1008
+    // "EL3602", order "EL3602-0020"; Elmo: 0x1008 "Elmo Motion Control"),
+    // so 0x1008 is reported, not judged. What a master shows must be the
+    // device: SOEM names a slave after string 1, so string 1 is the order
+    // (type) string the General category names (an SII with the group
+    // name first has SOEM show the group).
+    let order = ins
+        .general
+        .as_ref()
+        .map(|(g, s)| (g.order_idx, s[2].clone()));
+    let n1008 = name_1008
+        .as_deref()
+        .map_or("not readable".to_string(), |n| format!("\"{n}\""));
+    let o = match (&general_name, &order) {
+        (None, _) | (_, None) => Outcome::Fail("no General category".into()),
+        (Some(g), _) if g.is_empty() => Outcome::Fail(format!(
+            "the General category names no string (0x1008 {n1008})"
+        )),
+        (Some(g), Some((0, _))) => Outcome::Pass(format!(
+            "General name \"{g}\"; no order string; 0x1008 {n1008}"
+        )),
+        (Some(g), Some((_, order))) if string_1.as_deref() == Some(order.as_str()) => {
+            Outcome::Pass(format!(
+                "string 1 \"{order}\" is the General category's order string; General name \"{g}\"; 0x1008 {n1008}"
+            ))
         }
-        (Some(n), Some(g)) => Outcome::Fail(format!(
-            "0x1008 \"{n}\", General name \"{g}\", string 1 \"{}\"",
+        (Some(g), Some((_, order))) => Outcome::Fail(format!(
+            "string 1 \"{}\" is not the order string \"{order}\" (SOEM would show it as the name); General name \"{g}\"; 0x1008 {n1008}",
             string_1.unwrap_or_default()
         )),
     };
     r.record(
         "sii.device-name",
         "ETG.2010 2.3, 2.4; vendor SII images; SOEM reads string 1",
-        "SII string 1 (the device type, what SOEM shows as the name) = 0x1008; the General category names a non-empty string",
+        "the General category names a non-empty string; SII string 1 (what SOEM shows as the name) is its order string; 0x1008 reported",
         o,
     );
 

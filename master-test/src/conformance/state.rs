@@ -6,8 +6,33 @@ use crate::registers;
 
 pub(super) async fn state_checks(r: &mut Run<'_>) {
     const INVALID: u16 = 0x0011;
-    // Refused transitions from PRE-OP, then INIT.
+    // Refused transitions from PRE-OP, then INIT. An ESC in device
+    // emulation (0x0141 bit 0) refuses none: its AL status is the state
+    // AL control asks for (Beckhoff ESC datasheet, section II, 0x0141),
+    // which is what it promises and what is checked instead; the state is
+    // then set back.
     let refused = async |r: &mut Run<'_>, id, from: u16, to: u16, what: &str| {
+        if r.device_emulation {
+            let o = match r.request(to).await {
+                Ok((st, _)) if st == to => Outcome::Pass(format!(
+                    "{}: device emulation (0x0141 bit 0), the AL status follows AL control",
+                    state_name(st)
+                )),
+                Ok((st, code)) => Outcome::Fail(format!(
+                    "{} under device emulation (0x0141 bit 0): the AL status should be the requested state",
+                    al_text(st, code)
+                )),
+                Err(e) => Outcome::Fail(e),
+            };
+            r.record(
+                id,
+                "ESC register 0x0141 bit 0 (device emulation)",
+                "the AL status follows AL control (ESC in device emulation, 0x0141 bit 0)",
+                o,
+            );
+            let _ = r.request(from).await;
+            return;
+        }
         let o = match r.request(to).await {
             Ok((st, code)) if st == (from | 0x10) && code == INVALID => {
                 Outcome::Pass(al_text(st, code))

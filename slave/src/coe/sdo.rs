@@ -302,7 +302,11 @@ impl<const T: usize> SdoServer<T> {
                     Ok(n) => n,
                     Err(code) => return Reply::Abort { index, sub, code },
                 };
-                if n <= 4 && !complete_access {
+                // Expedited for 1 to 4 bytes; an empty value (a string of
+                // length 0) has no expedited form (its size indicator
+                // would be 4 unused bytes) and goes as a normal upload of
+                // size 0.
+                if (1..=4).contains(&n) && !complete_access {
                     let mut data = [0u8; 4];
                     if let (Some(d), Some(s)) = (data.get_mut(..n), self.buf.get(..n)) {
                         d.copy_from_slice(s);
@@ -444,6 +448,8 @@ mod tests {
             let src: &[u8] = match index {
                 0x2000 => &self.big,
                 0x2001 => &self.small,
+                // An empty string.
+                0x2002 => &[],
                 _ => return Err(SdoAbortCode::ObjectNotFound),
             };
             out[..src.len()].copy_from_slice(src);
@@ -538,6 +544,31 @@ mod tests {
                 code: SdoAbortCode::ObjectNotFound
             }
         );
+    }
+
+    #[test]
+    fn an_empty_value_uploads_as_a_normal_upload_of_size_0() {
+        // A string whose value is empty: no expedited form fits.
+        let mut od = od();
+        let mut srv = SdoServer::<64>::default();
+        let mut raw = [0u8; 10];
+        let n = SdoRequest::InitiateUpload {
+            index: 0x2002,
+            sub: 0,
+            complete_access: false,
+        }
+        .emit(&mut raw)
+        .unwrap();
+        let mut out = [0u8; 64];
+        let got = srv.handle(&raw[..n], &mut out, &mut od).unwrap().unwrap();
+        assert_eq!(got.service, CoeService::SdoResponse);
+        assert_eq!(
+            out[0] & 0xE3,
+            0x41,
+            "initiate upload response, size indicated, not expedited"
+        );
+        assert_eq!(&out[4..8], &0u32.to_le_bytes(), "size 0");
+        assert_eq!(got.len, 8);
     }
 
     #[test]

@@ -140,8 +140,14 @@ impl<A: Application> OdAccess<'_, A> {
         if entries_written && !complete_access && self.od.get(index, 0).unwrap_or(0) != 0 {
             return Err(SdoAbortCode::SubindexCannotBeWritten);
         }
-        // 0 clears a place (checked when the count covers it).
-        for (s, v) in changes.iter().filter(|(s, v)| *s != 0 && *v != 0) {
+        // 0 clears a place (checked when the count covers it); a place
+        // written with the value it holds changes nothing (a vendor's
+        // default there is the vendor's).
+        let unchanged = |s: u8, v: i64| self.od.get(index, s) == Some(v);
+        for (s, v) in changes
+            .iter()
+            .filter(|(s, v)| *s != 0 && *v != 0 && !unchanged(*s, *v))
+        {
             if !(complete_access && i64::from(*s) > new(0)) {
                 crate::pdo::check_mapping_value(dict, dir, *v as u32)?;
             }
