@@ -22,6 +22,7 @@ pub mod link;
 pub mod mailbox;
 pub mod od;
 pub mod registers;
+pub mod replay;
 pub mod sdo_info;
 
 use ethercrab::{MainDevice, MainDeviceConfig, PduStorage, RetryBehaviour, Timeouts};

@@ -22,6 +22,7 @@ mod long_line;
 mod mixed_line;
 mod power_cut;
 mod qemu;
+mod replay;
 mod safety;
 mod sdo;
 mod servo402;

@@ -15,6 +15,9 @@ impl SoftEsc {
         // than what the ESC has seen is taken as now).
         self.dc_port0_ns = port0_ns.max(self.dc_port0_ns);
         self.dc_port1_ns = port1_ns.map(|t| t.max(self.dc_port0_ns));
+        if self.sii_busy_until.is_some() {
+            self.sii_tick(self.dc_port0_ns);
+        }
     }
 
     /// Makes this ESC's oscillator run `error_ppb` parts per billion fast

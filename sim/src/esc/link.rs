@@ -10,8 +10,17 @@ impl SoftEsc {
         use reg::dl_status::{
             PDI_OPERATIONAL, PDI_WATCHDOG_OK, communication, link as up, loop_closed,
         };
-        // Port 0 is open with a link and communication.
-        let mut dl = PDI_OPERATIONAL | PDI_WATCHDOG_OK | up(0) | communication(0);
+        // Port 0 is open with a link and communication; ports 2 and 3
+        // have no link, so their loops are closed (as every real ESC of
+        // tests/data/captures shows them). The PDI watchdog of an ESC
+        // without a PDI (PDI control 0) never runs: expired.
+        let watchdog = if self.mem_u8(reg::PDI_CONTROL) == 0 {
+            0
+        } else {
+            self.mem_u16(reg::DL_STATUS) & PDI_WATCHDOG_OK
+        };
+        let mut dl =
+            PDI_OPERATIONAL | watchdog | up(0) | communication(0) | loop_closed(2) | loop_closed(3);
         if link {
             dl |= up(1) | communication(1);
         } else {

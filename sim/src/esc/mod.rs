@@ -29,10 +29,12 @@ mod pdi;
 mod physical;
 mod registers;
 mod sii;
+mod silicon;
 mod sm;
 mod watchdog;
 
 pub use pdi::PdiFault;
+pub use silicon::Silicon;
 
 use dc::DcClock;
 use ecat_slave::esc::Esc;
@@ -90,6 +92,10 @@ pub struct SoftEsc {
     /// The EEPROM: [`SII_SIZE`] bytes, or an image's length up to
     /// [`MAX_SII_SIZE`].
     sii: Vec<u8>,
+    /// The chip's profile: identity registers, units, EEPROM timing.
+    silicon: Silicon,
+    /// Injected time at which the running EEPROM command ends.
+    sii_busy_until: Option<u64>,
     sms: [SmConfig; SM_COUNT],
     fmmus: [FmmuConfig; FMMU_COUNT],
     /// Bit n set: FMMU n enabled (fast skip in logical addressing).
@@ -162,6 +168,8 @@ impl SoftEsc {
         let mut esc = SoftEsc {
             mem: vec![0; size],
             sii: Vec::new(),
+            silicon: Silicon::SOFT,
+            sii_busy_until: None,
             sms: [SmConfig::default(); SM_COUNT],
             fmmus: [FmmuConfig::default(); FMMU_COUNT],
             fmmu_active: 0,
@@ -231,20 +239,24 @@ impl SoftEsc {
         self.wd_sm_armed_at = None;
         self.pdi_touched = false;
         self.wd_pdi_at = None;
-        self.set_u8(reg::TYPE, 0x11);
-        self.set_u8(reg::REVISION, 0x02);
-        self.set_u8(reg::FMMU_COUNT, FMMU_COUNT as u8);
-        self.set_u8(reg::SM_COUNT, SM_COUNT as u8);
+        self.sii_busy_until = None;
+        let si = self.silicon;
+        self.set_u8(reg::TYPE, si.esc_type);
+        self.set_u8(reg::REVISION, si.revision);
+        self.set_u16(reg::BUILD, si.build);
+        self.set_u8(reg::FMMU_COUNT, si.fmmus);
+        self.set_u8(reg::SM_COUNT, si.sms);
         let ram_kib = (self.mem.len() - 0x1000) / 1024;
-        self.set_u8(reg::RAM_SIZE, u8::try_from(ram_kib).unwrap_or(u8::MAX));
-        // Ports 0 and 1 MII, ports 2 and 3 not implemented.
-        self.set_u8(reg::PORT_DESCRIPTOR, 0x0F);
-        // Bit-oriented FMMUs, LRW and read/write commands supported; DC
-        // receive times and a 64-bit system time (bits 2 and 3) and the
-        // SYNC0 unit with the activation registers 0x0981-0x0984 (bit 8,
-        // "enhanced DC sync activation"); ETG.1000.4 Table 31. No LATCH
-        // inputs and no SYNC1 pulses yet.
-        self.set_u16(reg::FEATURES, 0x010C);
+        let ram_kib = si
+            .ram_kib
+            .unwrap_or(u8::try_from(ram_kib).unwrap_or(u8::MAX));
+        self.set_u8(reg::RAM_SIZE, ram_kib);
+        self.set_u8(reg::PORT_DESCRIPTOR, si.port_descriptor);
+        self.set_u16(reg::FEATURES, si.features);
+        if let Some((port1, port3)) = si.dc_marks {
+            self.set_u32(reg::DC_RECEIVE_TIME_PORT0 + 4, u32::from_le_bytes(port1));
+            self.set_u32(reg::DC_RECEIVE_TIME_PORT0 + 12, u32::from_le_bytes(port3));
+        }
         self.dc.power_on(self.dc_port0_ns);
         self.sync0_next = None;
         self.sync0_last = None;
@@ -270,8 +282,11 @@ impl SoftEsc {
         // the AL event mask (ET1100 Section II, register 0x0204: 0x00FFFF0F).
         // Only the IRQ output uses it; 0x0220 shows every event regardless.
         self.set_u32(reg::AL_EVENT_MASK, 0x00FF_FF0F);
-        // 8-byte EEPROM reads.
-        self.set_u16(reg::SII_CONTROL, 0x0040);
+        // The EEPROM interface's status bits (8-byte reads).
+        self.set_u16(reg::SII_CONTROL, si.sii_status);
+        // The PDI watchdog starts reloaded (set_port1_link keeps it, and
+        // clears it for an ESC without a PDI).
+        self.set_u16(reg::DL_STATUS, reg::dl_status::PDI_WATCHDOG_OK);
         self.set_port1_link(false);
     }
 

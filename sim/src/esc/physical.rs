@@ -18,7 +18,7 @@ impl SoftEsc {
     pub(super) fn ecat_read(&mut self, addr: u16, out: &mut [u8], mode: ReadMode) -> bool {
         let a = u32::from(addr);
         let b = a + out.len() as u32;
-        if b > 0x1_0000 {
+        if b > 0x1_0000 || !self.silicon.implements(a, b) {
             return false;
         }
         self.refresh_dc_registers(a, b);
@@ -95,7 +95,14 @@ impl SoftEsc {
     pub(super) fn ecat_write(&mut self, addr: u16, data: &[u8]) -> bool {
         let a = u32::from(addr);
         let b = a + data.len() as u32;
-        if b > 0x1_0000 {
+        if b > 0x1_0000 || !self.silicon.implements(a, b) {
+            return false;
+        }
+        // The DC system time difference 0x092C-0x092F is the ESC's to
+        // write: a master's write changes nothing and is not counted (the
+        // real ESCs of tests/data/captures answer it with 0).
+        let diff = u32::from(reg::DC_SYSTEM_TIME_DIFF);
+        if a >= diff && b <= diff + 4 {
             return false;
         }
         if a < u32::from(reg::PROCESS_RAM) {

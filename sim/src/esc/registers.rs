@@ -76,8 +76,9 @@ impl SoftEsc {
                 }
                 reg::SII_CONFIG..=reg::SII_PDI_ACCESS => self.set_u8(a, v),
                 reg::SII_CONTROL => {
-                    // Bit 6 (read size) is read-only; bits 0 and 7 writable.
-                    let keep = self.mem_u8(a) & 0x40;
+                    // Bits 1-6 (the silicon's status: read size, ...) are
+                    // read-only; bits 0 and 7 writable.
+                    let keep = self.mem_u8(a) & 0x7E;
                     self.set_u8(a, (v & 0x81) | keep);
                 }
                 SII_CONTROL_COMMAND => {
@@ -133,11 +134,11 @@ impl SoftEsc {
             if self.mem_u8(reg::ESC_CONFIG) & ESC_CONFIG_DEVICE_EMULATION != 0 {
                 // Device emulation (ET1100 Section II, 0x0141 bit 0): an
                 // ESC without a firmware (digital I/O terminals, couplers)
-                // takes the requested state as its AL status. Only the
-                // state bits are copied: such a device never indicates an
-                // error, so an Error Ind Ack (bit 4) does not become an
-                // error indication.
-                let requested = self.mem_u16(reg::AL_CONTROL) & 0x000F;
+                // takes the value written to AL control as its AL status,
+                // the acknowledge bit 4 included: real EK1100, EL2828 and
+                // EL2889 answer 0x0011 after a master wrote 0x0011
+                // (tests/data/captures, the replay oracle).
+                let requested = self.mem_u16(reg::AL_CONTROL) & 0x001F;
                 self.set_u16(reg::AL_STATUS, requested);
             }
             self.raise_al_event(reg::AL_EVENT_AL_CONTROL);

@@ -14,7 +14,14 @@ impl SoftEsc {
         match cmd {
             0 => {}
             1 => {
-                // Read: 8 bytes (bit 6) from the word address.
+                // Read: 8 bytes (bit 6) from the word address. A silicon
+                // with an EEPROM read time stays busy (bit 15, the command
+                // bits set) until the frames' time has passed it.
+                if self.silicon.sii_read_ns > 0 {
+                    status |= 0x8000 | 0x0100;
+                    self.sii_busy_until =
+                        Some(self.dc_port0_ns.saturating_add(self.silicon.sii_read_ns));
+                }
                 let mut data = [0xFFu8; 8];
                 if let Ok(w) = usize::try_from(word) {
                     for (i, d) in data.iter_mut().enumerate() {

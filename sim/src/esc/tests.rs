@@ -159,8 +159,11 @@ fn al_control_write_raises_an_event_that_a_pdi_read_clears() {
     assert_eq!(e.read_u32(reg::AL_EVENT_REQUEST).unwrap() & 1, 0);
 }
 
+/// The real EK1100, EL2828 and EL2889 of tests/data/captures answer AL
+/// status 0x0011 after a master wrote AL control 0x0011: device emulation
+/// copies the acknowledge bit too.
 #[test]
-fn device_emulation_makes_the_al_status_follow_al_control_without_error_bit() {
+fn device_emulation_copies_al_control_into_al_status_acknowledge_bit_included() {
     // PDI control word 0x0104 of an EL2004 dump: digital I/O PDI, ESC
     // configuration 0x01 (device emulation).
     let mut sii = [0xFFu8; 128];
@@ -172,8 +175,8 @@ fn device_emulation_makes_the_al_status_follow_al_control_without_error_bit() {
     e.process_frame(&mut f);
     assert_eq!(
         e.mem_u16(reg::AL_STATUS),
-        0x0002,
-        "PRE-OP, ack bit not copied"
+        0x0012,
+        "PRE-OP with the acknowledge bit, as written"
     );
     let (mut f, _) = frame(&[(Command::Bwr, phys(0, reg::AL_CONTROL), &[0x08, 0x00])]);
     e.process_frame(&mut f);
@@ -633,7 +636,11 @@ fn watchdog_time_zero_disables_and_the_divider_scales_the_tick() {
 
 #[test]
 fn pdi_watchdog_expires_when_the_firmware_stops_accessing_the_esc() {
-    let mut e = esc();
+    // An ESC with a PDI (SPI, 0x05): one without has no watchdog to reload.
+    let mut sii = [0xFFu8; 128];
+    sii[..16].fill(0);
+    sii[0] = 0x05;
+    let mut e = SoftEsc::new(&sii);
     e.read_u16(reg::AL_CONTROL).unwrap();
     e.update_watchdogs(0);
     e.update_watchdogs(50_000_000);
@@ -853,4 +860,85 @@ fn a_start_time_far_in_the_past_arms_without_looping() {
     ecat_write_at(&mut e, 0, 0x0920, &(u64::MAX - 5).to_le_bytes());
     ecat_write_at(&mut e, 0, 0x0981, &[0x03]);
     e.update_dc(u64::MAX);
+}
+
+#[test]
+fn an_et1200_counts_only_its_three_fmmus_and_four_sync_managers() {
+    let mut e = esc();
+    e.set_silicon(Silicon::ET1200);
+    assert_eq!(e.mem_u8(reg::TYPE), 0x12);
+    assert_eq!((e.mem_u8(reg::FMMU_COUNT), e.mem_u8(reg::SM_COUNT)), (3, 4));
+    let z = [0u8; 16];
+    for (ado, len, counted) in [
+        (0x0620u16, 16usize, true),
+        (0x0630, 16, false),
+        (0x0628, 16, true), // half in FMMU 2, half beyond
+        (0x0818, 8, true),
+        (0x0820, 8, false),
+        (0x0910, 8, true),
+    ] {
+        let (mut g, s) = frame(&[(Command::Apwr, phys(0, ado), &z[..len])]);
+        e.process_frame(&mut g);
+        assert_eq!(wkc(&g, &s[0]), u16::from(counted), "{ado:#06x}");
+    }
+    let mut no_dc = esc();
+    no_dc.set_silicon(Silicon {
+        dc_system_time: false,
+        ..Silicon::ET1200
+    });
+    for (ado, counted) in [(0x0900u16, true), (0x0910, false), (0x0918, false)] {
+        let (mut g, s) = frame(&[(Command::Aprd, phys(0, ado), &z[..8])]);
+        no_dc.process_frame(&mut g);
+        assert_eq!(wkc(&g, &s[0]), u16::from(counted), "{ado:#06x}");
+    }
+    let mut soft = esc();
+    let (mut g, s) = frame(&[(Command::Apwr, phys(0, 0x0630), &z[..])]);
+    soft.process_frame(&mut g);
+    assert_eq!(wkc(&g, &s[0]), 1, "the soft ESC has 8 FMMUs");
+}
+
+#[test]
+fn an_eeprom_read_keeps_the_interface_busy_for_the_silicons_read_time() {
+    let mut image = vec![0u8; 256];
+    image[0x20..0x28].copy_from_slice(&[1, 2, 3, 4, 5, 6, 7, 8]);
+    let mut e = SoftEsc::new(&image);
+    e.set_silicon(Silicon::ET1100);
+    let t0 = 1_000_000u64;
+    e.set_frame_times(t0, None);
+    let (mut f, _) = frame(&[(
+        Command::Apwr,
+        phys(0, reg::SII_CONTROL),
+        &[0x00, 0x01, 0x10, 0, 0, 0],
+    )]);
+    e.process_frame(&mut f);
+    let status = |e: &mut SoftEsc, t: u64| {
+        e.set_frame_times(t, None);
+        let (mut f, r) = frame(&[(Command::Aprd, phys(0, reg::SII_CONTROL), &[0, 0])]);
+        e.process_frame(&mut f);
+        u16::from_le_bytes([f[r[0].start], f[r[0].start + 1]])
+    };
+    assert_eq!(status(&mut e, t0 + 300_000), 0x8140, "busy, read command");
+    assert_eq!(status(&mut e, t0 + 689_000), 0x8140);
+    assert_eq!(status(&mut e, t0 + 690_000), 0x0040, "done");
+    assert_eq!(&e.raw_memory()[0x0508..0x0510], &[1, 2, 3, 4, 5, 6, 7, 8]);
+    // The soft ESC answers at once.
+    let mut soft = SoftEsc::new(&image);
+    let (mut f, _) = frame(&[(
+        Command::Apwr,
+        phys(0, reg::SII_CONTROL),
+        &[0x00, 0x01, 0x10, 0, 0, 0],
+    )]);
+    soft.process_frame(&mut f);
+    assert_eq!(status(&mut soft, 0), 0x0040);
+}
+
+#[test]
+fn an_esc_without_a_pdi_shows_its_pdi_watchdog_expired_and_unused_ports_closed() {
+    let mut e = esc();
+    assert_eq!(e.mem_u8(reg::PDI_CONTROL), 0);
+    e.update_watchdogs(0);
+    e.update_watchdogs(1_000_000);
+    let dl = e.mem_u16(reg::DL_STATUS);
+    assert_eq!(dl & reg::dl_status::PDI_WATCHDOG_OK, 0, "{dl:#06x}");
+    assert_eq!(dl & 0x5000, 0x5000, "ports 2 and 3 closed: {dl:#06x}");
 }

@@ -4,8 +4,11 @@
 use super::*;
 
 impl SoftEsc {
-    /// Sets or clears DL status bit 1, "PDI watchdog not expired".
+    /// Sets or clears DL status bit 1, "PDI watchdog not expired". An ESC
+    /// without a PDI (PDI control 0: a coupler) has none that could be
+    /// reloaded: the bit stays clear.
     pub fn set_pdi_watchdog_ok(&mut self, ok: bool) {
+        let ok = ok && self.mem_u8(reg::PDI_CONTROL) != 0;
         let dl = self.mem_u16(reg::DL_STATUS);
         let bit = reg::dl_status::PDI_WATCHDOG_OK;
         self.set_u16(reg::DL_STATUS, if ok { dl | bit } else { dl & !bit });
