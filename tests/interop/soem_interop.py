@@ -938,6 +938,22 @@ def mapping(index, bits, sub=0):
     return struct.pack("<I", index << 16 | sub << 8 | bits)
 
 
+def csp_exchange(m, s, out, inp):
+    """One cycle of a drive in CSP, `n` times: controlword and target
+    position (mode 8) out as `out` packs them, the inputs back as `inp`
+    unpacks them; 1 ms between cycles."""
+
+    def exchange(controlword, target, n=1):
+        for _ in range(n):
+            s.output = out.pack(controlword, target, 8)
+            m.send_processdata()
+            m.receive_processdata(RECEIVE_TIMEOUT_US)
+            time.sleep(0.001)
+        return inp.unpack(bytes(s.input))
+
+    return exchange
+
+
 def servo402_mapping(s):
     """The master's PDO configuration in PRE-OP, in ETG.1020's order: the
     assignment emptied, each mapping's subindex 0 to 0, its entries, its
@@ -1010,13 +1026,7 @@ def servo402(iface):
     except pysoem.SdoError as e:
         check(e.abort_code == 0x08000022, f"the mapping in OP: abort {e.abort_code:#010x}")
 
-    def exchange(controlword, target, n=1):
-        for _ in range(n):
-            s.output = SERVO_OUT.pack(controlword, target, 8)
-            m.send_processdata()
-            m.receive_processdata(RECEIVE_TIMEOUT_US)
-            time.sleep(0.001)
-        return SERVO_IN.unpack(bytes(s.input))
+    exchange = csp_exchange(m, s, SERVO_OUT, SERVO_IN)
 
     def command(controlword, target, want, mask=0x6F):
         for _ in range(500):
@@ -1108,16 +1118,7 @@ def corpus(iface, spec, drive):
     check(to_op(m), "every slave in OP")
     states = [al_status(s) for s in m.slaves]
     check(all(st == 0x08 for st in states), f"AL status of every slave {[hex(x) for x in states]}")
-    out = struct.Struct("<HiB")
-    inp = struct.Struct("<Hi")
-
-    def exchange(controlword, target, k=1):
-        for _ in range(k):
-            d.output = out.pack(controlword, target, 8)
-            m.send_processdata()
-            m.receive_processdata(RECEIVE_TIMEOUT_US)
-            time.sleep(0.001)
-        return inp.unpack(bytes(d.input))
+    exchange = csp_exchange(m, d, struct.Struct("<HiB"), struct.Struct("<Hi"))
 
     sw, pos = exchange(0, 0, 10)
     check(sw & 0x4F == SWITCH_ON_DISABLED, f"drive statusword {sw:#06x}: Switch on disabled")

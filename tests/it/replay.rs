@@ -103,6 +103,41 @@ fn run(capture: &str, line: Vec<Box<dyn LineSlave>>, start: Option<(&[u16], u8)>
     report
 }
 
+/// The line of ethercrab's capture: EK1100, EL2828 and EL2889 on
+/// `silicon`, each with its real EEPROM (the dumps, with what the capture
+/// read of the EL2828 and EL2889 put over theirs).
+fn ethercrab_line(x: &[replay::Exchange], silicon: [Silicon; 3]) -> Vec<Box<dyn LineSlave>> {
+    let [coupler, el2828, el2889] = silicon;
+    vec![
+        twin(
+            "EK1100.xml",
+            "EK1100",
+            Some(Eeprom::Dump("ek1100-eeprom-dump.bin")),
+            coupler,
+        ),
+        twin(
+            "EL2xxx.xml",
+            "EL2828",
+            Some(Eeprom::Overlay(
+                "el2828.bin",
+                replay::sii_from_capture(x, 0x1001),
+            )),
+            el2828,
+        ),
+        // No ESI of an EL2889 here: the EL2828's shape (its outputs) with
+        // the EL2889's EEPROM.
+        twin(
+            "EL2xxx.xml",
+            "EL2828",
+            Some(Eeprom::Overlay(
+                "el2889.bin",
+                replay::sii_from_capture(x, 0x1002),
+            )),
+            el2889,
+        ),
+    ]
+}
+
 /// What differences may remain, and why: the DC unit's times (receive
 /// times and system time, 0x0900-0x091F) come from each real ESC's own
 /// clock since its power-on, which neither an ESI nor an SII tells; and
@@ -139,32 +174,7 @@ fn the_replayed_captures_answer_as_the_real_devices_did() {
     let reports = [
         run(
             "replay-ek1100-el2828-el2889.pcapng",
-            vec![
-                twin(
-                    "EK1100.xml",
-                    "EK1100",
-                    Some(Eeprom::Dump("ek1100-eeprom-dump.bin")),
-                    Silicon::ET1100,
-                ),
-                twin(
-                    "EL2xxx.xml",
-                    "EL2828",
-                    Some(Eeprom::Overlay(
-                        "el2828.bin",
-                        replay::sii_from_capture(&ethercrab, 0x1001),
-                    )),
-                    EL2828_ESC,
-                ),
-                twin(
-                    "EL2xxx.xml",
-                    "EL2828",
-                    Some(Eeprom::Overlay(
-                        "el2889.bin",
-                        replay::sii_from_capture(&ethercrab, 0x1002),
-                    )),
-                    Silicon::ET1200,
-                ),
-            ],
+            ethercrab_line(&ethercrab, [Silicon::ET1100, EL2828_ESC, Silicon::ET1200]),
             None,
         ),
         run(
@@ -228,32 +238,7 @@ fn the_oracle_sees_a_twin_on_the_wrong_silicon() {
     let ethercrab = exchanges("replay-ek1100-el2828-el2889.pcapng");
     let r = run(
         "replay-ek1100-el2828-el2889.pcapng",
-        vec![
-            twin(
-                "EK1100.xml",
-                "EK1100",
-                Some(Eeprom::Dump("ek1100-eeprom-dump.bin")),
-                Silicon::SOFT,
-            ),
-            twin(
-                "EL2xxx.xml",
-                "EL2828",
-                Some(Eeprom::Overlay(
-                    "el2828.bin",
-                    replay::sii_from_capture(&ethercrab, 0x1001),
-                )),
-                Silicon::SOFT,
-            ),
-            twin(
-                "EL2xxx.xml",
-                "EL2828",
-                Some(Eeprom::Overlay(
-                    "el2889.bin",
-                    replay::sii_from_capture(&ethercrab, 0x1002),
-                )),
-                Silicon::SOFT,
-            ),
-        ],
+        ethercrab_line(&ethercrab, [Silicon::SOFT; 3]),
         None,
     );
     assert!(r.rate() < 0.8, "{}", r.text());
