@@ -12,8 +12,10 @@
 //!   every LRW is really processed (the bench checks the working counter).
 //!
 //! It prints p50, p99, p99.9 and max per case and the ratio runner/floor
-//! at p50 and p99. Needs root and iproute2 (the namespace is removed at
-//! the end); builds `pam-slave` in release mode first.
+//! at p50 and p99. `--pace-us N` sends one frame every N us (1000: a
+//! 1 kHz cyclic master), back to back by default. Needs root and iproute2
+//! (the namespace is removed at the end); builds `pam-slave` in release
+//! mode first.
 //!
 //! Run: `cargo bench -p master-test --bench latency` (`-- --frames N` for
 //! another count).
@@ -201,6 +203,14 @@ fn main() {
         .and_then(|i| args.get(i + 1))
         .and_then(|v| v.parse().ok())
         .unwrap_or(20_000);
+    // `--pace-us N`: N microseconds between frames, as a cyclic master
+    // sends them (1000: 1 kHz); 0 (the default): back to back.
+    let pace = args
+        .iter()
+        .position(|a| a == "--pace-us")
+        .and_then(|i| args.get(i + 1))
+        .and_then(|v| v.parse::<u64>().ok())
+        .map_or(Duration::ZERO, Duration::from_micros);
     let ok = Command::new(env!("CARGO"))
         .args([
             "build",
@@ -243,7 +253,14 @@ fn main() {
     };
     let mut m = Master { tx, rx };
 
-    println!("{frames} round trips per case over a veth pair; times in microseconds");
+    println!(
+        "{frames} round trips per case over a veth pair, {}; times in microseconds",
+        if pace.is_zero() {
+            "back to back".to_string()
+        } else {
+            format!("one frame every {} us", pace.as_micros())
+        }
+    );
     println!("| case | p50 | p99 | p99.9 | max | p50 / floor | p99 / floor |");
     println!("|---|---|---|---|---|---|---|");
     let mut floor: Option<(Duration, Duration)> = None;
@@ -268,7 +285,19 @@ fn main() {
         }
         let (f, ends) = cycle_frame(n);
         let mut times = Vec::with_capacity(frames);
+        let mut next = Instant::now();
         for k in 0..frames + 1000 {
+            if !pace.is_zero() {
+                // The next cycle starts one period after the last one
+                // started (a master's cycle timer), not after its answer.
+                next += pace;
+                let now = Instant::now();
+                if next > now {
+                    std::thread::sleep(next - now);
+                } else {
+                    next = now;
+                }
+            }
             let (r, t) = m.exchange(&f);
             if name != "floor" {
                 assert_eq!(

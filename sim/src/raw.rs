@@ -168,6 +168,11 @@ pub fn run(
             (Chain::with_stores(slaves, stores), Vec::new())
         }
     };
+    // On a wire the slaves' clock is real time: the sweep runs every
+    // firmware in its turn, and the extra passes of an idle link (meant
+    // for a simulated clock that stands still) would only run into the
+    // next frame of a cyclic master.
+    chain.set_idle_passes(false);
     let out = out_iface.as_ref().map(open).transpose()?;
     // The master-side sender, shared with the thread that relays frames
     // coming back from the next runner.
