@@ -802,6 +802,7 @@ impl DatagramCursor {
 
     /// Byte range of the next datagram in `payload`, an error, or `None`
     /// once the chain has ended (or after an error).
+    #[inline]
     pub fn next_range(&mut self, payload: &[u8]) -> Option<Result<Range<usize>, WireError>> {
         if self.done {
             return None;

@@ -74,11 +74,15 @@ type Field = core::ops::Range<usize>;
 type Rest = core::ops::RangeFrom<usize>;
 
 /// Reads one byte, or 0 if `at` is out of range.
+// The field helpers below are small and run on every datagram: `#[inline]`
+// lets the crates that parse frames (the software ESC) inline them.
+#[inline]
 fn get_u8(buf: &[u8], at: usize) -> u8 {
     buf.get(at).copied().unwrap_or(0)
 }
 
 /// Writes one byte; out-of-range writes are dropped.
+#[inline]
 fn set_u8(buf: &mut [u8], at: usize, value: u8) {
     if let Some(b) = buf.get_mut(at) {
         *b = value;
@@ -86,6 +90,7 @@ fn set_u8(buf: &mut [u8], at: usize, value: u8) {
 }
 
 /// Reads a fixed-size array, or all zeroes if `field` is out of range.
+#[inline]
 fn get_array<const N: usize>(buf: &[u8], field: Field) -> [u8; N] {
     buf.get(field)
         .and_then(|b| <[u8; N]>::try_from(b).ok())
@@ -93,6 +98,7 @@ fn get_array<const N: usize>(buf: &[u8], field: Field) -> [u8; N] {
 }
 
 /// Writes a fixed-size array; out-of-range writes are dropped.
+#[inline]
 fn set_array<const N: usize>(buf: &mut [u8], field: Field, value: [u8; N]) {
     if let Some(b) = buf.get_mut(field).filter(|b| b.len() == N) {
         b.copy_from_slice(&value);
@@ -100,26 +106,31 @@ fn set_array<const N: usize>(buf: &mut [u8], field: Field, value: [u8; N]) {
 }
 
 /// Reads a little-endian `u16`, or 0 if `field` is out of range.
+#[inline]
 fn get_u16_le(buf: &[u8], field: Field) -> u16 {
     u16::from_le_bytes(get_array(buf, field))
 }
 
 /// Writes a little-endian `u16`; out-of-range writes are dropped.
+#[inline]
 fn set_u16_le(buf: &mut [u8], field: Field, value: u16) {
     set_array(buf, field, value.to_le_bytes());
 }
 
 /// Reads a little-endian `u32`, or 0 if `field` is out of range.
+#[inline]
 fn get_u32_le(buf: &[u8], field: Field) -> u32 {
     u32::from_le_bytes(get_array(buf, field))
 }
 
 /// Writes a little-endian `u32`; out-of-range writes are dropped.
+#[inline]
 fn set_u32_le(buf: &mut [u8], field: Field, value: u32) {
     set_array(buf, field, value.to_le_bytes());
 }
 
 /// Copies `data` into `buf` at `start`; dropped if it does not fit.
+#[inline]
 fn set_bytes(buf: &mut [u8], start: usize, data: &[u8]) {
     let end = start.saturating_add(data.len());
     if let Some(dst) = buf.get_mut(start..end) {
