@@ -6,7 +6,7 @@ use crate::common::abort_code;
 use master_test::link::{Clock, lock};
 use master_test::{Group, VirtualBus};
 use pam_199_p_etc::Pam;
-use pam_199_p_etc::app::power_stage::{Fault, Solenoid};
+use pam_199_p_etc::board::{Fault, Solenoid};
 use std::time::Duration;
 
 type OpGroup = Group<ethercrab::subdevice_group::Op>;

@@ -284,7 +284,7 @@ fn every_entry_reads_its_default_and_every_rw_entry_round_trips_both_paths() {
 fn an_injected_fault_produces_an_emergency_the_master_decodes() {
     use ecat_slave::wire::coe::{CoeHeader, CoeService, Emergency, EmergencyRepr};
     use master_test::link::lock;
-    use pam_199_p_etc::app::power_stage::{Fault, Solenoid};
+    use pam_199_p_etc::board::{Fault, Solenoid};
     smol::block_on(async {
         // Simulated time: 1 ms per cycle, so no SM watchdog trip on a slow
         // machine can put another emergency first.

@@ -3,9 +3,9 @@
 //! example as process data, and the refusals a master expects.
 
 use crate::common::{Md, abort_code, request, status};
-use hcs_dma22::device::{MODULE_IDENT, od as dma_od};
 use hcs_dma22::telegram::semantics::status as hcs_status;
 use hcs_dma22::telegram::{ModuleOutput, MultiWriteResponse, RequestRepr, ResponseRepr};
+use hcs_dma22::{MODULE_IDENT, description::od as dma_od};
 use master_test::VirtualBus;
 use master_test::link::Clock;
 
@@ -171,7 +171,7 @@ fn objects_and_pdos_of_empty_slots_do_not_exist() {
 
 #[test]
 fn the_dma22_esi_describes_slots_and_modules() {
-    let xml = ecat_esi::generate(&hcs_dma22::device::DEVICE).expect("ESI");
+    let xml = ecat_esi::generate(&hcs_dma22::DEVICE).expect("ESI");
     let text = std::str::from_utf8(&xml).unwrap();
     let doc = ecat_esi::xml::parse(text).expect("parse");
     let slots = doc
@@ -230,7 +230,7 @@ fn hcs_telegrams_through_the_coe_channel_reach_the_module_parameters() {
         let md: &Md = &bus.maindevice;
         let group = bus.init().await.expect("PRE-OP");
         let station = group.subdevice(md, 0).expect("node").configured_address();
-        let layout = hcs_dma22::device::DEVICE.layout();
+        let layout = hcs_dma22::DEVICE.layout();
         let mut c = MailboxClient::new(md, station, MailboxGeometry::of(&layout));
         // Manual 6.3: read the software version of module 1.
         assert_eq!(
@@ -251,7 +251,7 @@ fn hcs_telegrams_through_the_coe_channel_reach_the_module_parameters() {
 
 #[test]
 fn a_mixed_line_pam_dma22_io8_reaches_op_and_the_hw_enable_input_acts() {
-    use hcs_dma22::device::Dma22Node;
+    use hcs_dma22::Dma22Node;
     use master_test::link::lock;
     use std::time::Duration;
     smol::block_on(async {

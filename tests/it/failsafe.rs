@@ -138,7 +138,7 @@ fn a_failing_pdi_in_op_drops_to_safeop_with_outputs_and_current_off() {
                 slave
                     .app()
                     .stage()
-                    .setpoint_ma(pam_199_p_etc::app::power_stage::Solenoid::A)
+                    .setpoint_ma(pam_199_p_etc::board::Solenoid::A)
                     > 0
             );
         }
@@ -154,8 +154,8 @@ fn a_failing_pdi_in_op_drops_to_safeop_with_outputs_and_current_off() {
         assert_eq!(slave.od().get(0x7000, 1), Some(0), "ENABLE off");
         assert_eq!(slave.od().get(0x7000, 3), Some(0), "command value 0");
         for sol in [
-            pam_199_p_etc::app::power_stage::Solenoid::A,
-            pam_199_p_etc::app::power_stage::Solenoid::B,
+            pam_199_p_etc::board::Solenoid::A,
+            pam_199_p_etc::board::Solenoid::B,
         ] {
             assert_eq!(slave.app().stage().setpoint_ma(sol), 0, "{sol:?} off");
         }

@@ -56,10 +56,38 @@ const SCOPES: &[Scope] = &[
         test_only: &[],
     },
     Scope {
-        dir: "devices/hcs-dma22/src/device",
+        dir: "devices/hcs-dma22/src",
+        doc: "lib.rs",
+        top_level: true,
+        path: "",
+        test_only: &[],
+    },
+    Scope {
+        dir: "devices/hcs-dma22/src/description",
         doc: "mod.rs",
         top_level: false,
-        path: "device",
+        path: "description",
+        test_only: &[],
+    },
+    Scope {
+        dir: "devices/hcs-dma22/src/app",
+        doc: "mod.rs",
+        top_level: false,
+        path: "app",
+        test_only: &["tests"],
+    },
+    Scope {
+        dir: "devices/pam-199-p-etc/src",
+        doc: "lib.rs",
+        top_level: true,
+        path: "",
+        test_only: &["tests"],
+    },
+    Scope {
+        dir: "examples/io8/src",
+        doc: "lib.rs",
+        top_level: true,
+        path: "",
         test_only: &["tests"],
     },
     Scope {
@@ -242,7 +270,7 @@ fn every_module_uses_only_the_layers_below_its_own() {
             vec!["super::".to_string(), format!("crate::{}::", scope.path)]
         };
         let found = sources(scope);
-        assert!(found.len() >= 3, "{}: {} modules", scope.dir, found.len());
+        assert!(found.len() >= 2, "{}: {} modules", scope.dir, found.len());
         for v in violations(&layers, &found, &prefixes) {
             all.push(format!("{}: {v}", scope.dir));
         }

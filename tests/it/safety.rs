@@ -9,7 +9,7 @@ use crate::common::{abort_code, request};
 use master_test::VirtualBus;
 use master_test::link::lock;
 use pam_199_p_etc::Pam;
-use pam_199_p_etc::app::power_stage::Solenoid;
+use pam_199_p_etc::board::Solenoid;
 use std::time::Duration;
 
 type Md = ethercrab::MainDevice<'static>;

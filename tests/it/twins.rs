@@ -658,7 +658,7 @@ fn an_eni_configuring_three_modules_gets_a_modular_twin_holding_three_and_etherc
     // write 0xF030 with three modules, as TwinCAT does for this machine.
     const PRODUCT: u32 = 0x0022_00FF;
     const IDENT: u32 = 0x0022_0001;
-    let dev = &hcs_dma22::device::DEVICE;
+    let dev = &hcs_dma22::DEVICE;
     let esi = String::from_utf8(ecat_esi::generate(dev).expect("ESI"))
         .expect("utf-8")
         .replace(

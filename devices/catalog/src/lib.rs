@@ -127,20 +127,20 @@ pub const DEVICES: &[DeviceEntry] = &[
     DeviceEntry {
         key: "dma22",
         summary: "HCS DMA-22(A) node, modular: 3 DMA-22(A) modules in mode 3 (manual 5.4.2)",
-        description: &hcs_dma22::device::DEVICE,
-        make: make::<hcs_dma22::device::Dma22Node<3>>,
+        description: &hcs_dma22::DEVICE,
+        make: make::<hcs_dma22::Dma22Node<3>>,
     },
     DeviceEntry {
         key: "dma22x1",
         summary: "HCS DMA-22(A) node with 1 module in mode 3",
-        description: &hcs_dma22::device::DEVICE,
-        make: make::<hcs_dma22::device::Dma22Node<1>>,
+        description: &hcs_dma22::DEVICE,
+        make: make::<hcs_dma22::Dma22Node<1>>,
     },
     DeviceEntry {
         key: "dma22x5",
         summary: "HCS DMA-22(A) node with 5 modules in mode 3",
-        description: &hcs_dma22::device::DEVICE,
-        make: make::<hcs_dma22::device::Dma22Node<5>>,
+        description: &hcs_dma22::DEVICE,
+        make: make::<hcs_dma22::Dma22Node<5>>,
     },
 ];
 

@@ -1,10 +1,17 @@
 //! # hcs-dma22: the HCS DMA-22(A) amplifier node and its telegram
 //!
 //! The HCS DMA-22(A) digital amplifier node as an EtherCAT *modular
-//! device* (ETG.5001) on the `ecat-slave` core ([`device`]): one node with
-//! 1..=5 DMA-22(A) modules in its slots (module address E22 = slot), each
-//! with the parameter list of the manual's chapter 7, its CMD 15 block as
+//! device* (ETG.5001) on the `ecat-slave` core: one node with 1..=5
+//! DMA-22(A) modules in its slots (module address E22 = slot), each with
+//! the parameter list of the manual's chapter 7, its CMD 15 block as
 //! process data, a behaviour model, and the telegram channel over CoE.
+//! The crate has the IO8 example's layout: [`description`] (what the node
+//! is, [`DEVICE`]), [`app`] (what it does, [`Dma22Node`], with its tests); the
+//! node is simulated only, so it has no board module (the modules' inputs,
+//! hardware enable and digital inputs, are set through
+//! [`Dma22Node::module_mut`]).
+//!
+//! Layers: `app` → `description`, `telegram`
 //!
 //! The codec ([`telegram`]) reads and writes the HCS fieldbus telegram that
 //! the DMA-22(A) node exchanges with its master over EtherNet/IP and
@@ -54,5 +61,11 @@
     )
 )]
 
-pub mod device;
+pub mod app;
+pub mod description;
 pub mod telegram;
+
+pub use app::Dma22Node;
+pub use description::{
+    DEVICE, DEVICE_NAME, MODULE_IDENT, PRODUCT_CODE, REVISION, SLOTS, VENDOR_ID,
+};

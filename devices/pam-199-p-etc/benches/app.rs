@@ -9,7 +9,7 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use pam_199_p_etc::app::amplifier::Amplifier;
-use pam_199_p_etc::app::power_stage::SimPowerStage;
+use pam_199_p_etc::board::SimPowerStage;
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {

@@ -11,7 +11,7 @@
 //! of one tick (the set-up is a few thousand instructions).
 
 use pam_199_p_etc::app::amplifier::Amplifier;
-use pam_199_p_etc::app::power_stage::SimPowerStage;
+use pam_199_p_etc::board::SimPowerStage;
 use std::hint::black_box;
 
 fn main() {

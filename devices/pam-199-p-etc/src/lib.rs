@@ -1,10 +1,20 @@
 //! # pam-199-p-etc: the W.E.St. PAM-199-P-ETC valve amplifier on the core
 //!
-//! One device on [`ecat_slave`]: its object dictionary ([`od`], manual
-//! chapter 6), its description ([`DEVICE`]) and its application ([`Pam`]:
-//! the amplifier task of [`app`], the 0xF801 commands, the vendor password,
-//! FUNCTION selecting the PDO set, parameter storage, diagnosis
-//! emergencies). `#![no_std]` without its `std` feature.
+//! One device on [`ecat_slave`], in the IO8 example's layout:
+//!
+//! * [`description`]: what it is, described once ([`DEVICE`], the object
+//!   dictionary [`od`] of manual chapter 6);
+//! * [`board`]: its hardware, the solenoid [`PowerStage`] (and
+//!   [`SimPowerStage`], the simulated one with fault injection);
+//! * [`app`]: what it does ([`Pam`]: the amplifier task, the 0xF801
+//!   commands, the vendor password, FUNCTION selecting the PDO set,
+//!   parameter storage, diagnosis emergencies);
+//! * `invariants` (feature `invariants`): the safety rules of
+//!   docs/SAFETY.md checked after every step of random master sessions.
+//!
+//! `#![no_std]` without its `std` feature.
+//!
+//! Layers: `invariants` → `app` → `board` → `description`
 //!
 //! ```
 //! use ecat_sim::SoftSlave;
@@ -26,17 +36,18 @@
 )]
 
 pub mod app;
-mod device;
-pub mod diagnosis;
+pub mod board;
+pub mod description;
 #[cfg(any(test, feature = "invariants"))]
 pub mod invariants;
-pub mod od;
 #[cfg(test)]
 mod tests;
 
-pub use device::{
-    COMMAND_ACK, COMMAND_ACK_NS, DEVICE, DEVICE_NAME, DIRECTIONAL_MAPPING, INDEPENDENT_MAPPING,
-    PRODUCT_CODE, Pam, REVISION, SAVE_MIN_INTERVAL_NS, VENDOR_ID, VENDOR_PASSWORD, function_set,
+pub use app::{COMMAND_ACK, COMMAND_ACK_NS, Pam, SAVE_MIN_INTERVAL_NS, VENDOR_PASSWORD};
+pub use board::{PowerStage, SimPowerStage};
+pub use description::{
+    DEVICE, DEVICE_NAME, DIRECTIONAL_MAPPING, INDEPENDENT_MAPPING, PRODUCT_CODE, REVISION,
+    VENDOR_ID, function_set, od,
 };
 
 /// The PAM's live object dictionary (sized for [`od::DICT`]).

@@ -252,7 +252,7 @@ pub fn new_app() -> io8::App {
 /// The PAM's power stage driven through `stage_*`.
 #[cfg(feature = "pam")]
 pub mod pam {
-    use pam_199_p_etc::app::power_stage::{Dither, Faults, PiGains, PowerStage, Solenoid};
+    use pam_199_p_etc::board::{Dither, Faults, PiGains, PowerStage, Solenoid};
 
     use crate::ffi;
 

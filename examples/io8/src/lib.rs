@@ -12,6 +12,8 @@
 //! * [`board`]: its hardware ([`Board`], [`SimBoard`]).
 //! * [`app`]: what it does ([`Io8`], the [`Application`](ecat_slave::device::Application)).
 //!
+//! Layers: `app` → `board`, `description`
+//!
 //! ```
 //! use ecat_slave::al::AlState;
 //!

@@ -26,7 +26,7 @@ use super::deadband::{Deadband, DirectionalDeadband, MmType};
 use super::entries::{
     BASIS, DIAGNOSIS, DIRECTIONAL, INDEPENDENT, IndependentEntries, StageEntries,
 };
-use super::power_stage::{Faults, PowerStage, Solenoid, StageParams, acc_gains, pwm_from_code};
+use crate::board::{Faults, PowerStage, Solenoid, StageParams, acc_gains, pwm_from_code};
 use ecat_slave::od::Od;
 
 /// Tick period of the application in microseconds.
@@ -374,7 +374,7 @@ impl Amplifier {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::app::power_stage::{Fault, SimPowerStage};
+    use crate::board::{Fault, SimPowerStage};
 
     fn run(amp: &mut Amplifier, s: &mut Od, st: &mut SimPowerStage, from: u64, ms: u64) -> u64 {
         let to = from + ms * 1_000_000;

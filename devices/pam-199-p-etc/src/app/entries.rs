@@ -5,18 +5,18 @@
 //! and diagnosis flags. Looking each one up by `index:sub`
 //! ([`Od::get`] / [`Od::set`]: a binary search over the objects, then over
 //! the entries) cost two thirds of the tick. Here every entry is named once
-//! as an [`EntryPos`], whose flat position [`crate::od::position`] finds
-//! while the crate is compiled (a name missing from [`crate::od::OBJECTS`]
+//! as an [`EntryPos`], whose flat position [`crate::description::od::position`] finds
+//! while the crate is compiled (a name missing from [`crate::description::od::OBJECTS`]
 //! is a build error); the task then reads and writes the store's value
 //! slots directly ([`Od::value`] / [`Od::set_value`]).
 //!
 //! Nothing is copied out of the store: every read sees the value as it is
 //! now, whoever wrote it (an SDO download or complete access, DEFAULT,
 //! LOADBACK, the PDO engine, a test). The positions are those of the PAM's
-//! dictionary [`crate::od::DICT`], so the store must be one of it
+//! dictionary [`crate::description::od::DICT`], so the store must be one of it
 //! ([`crate::Store`]).
 
-use crate::od;
+use crate::description::od;
 use ecat_slave::od::Od;
 
 /// One entry: its object index, subindex and flat position in the store.

@@ -7,7 +7,7 @@
 //! `decode(&encode(a)) == a` for every action (tested), so a sequence the
 //! property test shrinks can be replayed by the fuzz target and back.
 
-use crate::od::DICT;
+use crate::description::od::DICT;
 
 /// Most actions decoded from one input (a longer input is cut).
 pub const MAX_ACTIONS: usize = 128;

@@ -599,7 +599,7 @@ pub fn pdo_bits(pdo: u16) -> u32 {
 /// The mapping entries (`0xIIIISSLL`) of a PDO of the PAM, from its
 /// dictionary (the mappings are fixed).
 pub fn mapping(pdo: u16) -> Vec<u32> {
-    let Some((_, obj)) = crate::od::DICT.find(pdo) else {
+    let Some((_, obj)) = crate::description::od::DICT.find(pdo) else {
         return Vec::new();
     };
     obj.entries

@@ -18,7 +18,7 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 
 use crate::Pam;
-use crate::app::power_stage::{Dither, PiGains, PowerStage, Solenoid};
+use crate::board::{Dither, PiGains, PowerStage, Solenoid};
 use crate::invariants::*;
 
 // --- strategies ------------------------------------------------------------
@@ -68,14 +68,18 @@ fn value() -> impl Strategy<Value = Value> {
 /// An object (mostly the interesting ones) and one of its subindices (or
 /// any).
 fn target() -> impl Strategy<Value = (u16, u8)> {
-    let all: Vec<u16> = crate::od::DICT.objects().iter().map(|o| o.index).collect();
+    let all: Vec<u16> = crate::description::od::DICT
+        .objects()
+        .iter()
+        .map(|o| o.index)
+        .collect();
     let index = prop_oneof![
         4 => proptest::sample::select(INTERESTING),
         2 => proptest::sample::select(all),
         1 => any::<u16>(),
     ];
     (index, any::<u8>(), any::<bool>()).prop_map(|(index, x, pick)| {
-        let sub = match crate::od::DICT.find(index) {
+        let sub = match crate::description::od::DICT.find(index) {
             Some((_, o)) if pick && !o.entries.is_empty() => {
                 o.entries[usize::from(x) % o.entries.len()].sub
             }

@@ -1,6 +1,6 @@
 //! Parameter storage (core) with the PAM's parameter set.
 
-use crate::od::DICT;
+use crate::description::od::DICT;
 use ecat_slave::hal::MemNv;
 use ecat_slave::params::*;
 

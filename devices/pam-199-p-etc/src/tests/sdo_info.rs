@@ -15,10 +15,10 @@ fn exchange(server: &mut SdoInfoServer, req: &[u8], size: usize) -> Vec<Vec<u8>>
     let mut out = vec![0u8; size];
     let mut frames = Vec::new();
     let n = server
-        .handle(req, &mut out, &crate::od::DICT)
+        .handle(req, &mut out, &crate::description::od::DICT)
         .expect("a response");
     frames.push(out[..n].to_vec());
-    while let Some(n) = server.next_fragment(&mut out, &crate::od::DICT) {
+    while let Some(n) = server.next_fragment(&mut out, &crate::description::od::DICT) {
         frames.push(out[..n].to_vec());
         assert!(frames.len() < 1000, "endless response");
     }
@@ -74,7 +74,7 @@ fn error_code(frame: &[u8]) -> u32 {
 }
 
 fn indices(pred: impl Fn(&Object) -> bool) -> Vec<u16> {
-    crate::od::OBJECTS
+    crate::description::od::OBJECTS
         .iter()
         .filter(|o| pred(o))
         .map(|o| o.index)
@@ -90,7 +90,7 @@ fn od_list_counts_give_the_size_of_each_list() {
     assert_eq!(&f[..4], &[0x02, 0, 0, 0]);
     let w = words(&f[4..]);
     let want = [
-        crate::od::OBJECTS.len(),
+        crate::description::od::OBJECTS.len(),
         od_list(2, 128).len(),
         od_list(3, 128).len(),
         od_list(4, 128).len(),
@@ -109,7 +109,10 @@ fn od_list_counts_give_the_size_of_each_list() {
 
 #[test]
 fn all_objects_list_is_the_model_in_order_across_small_fragments() {
-    let all: Vec<u16> = crate::od::OBJECTS.iter().map(|o| o.index).collect();
+    let all: Vec<u16> = crate::description::od::OBJECTS
+        .iter()
+        .map(|o| o.index)
+        .collect();
     let mut s = SdoInfoServer::new();
     let frames = exchange(&mut s, &request(1, &[1, 0]), 20);
     assert!(frames.len() > 5, "{} fragments", frames.len());
@@ -125,7 +128,10 @@ fn all_objects_list_is_the_model_in_order_across_small_fragments() {
 
 #[test]
 fn odd_fragment_sizes_never_split_an_index() {
-    let all: Vec<u16> = crate::od::OBJECTS.iter().map(|o| o.index).collect();
+    let all: Vec<u16> = crate::description::od::OBJECTS
+        .iter()
+        .map(|o| o.index)
+        .collect();
     for size in [6, 7, 9, 21, 33] {
         let mut s = SdoInfoServer::new();
         let frames = exchange(&mut s, &request(1, &[1, 0]), size);
@@ -269,11 +275,19 @@ fn unknown_object_answers_object_does_not_exist() {
     let mut s = SdoInfoServer::new();
     let mut out = [0u8; 64];
     let n = s
-        .handle(&request(3, &[0x02, 0x10]), &mut out, &crate::od::DICT)
+        .handle(
+            &request(3, &[0x02, 0x10]),
+            &mut out,
+            &crate::description::od::DICT,
+        )
         .unwrap();
     assert_eq!(error_code(&out[..n]), 0x0602_0000);
     let n = s
-        .handle(&request(5, &[0x00, 0x08, 0, 0]), &mut out, &crate::od::DICT)
+        .handle(
+            &request(5, &[0x00, 0x08, 0, 0]),
+            &mut out,
+            &crate::description::od::DICT,
+        )
         .unwrap();
     assert_eq!(error_code(&out[..n]), 0x0602_0000); // enum types are not objects
     assert!(!s.busy());
@@ -287,7 +301,7 @@ fn unknown_or_absent_subindex_answers_subindex_does_not_exist() {
         let mut s = SdoInfoServer::new();
         let mut out = [0u8; 64];
         let n = s
-            .handle(&request(5, &req), &mut out, &crate::od::DICT)
+            .handle(&request(5, &req), &mut out, &crate::description::od::DICT)
             .unwrap();
         assert_eq!(error_code(&out[..n]), 0x0609_0011, "{index:#06x}:{sub}");
     }
@@ -308,7 +322,9 @@ fn truncated_or_unknown_requests_answer_unknown_command() {
         request(2, &[1, 0]), // a response opcode
         request(0x7F, &[]),  // unknown opcode
     ] {
-        let n = s.handle(&req, &mut out, &crate::od::DICT).unwrap();
+        let n = s
+            .handle(&req, &mut out, &crate::description::od::DICT)
+            .unwrap();
         assert_eq!(error_code(&out[..n]), 0x0504_0001, "{req:02x?}");
     }
 }
@@ -318,20 +334,30 @@ fn fragments_left_count_down_to_zero() {
     let mut s = SdoInfoServer::new();
     let mut out = [0u8; 10]; // 6 bytes of service data per fragment
     let n = s
-        .handle(&request(1, &[1, 0]), &mut out, &crate::od::DICT)
+        .handle(
+            &request(1, &[1, 0]),
+            &mut out,
+            &crate::description::od::DICT,
+        )
         .unwrap();
     assert_eq!(n, 10);
-    let total = 2 + 2 * crate::od::OBJECTS.len();
+    let total = 2 + 2 * crate::description::od::OBJECTS.len();
     let count = total.div_ceil(6);
     let mut left = vec![u16::from_le_bytes([out[2], out[3]])];
     assert!(out[0] & 0x80 != 0 && s.busy());
-    while s.next_fragment(&mut out, &crate::od::DICT).is_some() {
+    while s
+        .next_fragment(&mut out, &crate::description::od::DICT)
+        .is_some()
+    {
         left.push(u16::from_le_bytes([out[2], out[3]]));
     }
     let want: Vec<u16> = (0..count as u16).rev().collect();
     assert_eq!(left, want);
     assert_eq!(out[0], 0x02); // last: incomplete bit clear
-    assert_eq!(s.next_fragment(&mut out, &crate::od::DICT), None);
+    assert_eq!(
+        s.next_fragment(&mut out, &crate::description::od::DICT),
+        None
+    );
 }
 
 #[test]
@@ -347,19 +373,34 @@ fn buffered_descriptions_fragment_too() {
 fn a_new_request_abandons_the_pending_response() {
     let mut s = SdoInfoServer::new();
     let mut out = [0u8; 12];
-    s.handle(&request(1, &[1, 0]), &mut out, &crate::od::DICT)
-        .unwrap();
+    s.handle(
+        &request(1, &[1, 0]),
+        &mut out,
+        &crate::description::od::DICT,
+    )
+    .unwrap();
     assert!(s.busy());
     // 0x1000's description: 6 + 11 bytes in fragments of 8, 8, 1.
     let n = s
-        .handle(&request(3, &[0x00, 0x10]), &mut out, &crate::od::DICT)
+        .handle(
+            &request(3, &[0x00, 0x10]),
+            &mut out,
+            &crate::description::od::DICT,
+        )
         .unwrap();
     assert_eq!(&out[..n], b"\x84\x00\x02\x00\x00\x10\x07\x00\x00\x07DE");
-    let n = s.next_fragment(&mut out, &crate::od::DICT).unwrap();
+    let n = s
+        .next_fragment(&mut out, &crate::description::od::DICT)
+        .unwrap();
     assert_eq!(&out[..n], b"\x84\x00\x01\x00VICE TYP");
-    let n = s.next_fragment(&mut out, &crate::od::DICT).unwrap();
+    let n = s
+        .next_fragment(&mut out, &crate::description::od::DICT)
+        .unwrap();
     assert_eq!(&out[..n], b"\x04\x00\x00\x00E");
-    assert_eq!(s.next_fragment(&mut out, &crate::od::DICT), None);
+    assert_eq!(
+        s.next_fragment(&mut out, &crate::description::od::DICT),
+        None
+    );
 }
 
 #[test]
@@ -367,19 +408,34 @@ fn too_small_output_gives_no_response_and_no_state() {
     let mut s = SdoInfoServer::new();
     let mut out = [0u8; 5];
     assert_eq!(
-        s.handle(&request(1, &[1, 0]), &mut out, &crate::od::DICT),
+        s.handle(
+            &request(1, &[1, 0]),
+            &mut out,
+            &crate::description::od::DICT
+        ),
         None
     );
     assert!(!s.busy());
     assert_eq!(
-        s.handle(&request(3, &[0x02, 0x10]), &mut out, &crate::od::DICT),
+        s.handle(
+            &request(3, &[0x02, 0x10]),
+            &mut out,
+            &crate::description::od::DICT
+        ),
         None
     );
     let mut big = [0u8; 20];
-    s.handle(&request(1, &[1, 0]), &mut big, &crate::od::DICT)
-        .unwrap();
+    s.handle(
+        &request(1, &[1, 0]),
+        &mut big,
+        &crate::description::od::DICT,
+    )
+    .unwrap();
     assert!(s.busy());
-    assert_eq!(s.next_fragment(&mut out, &crate::od::DICT), None);
+    assert_eq!(
+        s.next_fragment(&mut out, &crate::description::od::DICT),
+        None
+    );
     assert!(!s.busy());
 }
 
@@ -387,12 +443,12 @@ fn too_small_output_gives_no_response_and_no_state() {
 fn every_entry_has_a_description_that_fits_the_buffer() {
     let mut s = SdoInfoServer::new();
     let mut out = [0u8; 4 + INFO_BUFFER];
-    for o in crate::od::OBJECTS {
+    for o in crate::description::od::OBJECTS {
         for e in o.entries {
             let mut req = o.index.to_le_bytes().to_vec();
             req.extend([e.sub, value_info::ALL]);
             let n = s
-                .handle(&request(5, &req), &mut out, &crate::od::DICT)
+                .handle(&request(5, &req), &mut out, &crate::description::od::DICT)
                 .unwrap();
             assert_eq!(out[0], 0x06, "{:#06x}:{}", o.index, e.sub);
             assert!(out[n - e.name.len()..n] == *e.name.as_bytes());

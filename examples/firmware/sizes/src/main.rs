@@ -54,21 +54,21 @@ impl io8_example::Board for NoBoard {
 }
 
 struct NoStage;
-impl pam_199_p_etc::app::power_stage::PowerStage for NoStage {
+impl pam_199_p_etc::board::PowerStage for NoStage {
     fn set_current(
         &mut self,
-        _: pam_199_p_etc::app::power_stage::Solenoid,
+        _: pam_199_p_etc::board::Solenoid,
         _: u16,
-        _: pam_199_p_etc::app::power_stage::Dither,
+        _: pam_199_p_etc::board::Dither,
         _: u16,
-        _: pam_199_p_etc::app::power_stage::PiGains,
+        _: pam_199_p_etc::board::PiGains,
     ) {
     }
     fn disable(&mut self) {}
-    fn measured_ma(&self, _: pam_199_p_etc::app::power_stage::Solenoid) -> u16 {
+    fn measured_ma(&self, _: pam_199_p_etc::board::Solenoid) -> u16 {
         0
     }
-    fn faults(&self) -> pam_199_p_etc::app::power_stage::Faults {
+    fn faults(&self) -> pam_199_p_etc::board::Faults {
         Default::default()
     }
     fn step(&mut self, _: u32) {}

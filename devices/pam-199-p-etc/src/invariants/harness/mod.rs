@@ -36,8 +36,8 @@ use super::action::{
 use super::model::{
     Invariant, Observation, PassContext, Shadow, Unlock, Violation, mapping, pdo_bits,
 };
-use crate::app::power_stage::{Fault, Solenoid};
-use crate::od::DICT;
+use crate::board::{Fault, Solenoid};
+use crate::description::od::DICT;
 use crate::{DEVICE, PRODUCT_CODE, Pam, REVISION, VENDOR_ID, VENDOR_PASSWORD};
 
 mod boot;

@@ -5,6 +5,7 @@ use ecat_slave::device::Tick;
 
 use super::model::{id, status};
 use super::*;
+use ecat_slave::od::Od;
 
 fn node3() -> SoftSlave<Dma22Node<3>> {
     SoftSlave::new(Dma22Node::<3>::default())
@@ -262,7 +263,7 @@ fn set_values_written_outside_op_leave_the_solenoid_currents_at_0() {
     assert_eq!(model::get(od, 0, id::D1_09), 0);
     // A CMD 15 telegram through the channel (set value 2.5 V), then
     // SAFE-OP: still nothing.
-    let mut out = [0u8; channel::MAX_TELEGRAM];
+    let mut out = [0u8; crate::description::od::MAX_TELEGRAM];
     let req = [0x40, 0x01, 0x0F, 0x00, 0x09, 0xC4, 0x00, 0x00];
     node.channel.serve(
         od,
@@ -313,7 +314,7 @@ impl<const N: usize> Bench<N> {
     }
 
     fn send(&mut self, request: &[u8]) -> Vec<u8> {
-        let mut out = [0u8; channel::MAX_TELEGRAM];
+        let mut out = [0u8; crate::description::od::MAX_TELEGRAM];
         let modes = [3u8; N];
         let n = self.channel.serve(
             self.slave.slave_mut().od_mut(),

@@ -12,7 +12,7 @@
 
 use ecat_slave::od::Od;
 
-use super::map::{INPUTS, OUTPUTS, parameter, slot_index};
+use crate::description::map::{INPUTS, OUTPUTS, parameter, slot_index};
 
 /// Parameter IDs the model reads or writes (chapter 7).
 pub mod id {

@@ -70,6 +70,10 @@ pub const PARAMS_LOW: u16 = 0x8000;
 pub const PARAMS_HIGH: u16 = 0x8001;
 /// Diagnosis of a module (0xA0n0).
 pub const DIAGNOSIS: u16 = 0xA000;
+/// 0x2000 HCS telegram request (the telegram channel, [`crate::app::channel`]).
+pub const REQUEST: u16 = 0x2000;
+/// 0x2001 HCS telegram response.
+pub const RESPONSE: u16 = 0x2001;
 
 /// The `(index, subindex)` of HCS parameter `id` of the module in slot
 /// `n`, if the ID is in the parameter range.

@@ -51,7 +51,7 @@
 //!   choice: the manual gives only the ambient range −20..60 °C) →
 //!   `overtemperature`.
 
-use super::FULL_SCALE;
+use crate::description::FULL_SCALE;
 
 /// Internal simulation step in µs.
 pub const SUB_STEP_US: u32 = 50;
@@ -75,7 +75,7 @@ pub const DEFAULT_L_H: f32 = 0.03;
 /// The PWM frequencies of DT0803EN05 as (frequency in Hz, enum code), read
 /// from the object dictionary's one description of the enumeration.
 pub fn pwm_table() -> impl Iterator<Item = (u16, u8)> {
-    crate::od::DT0803EN05
+    crate::description::od::DT0803EN05
         .values
         .iter()
         .filter_map(|(code, text)| Some((text.parse::<u16>().ok()?, u8::try_from(*code).ok()?)))

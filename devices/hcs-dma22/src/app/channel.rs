@@ -19,8 +19,7 @@
 //! place of CMD 15: a CMD 15 through this channel writes the same
 //! parameters (which the next cycle in OP overwrites).
 
-use ecat_slave::od::build::{base, sub_name, sub0};
-use ecat_slave::od::{Access, DataType, Entry, Od, PdoMapping};
+use ecat_slave::od::Od;
 
 use crate::telegram::semantics::{Multiplexer, ResponseGate};
 use crate::telegram::{
@@ -28,46 +27,9 @@ use crate::telegram::{
     RequestRepr, ResponseRepr, WriteException,
 };
 
-use super::map::{INPUTS, parameter, slot_index};
 use super::model::{self, Module};
-
-/// 0x2000 HCS telegram request.
-pub const REQUEST: u16 = 0x2000;
-/// 0x2001 HCS telegram response.
-pub const RESPONSE: u16 = 0x2001;
-/// Most bytes of a telegram in the channel (a CMD 15 for 5 modules has 28).
-pub const MAX_TELEGRAM: usize = 32;
-
-#[allow(
-    clippy::indexing_slicing,
-    reason = "evaluated only in const items: an index out of range fails the build"
-)]
-const fn telegram_entries(access: Access) -> [Entry; MAX_TELEGRAM + 2] {
-    let mut l = [const { sub0(0) }; MAX_TELEGRAM + 2];
-    l[0] = sub0(MAX_TELEGRAM as u8 + 1);
-    let mut len = base(1, "Length", DataType::UInt8, access, PdoMapping::None, 0);
-    len.min = Some(0);
-    len.max = Some(MAX_TELEGRAM as i64);
-    l[1] = len;
-    let mut k = 2;
-    while k < l.len() {
-        l[k] = base(
-            k as u8,
-            sub_name(k as u8),
-            DataType::UInt8,
-            access,
-            PdoMapping::None,
-            0,
-        );
-        k += 1;
-    }
-    l
-}
-
-/// Entries of 0x2000.
-pub const REQUEST_ENTRIES: [Entry; MAX_TELEGRAM + 2] = telegram_entries(Access::Rw);
-/// Entries of 0x2001.
-pub const RESPONSE_ENTRIES: [Entry; MAX_TELEGRAM + 2] = telegram_entries(Access::Ro);
+use crate::description::map::{INPUTS, REQUEST, RESPONSE, parameter, slot_index};
+use crate::description::od::MAX_TELEGRAM;
 
 /// The node's telegram state: the TADR rule and the CMD 15 multiplexer.
 #[derive(Debug, Clone, Copy, Default)]

@@ -1,13 +1,13 @@
-//! The DMA-22(A) node as an EtherCAT modular device (ETG.5001) on the
-//! `ecat-slave` core: one node with 1..=5 DMA-22(A) modules in slots 1..=5
-//! (module address E22 = slot), each with the parameter list of chapter 7,
-//! its CMD 15 block as process data and the behaviour of [`model`].
+//! What the DMA-22(A) node does: [`Dma22Node`], the [`Application`] of
+//! the core, with 1..=5 modules in its slots; each module's behaviour
+//! ([`model`]: the operation modes, ramps, the closed loop, the solenoid
+//! currents) and the HCS telegram channel over CoE ([`channel`]).
 //!
-//! Layers: `od` → `channel` → `model`, `params` → `map`
+//! Layers: `channel` → `model`
 //!
 //! ```
 //! use ecat_sim::SoftSlave;
-//! use hcs_dma22::device::Dma22Node;
+//! use hcs_dma22::Dma22Node;
 //!
 //! // The node of manual 5.4.2: three modules in operation mode 3.
 //! let slave = SoftSlave::new(Dma22Node::<3>::default());
@@ -15,54 +15,16 @@
 //! ```
 
 pub mod channel;
-pub mod map;
 pub mod model;
-pub mod od;
-pub mod params;
 
 use ecat_slave::al::AlState;
-use ecat_slave::device::{
-    Application, DeviceDescription, DeviceNames, Download, EscConfig, Identity, MailboxConfig,
-    PdoSet, ProcessData, Tick, Write,
-};
+use ecat_slave::device::{Application, DeviceDescription, Download, Tick, Write};
 use ecat_slave::od::Od;
 use ecat_slave::wire::coe::SdoAbortCode;
 
+use crate::description::map::{self, MODULE_IDENT, SLOTS};
+use crate::description::{DEVICE, od};
 use model::{MODES, Module};
-
-pub use map::{DEVICE_NAME, MODULE_IDENT, PRODUCT_CODE, REVISION, SLOTS, VENDOR_ID};
-
-/// The node, described once.
-pub const DEVICE: DeviceDescription = DeviceDescription {
-    identity: Identity {
-        vendor_id: VENDOR_ID,
-        product_code: PRODUCT_CODE,
-        revision: REVISION,
-        serial: 0,
-    },
-    names: DeviceNames {
-        vendor: "HCS Hydraulic Control Systems GmbH",
-        type_name: DEVICE_NAME,
-        name: "DMA-22(A) EtherCAT node",
-        group_type: "DMA",
-        group_name: "HCS digital amplifiers",
-    },
-    dictionary: &od::DICT,
-    process_data: ProcessData {
-        sets: &[PdoSet {
-            name: "Modules",
-            rx: &[0x1600, 0x1601, 0x1602, 0x1603, 0x1604],
-            tx: &[0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x1A04],
-        }],
-    },
-    // 128-byte mailbox, SDO Information, PDO assignment, complete
-    // access; no BOOT, no FoE.
-    mailbox: MailboxConfig::STANDARD,
-    esc: EscConfig::DEFAULT,
-    modules: Some(&od::LAYOUT),
-};
-
-const _: () = DEVICE.assert_valid();
 
 /// The node with `N` modules plugged in (1..=5; more are cut to 5).
 #[derive(Debug, Clone)]
@@ -127,7 +89,7 @@ impl<const N: usize> Application for Dma22Node<N> {
     fn sdo_download(&mut self, od: &mut Od, d: &Download<'_>) -> Result<Write, SdoAbortCode> {
         // The HCS telegram channel: writing the request's length hands it
         // to the node, which answers into 0x2001.
-        if d.index == channel::REQUEST {
+        if d.index == map::REQUEST {
             d.apply(od);
             if d.value(1).is_some() {
                 let n = usize::from(Self::count());

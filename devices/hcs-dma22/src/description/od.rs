@@ -14,7 +14,7 @@
 //!
 //! The PDO entries are the 5 + 6 bytes a module has in CMD 15 (000 5.1,
 //! 5.2); what the process values and values mean depends on the module's
-//! operation mode E00 (5.5.2-5.5.6, see [`super::model`]).
+//! operation mode E00 (5.5.2-5.5.6, see [`crate::app::model`]).
 
 use ecat_slave::od::build::{
     SYNC_PARAMETER_ENTRIES, assign, assign_count, base, constant, input, map_to, output, string,
@@ -23,12 +23,46 @@ use ecat_slave::od::build::{
 use ecat_slave::od::modules::{ModularLayout, ModuleType, SlotRange};
 use ecat_slave::od::{Access, DataType, Entry, Object, ObjectCode, PdoMapping};
 
-use super::channel;
 use super::map::{DEVICE_NAME, MODULE_IDENT, PRODUCT_CODE, REVISION, SLOTS, VENDOR_ID};
 pub use super::map::{
-    DIAGNOSIS, INPUTS, OUTPUTS, PARAMS_HIGH, PARAMS_LOW, parameter, ro, rw, slot_index,
+    DIAGNOSIS, INPUTS, OUTPUTS, PARAMS_HIGH, PARAMS_LOW, REQUEST, RESPONSE, parameter, ro, rw,
+    slot_index,
 };
 use super::params::{PARAMETERS_HIGH, PARAMETERS_LOW};
+
+/// Most bytes of a telegram in the channel (a CMD 15 for 5 modules has 28).
+pub const MAX_TELEGRAM: usize = 32;
+
+#[allow(
+    clippy::indexing_slicing,
+    reason = "evaluated only in const items: an index out of range fails the build"
+)]
+const fn telegram_entries(access: Access) -> [Entry; MAX_TELEGRAM + 2] {
+    let mut l = [const { sub0(0) }; MAX_TELEGRAM + 2];
+    l[0] = sub0(MAX_TELEGRAM as u8 + 1);
+    let mut len = base(1, "Length", DataType::UInt8, access, PdoMapping::None, 0);
+    len.min = Some(0);
+    len.max = Some(MAX_TELEGRAM as i64);
+    l[1] = len;
+    let mut k = 2;
+    while k < l.len() {
+        l[k] = base(
+            k as u8,
+            sub_name(k as u8),
+            DataType::UInt8,
+            access,
+            PdoMapping::None,
+            0,
+        );
+        k += 1;
+    }
+    l
+}
+
+/// Entries of 0x2000.
+pub const REQUEST_ENTRIES: [Entry; MAX_TELEGRAM + 2] = telegram_entries(Access::Rw);
+/// Entries of 0x2001.
+pub const RESPONSE_ENTRIES: [Entry; MAX_TELEGRAM + 2] = telegram_entries(Access::Ro);
 
 const INPUT_ENTRIES: &[Entry] = &[
     sub0(3),
@@ -187,8 +221,8 @@ const HEAD: &[Object] = &[
     ] },
     Object { index: 0x1C32, name: "SM output parameter", code: Record, entries: SYNC_PARAMETER_ENTRIES },
     Object { index: 0x1C33, name: "SM input parameter", code: Record, entries: SYNC_PARAMETER_ENTRIES },
-    Object { index: channel::REQUEST, name: "HCS telegram request", code: Record, entries: &channel::REQUEST_ENTRIES },
-    Object { index: channel::RESPONSE, name: "HCS telegram response", code: Record, entries: &channel::RESPONSE_ENTRIES },
+    Object { index: REQUEST, name: "HCS telegram request", code: Record, entries: &REQUEST_ENTRIES },
+    Object { index: RESPONSE, name: "HCS telegram response", code: Record, entries: &RESPONSE_ENTRIES },
 ];
 
 const INPUT_OBJECTS: [Object; 5] = per_slot!(INPUTS, "DMA-22 inputs", INPUT_ENTRIES);
