@@ -24,7 +24,7 @@ use std::path::Path;
 fn esi_twin(c: &mut Criterion) {
     let mut g = c.benchmark_group("esi_twin");
     let io8 = device_catalog::find("io8").expect("io8").description;
-    for (name, dev) in [("io8", io8), ("dma22_5_slots", &hcs_dma22::device::DEVICE)] {
+    for (name, dev) in [("io8", io8), ("dma22_5_slots", &hcs_dma22::DEVICE)] {
         let xml = String::from_utf8(ecat_esi::generate(dev).expect("ESI")).expect("utf-8");
         g.bench_function(name, |b| {
             b.iter(|| {

@@ -5,7 +5,10 @@
 use crate::failure::{Failure, input};
 use crate::output::outln;
 use crate::target::{Session, Where};
-use hcs_dma22::device::channel::{MAX_TELEGRAM, REQUEST, RESPONSE};
+use hcs_dma22::description::{
+    map::{REQUEST, RESPONSE},
+    od::MAX_TELEGRAM,
+};
 use hcs_dma22::telegram::{
     ModuleOutput, MultiWriteRequest, ReadRequest, RequestRepr, ResponseRepr, WriteParameter,
 };
