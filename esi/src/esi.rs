@@ -328,8 +328,8 @@ fn write_sub_item(
     }
     text(w, "Name", name)?;
     text(w, "Type", type_name)?;
-    if !e.unit.is_empty() {
-        text(w, "Comment", &format!("Unit: {}", e.unit))?;
+    if !e.unit().is_empty() {
+        text(w, "Comment", &format!("Unit: {}", e.unit()))?;
     }
     text(w, "BitSize", &bits.to_string())?;
     text(w, "BitOffs", &offset.to_string())?;
@@ -397,16 +397,16 @@ fn write_value_info(w: &mut W, e: &Entry) -> io::Result<()> {
             text(w, "DefaultData", &hex_binary(&bytes))?;
         }
         DefaultValue::Int(v) => {
-            if let Some(min) = e.min {
+            if let Some(min) = e.min() {
                 text(w, "MinData", &default_data(min, e.bit_len))?;
             }
-            if let Some(max) = e.max {
+            if let Some(max) = e.max() {
                 text(w, "MaxData", &default_data(max, e.bit_len))?;
             }
             text(w, "DefaultData", &default_data(v, e.bit_len))?;
         }
     }
-    if let Some((code, _, _)) = unit_code(e.unit) {
+    if let Some((code, _, _)) = unit_code(e.unit()) {
         text(w, "Unit", &hex(code, 8))?;
     }
     Ok(())
@@ -469,7 +469,7 @@ fn write_objects(w: &mut W, objects: Objects<'_>) -> io::Result<()> {
 fn write_unit_types(w: &mut W, objects: Objects<'_>) -> io::Result<()> {
     let mut units: BTreeMap<u32, (&str, &str)> = BTreeMap::new();
     for e in objects.iter().flat_map(|o| o.entries) {
-        if let Some((code, name, symbol)) = unit_code(e.unit) {
+        if let Some((code, name, symbol)) = unit_code(e.unit()) {
             units.insert(code, (name, symbol));
         }
     }
@@ -1036,12 +1036,12 @@ mod tests {
                 assert_eq!(decode(d, e), v, "{what} default");
                 assert_eq!(
                     info.text_at("MinData").map(|m| decode(m, e)),
-                    e.min,
+                    e.min(),
                     "{what}"
                 );
                 assert_eq!(
                     info.text_at("MaxData").map(|m| decode(m, e)),
-                    e.max,
+                    e.max(),
                     "{what}"
                 );
             }

@@ -15,7 +15,7 @@ use crate::od::build::{
     assign, assign_count, constant, gap, input, map, output, pad, ranged, setting, string, sub0,
     var,
 };
-use crate::od::{DataType, EnumDesc, Object, ObjectCode, Od, PdoMapping};
+use crate::od::{DataType, EnumDesc, Limits, Object, ObjectCode, Od, PdoMapping};
 use crate::params::{self, STORAGE_SIZE};
 
 /// An enumeration of the test device.
@@ -107,16 +107,16 @@ pub const OBJECTS: &[Object] = &[
     ] },
     Object { index: 0x8000, name: "Settings", code: ObjectCode::Record, entries: &[
         sub0(3),
-        ranged(1, "Gain", DataType::UInt16, 100, 0, 1000, "mA"),
-        setting(2, "Mode", DataType::Enum(&MODE), 1, ""),
-        ranged(3, "Offset", DataType::Int16, -5, -100, 100, ""),
+        ranged(1, "Gain", DataType::UInt16, 100, &Limits::range(0, 1000, "mA")),
+        setting(2, "Mode", DataType::Enum(&MODE), 1, &Limits::NONE),
+        ranged(3, "Offset", DataType::Int16, -5, &Limits::range(-100, 100, "")),
     ] },
     Object { index: 0x8001, name: "Curve", code: ObjectCode::Array, entries: &[
         sub0(4),
-        ranged(1, "SubIndex 001", DataType::Int16, -10, -1000, 1000, ""),
-        ranged(2, "SubIndex 002", DataType::Int16, 0, -1000, 1000, ""),
-        ranged(3, "SubIndex 003", DataType::Int16, 10, -1000, 1000, ""),
-        ranged(4, "SubIndex 004", DataType::Int16, 20, -1000, 1000, ""),
+        ranged(1, "SubIndex 001", DataType::Int16, -10, &Limits::range(-1000, 1000, "")),
+        ranged(2, "SubIndex 002", DataType::Int16, 0, &Limits::range(-1000, 1000, "")),
+        ranged(3, "SubIndex 003", DataType::Int16, 10, &Limits::range(-1000, 1000, "")),
+        ranged(4, "SubIndex 004", DataType::Int16, 20, &Limits::range(-1000, 1000, "")),
     ] },
 ];
 

@@ -198,7 +198,7 @@ fn other_value(e: &ecat_slave::od::types::Entry) -> Option<Vec<u8>> {
     let v = match e.data_type {
         DataType::Bool => 1 - d,
         DataType::Enum(en) => en.values.iter().map(|(v, _)| *v).find(|v| *v != d)?,
-        _ => match (e.min, e.max) {
+        _ => match (e.min(), e.max()) {
             (_, Some(max)) if max != d => max,
             (Some(min), _) if min != d => min,
             _ => d ^ 1,

@@ -334,7 +334,7 @@ fn esi_equals_sdo_information(key: &str) -> Compared {
         let mut ranges = 0;
         for obj in dev.dictionary.objects().iter().filter(|o| visible(o.index)) {
             for e in obj.entries {
-                let (Some(min), Some(max)) = (e.min, e.max) else {
+                let (Some(min), Some(max)) = (e.min(), e.max()) else {
                     continue;
                 };
                 let live = entry_description(&mut c, obj.index, e.sub, 0x60)
@@ -405,7 +405,7 @@ fn every_catalog_device_reports_over_sdo_information_what_its_esi_says() {
         let want_gaps = shown().filter(|(_, _, e)| e.gap).count();
         assert_eq!(c.gaps, want_gaps, "{}", d.key);
         let want_ranges = shown()
-            .filter(|(_, _, e)| e.min.is_some() && e.max.is_some())
+            .filter(|(_, _, e)| e.min().is_some() && e.max().is_some())
             .count();
         assert_eq!(c.ranges, want_ranges, "{}", d.key);
     }

@@ -516,9 +516,7 @@ fn entry(spec: &EntrySpec, info: Option<&Element>) -> Result<Entry, EsiError> {
         access: spec.access,
         pdo: spec.pdo,
         default,
-        min,
-        max,
-        unit,
+        limits: crate::leak_limits(min, max, unit),
         backup: spec.backup,
         setting: spec.setting,
         gap: spec.gap,
@@ -898,11 +896,11 @@ mod tests {
         let off = &o(0x2000).entries[0];
         assert_eq!(off.data_type, DataType::Int16);
         assert_eq!(
-            (off.default, off.min, off.max),
+            (off.default, off.min(), off.max()),
             (DefaultValue::Int(-10), Some(-1000), Some(1000))
         );
         assert_eq!(
-            (off.unit, off.access, off.pdo, off.backup),
+            (off.unit(), off.access, off.pdo, off.backup),
             ("ms", Access::Rw, PdoMapping::Tx, true)
         );
         let id = o(0x1018);
@@ -1036,7 +1034,7 @@ mod tests {
             gain.default,
             DefaultValue::Int(i64::from((-2.5f32).to_bits()))
         );
-        assert_eq!(gain.min, Some(i64::from((-10f32).to_bits())));
+        assert_eq!(gain.min(), Some(i64::from((-10f32).to_bits())));
         assert_eq!(o(0x2002).entries[0].data_type, DataType::Int16);
         assert_eq!(o(0x2002).entries[0].default, DefaultValue::Int(-10));
         assert_eq!(
@@ -1140,10 +1138,10 @@ mod tests {
                 .entries[0]
         };
         let qs = e(0x605A);
-        assert_eq!((qs.min, qs.max), (Some(-2), Some(6)));
+        assert_eq!((qs.min(), qs.max()), (Some(-2), Some(6)));
         assert_eq!(qs.default, DefaultValue::Int(-1));
-        assert_eq!(e(0x2000).min, Some(-5), "decimal as written");
-        assert_eq!(e(0x2001).max, Some(0xFFFE), "unsigned hex unchanged");
+        assert_eq!(e(0x2000).min(), Some(-5), "decimal as written");
+        assert_eq!(e(0x2001).max(), Some(0xFFFE), "unsigned hex unchanged");
     }
 
     #[test]

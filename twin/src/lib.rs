@@ -50,6 +50,23 @@ pub(crate) fn leak(s: &str) -> &'static str {
     Box::leak(s.to_string().into_boxed_str())
 }
 
+/// An entry's range and unit as `'static` data: the shared
+/// [`Limits::NONE`](ecat_slave::od::Limits::NONE) when it has neither.
+pub(crate) fn leak_limits(
+    min: Option<i64>,
+    max: Option<i64>,
+    unit: &str,
+) -> &'static ecat_slave::od::Limits {
+    if min.is_none() && max.is_none() && unit.is_empty() {
+        return &ecat_slave::od::Limits::NONE;
+    }
+    Box::leak(Box::new(ecat_slave::od::Limits {
+        min,
+        max,
+        unit: leak(unit),
+    }))
+}
+
 /// What was built (and leaked) for each distinct device: building the
 /// same twin again (a line of identical devices, a benchmark, a fuzz
 /// target, the same file loaded again) finds it instead of leaking another

@@ -10,7 +10,7 @@ use ecat_slave::od::build::{
     SYNC_PARAMETER_ENTRIES, assign, assign_count, constant, input, map, output, ranged, string,
     sub_name, sub0, var,
 };
-use ecat_slave::od::{Access, DataType, Entry, Object, ObjectCode, PdoMapping};
+use ecat_slave::od::{Access, DataType, Entry, Limits, Object, ObjectCode, PdoMapping};
 
 /// Vendor ID of the IO8.
 ///
@@ -131,7 +131,7 @@ pub const OBJECTS: &[Object] = &[
     ] },
     Object { index: SETTINGS, name: "Settings", code: ObjectCode::Record, entries: &[
         sub0(1),
-        ranged(INPUT_FILTER, "Input filter", DataType::UInt16, 10, 0, 1000, "ms"),
+        ranged(INPUT_FILTER, "Input filter", DataType::UInt16, 10, &Limits::range(0, 1000, "ms")),
     ] },
 ];
 

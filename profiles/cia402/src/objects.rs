@@ -50,7 +50,7 @@
 //! (docs/SAFETY.md C2), which a parameter must survive.
 
 use ecat_slave::od::build::{input, map_rw, mapping_count, output, ranged, sub_name, var};
-use ecat_slave::od::{DataType, DefaultValue, Entry, Object, ObjectCode, PdoMapping};
+use ecat_slave::od::{DataType, DefaultValue, Entry, Limits, Object, ObjectCode, PdoMapping};
 
 use crate::drive::Parameters;
 use crate::mode::{Mode, SUPPORTED_DRIVE_MODES};
@@ -165,16 +165,16 @@ const MODES_OF_OPERATION: Entry = Entry {
 #[rustfmt::skip]
 pub const OBJECTS: &[Object] = &[
     obj(index::ABORT_CONNECTION_OPTION, "Abort connection option code", &[
-        ranged(0, "Abort connection option code", DataType::Int16, D.abort_connection_option as i64, 1, 3, ""),
+        ranged(0, "Abort connection option code", DataType::Int16, D.abort_connection_option as i64, &Limits::range(1, 3, "")),
     ]),
     obj(index::ERROR_CODE, "Error code", &[input(0, "Error code", DataType::UInt16)]),
     obj(index::CONTROLWORD, "Controlword", &[output(0, "Controlword", DataType::UInt16)]),
     obj(index::STATUSWORD, "Statusword", &[input(0, "Statusword", DataType::UInt16)]),
     obj(index::QUICK_STOP_OPTION, "Quick stop option code", &[
-        ranged(0, "Quick stop option code", DataType::Int16, D.quick_stop_option as i64, 0, 8, ""),
+        ranged(0, "Quick stop option code", DataType::Int16, D.quick_stop_option as i64, &Limits::range(0, 8, "")),
     ]),
     obj(index::FAULT_REACTION_OPTION, "Fault reaction option code", &[
-        ranged(0, "Fault reaction option code", DataType::Int16, D.fault_reaction_option as i64, 0, 4, ""),
+        ranged(0, "Fault reaction option code", DataType::Int16, D.fault_reaction_option as i64, &Limits::range(0, 4, "")),
     ]),
     obj(index::MODES_OF_OPERATION, "Modes of operation", &[MODES_OF_OPERATION]),
     obj(index::MODES_DISPLAY, "Modes of operation display", &[Entry {
@@ -184,47 +184,47 @@ pub const OBJECTS: &[Object] = &[
     obj(index::POSITION_DEMAND, "Position demand value", &[input(0, "Position demand value", DataType::Int32)]),
     obj(index::POSITION_ACTUAL, "Position actual value", &[input(0, "Position actual value", DataType::Int32)]),
     obj(index::FOLLOWING_ERROR_WINDOW, "Following error window", &[
-        ranged(0, "Following error window", DataType::UInt32, D.following_error_window as i64, 0, u32::MAX as i64, "inc"),
+        ranged(0, "Following error window", DataType::UInt32, D.following_error_window as i64, &Limits::range(0, u32::MAX as i64, "inc")),
     ]),
     obj(index::FOLLOWING_ERROR_TIMEOUT, "Following error time out", &[
-        ranged(0, "Following error time out", DataType::UInt16, D.following_error_timeout_ms as i64, 0, u16::MAX as i64, "ms"),
+        ranged(0, "Following error time out", DataType::UInt16, D.following_error_timeout_ms as i64, &Limits::range(0, u16::MAX as i64, "ms")),
     ]),
     obj(index::POSITION_WINDOW, "Position window", &[
-        ranged(0, "Position window", DataType::UInt32, D.position_window as i64, 0, u32::MAX as i64, "inc"),
+        ranged(0, "Position window", DataType::UInt32, D.position_window as i64, &Limits::range(0, u32::MAX as i64, "inc")),
     ]),
     obj(index::VELOCITY_ACTUAL, "Velocity actual value", &[input(0, "Velocity actual value", DataType::Int32)]),
     obj(index::VELOCITY_WINDOW, "Velocity window", &[
-        ranged(0, "Velocity window", DataType::UInt16, D.velocity_window as i64, 0, u16::MAX as i64, "inc/s"),
+        ranged(0, "Velocity window", DataType::UInt16, D.velocity_window as i64, &Limits::range(0, u16::MAX as i64, "inc/s")),
     ]),
     obj(index::VELOCITY_THRESHOLD, "Velocity threshold", &[
-        ranged(0, "Velocity threshold", DataType::UInt16, D.velocity_threshold as i64, 0, u16::MAX as i64, "inc/s"),
+        ranged(0, "Velocity threshold", DataType::UInt16, D.velocity_threshold as i64, &Limits::range(0, u16::MAX as i64, "inc/s")),
     ]),
     obj(index::TARGET_TORQUE, "Target torque", &[output(0, "Target torque", DataType::Int16)]),
     obj(index::MAX_TORQUE, "Max torque", &[
-        ranged(0, "Max torque", DataType::UInt16, D.max_torque as i64, 0, u16::MAX as i64, "permille"),
+        ranged(0, "Max torque", DataType::UInt16, D.max_torque as i64, &Limits::range(0, u16::MAX as i64, "permille")),
     ]),
     obj(index::TORQUE_ACTUAL, "Torque actual value", &[input(0, "Torque actual value", DataType::Int16)]),
     obj(index::TARGET_POSITION, "Target position", &[output(0, "Target position", DataType::Int32)]),
     obj(index::HOME_OFFSET, "Home offset", &[
-        ranged(0, "Home offset", DataType::Int32, D.home_offset as i64, i32::MIN as i64, i32::MAX as i64, "inc"),
+        ranged(0, "Home offset", DataType::Int32, D.home_offset as i64, &Limits::range(i32::MIN as i64, i32::MAX as i64, "inc")),
     ]),
     obj(index::MAX_MOTOR_SPEED, "Max motor speed", &[
-        ranged(0, "Max motor speed", DataType::UInt32, D.max_motor_speed as i64, 0, i32::MAX as i64, "inc/s"),
+        ranged(0, "Max motor speed", DataType::UInt32, D.max_motor_speed as i64, &Limits::range(0, i32::MAX as i64, "inc/s")),
     ]),
     obj(index::PROFILE_VELOCITY, "Profile velocity", &[
-        ranged(0, "Profile velocity", DataType::UInt32, D.profile_velocity as i64, 0, i32::MAX as i64, "inc/s"),
+        ranged(0, "Profile velocity", DataType::UInt32, D.profile_velocity as i64, &Limits::range(0, i32::MAX as i64, "inc/s")),
     ]),
     obj(index::PROFILE_ACCELERATION, "Profile acceleration", &[
-        ranged(0, "Profile acceleration", DataType::UInt32, D.profile_acceleration as i64, 1, u32::MAX as i64, "inc/s^2"),
+        ranged(0, "Profile acceleration", DataType::UInt32, D.profile_acceleration as i64, &Limits::range(1, u32::MAX as i64, "inc/s^2")),
     ]),
     obj(index::PROFILE_DECELERATION, "Profile deceleration", &[
-        ranged(0, "Profile deceleration", DataType::UInt32, D.profile_deceleration as i64, 1, u32::MAX as i64, "inc/s^2"),
+        ranged(0, "Profile deceleration", DataType::UInt32, D.profile_deceleration as i64, &Limits::range(1, u32::MAX as i64, "inc/s^2")),
     ]),
     obj(index::QUICK_STOP_DECELERATION, "Quick stop deceleration", &[
-        ranged(0, "Quick stop deceleration", DataType::UInt32, D.quick_stop_deceleration as i64, 1, u32::MAX as i64, "inc/s^2"),
+        ranged(0, "Quick stop deceleration", DataType::UInt32, D.quick_stop_deceleration as i64, &Limits::range(1, u32::MAX as i64, "inc/s^2")),
     ]),
     obj(index::HOMING_METHOD, "Homing method", &[
-        ranged(0, "Homing method", DataType::Int8, D.homing_method as i64, 35, 37, ""),
+        ranged(0, "Homing method", DataType::Int8, D.homing_method as i64, &Limits::range(35, 37, "")),
     ]),
     obj(index::FOLLOWING_ERROR_ACTUAL, "Following error actual value", &[input(0, "Following error actual value", DataType::Int32)]),
     obj(index::TARGET_VELOCITY, "Target velocity", &[output(0, "Target velocity", DataType::Int32)]),

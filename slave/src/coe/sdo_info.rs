@@ -297,7 +297,10 @@ fn natural_range(t: &DataType, bits: u16) -> Option<(i128, i128)> {
 /// else the type's natural range; `None` for strings.
 pub fn value_range(e: &Entry) -> Option<(i128, i128)> {
     let (lo, hi) = natural_range(&e.data_type, e.bit_len)?;
-    Some((e.min.map_or(lo, i128::from), e.max.map_or(hi, i128::from)))
+    Some((
+        e.min().map_or(lo, i128::from),
+        e.max().map_or(hi, i128::from),
+    ))
 }
 
 /// Transfer state of the SDO Information server.
@@ -570,7 +573,7 @@ fn write_entry_description(w: &mut Writer<'_>, index: u16, e: &Entry, asked: u8)
     w.u16(entry_access(e));
     let n = value_len(e);
     if info & value_info::UNIT != 0 {
-        w.u32(unit_code(e.unit));
+        w.u32(unit_code(e.unit()));
     }
     if info & value_info::DEFAULT != 0 {
         match e.default {

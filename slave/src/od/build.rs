@@ -3,24 +3,22 @@
 //!
 //! Every constructor fills the bit length from the data type (strings from
 //! their default), so the table cannot contradict itself there; ranges,
-//! units and flags are set with struct update syntax:
+//! units (a `&Limits`) and flags are set with struct update syntax:
 //!
 //! ```
-//! use ecat_slave::od::build::{setting, sub0};
-//! use ecat_slave::od::{DataType, Entry};
-//! const CURRENT: Entry = Entry {
-//!     min: Some(500),
-//!     max: Some(3000),
-//!     ..setting(2, "CURRENT", DataType::UInt16, 1000, "mA")
-//! };
+//! use ecat_slave::od::build::{ranged, sub0};
+//! use ecat_slave::od::{DataType, Entry, Limits};
+//! const CURRENT: Entry =
+//!     ranged(2, "CURRENT", DataType::UInt16, 1000, &Limits::range(500, 3000, "mA"));
 //! const ZERO: Entry = sub0(2);
 //! assert_eq!(CURRENT.bit_len, 16);
+//! assert_eq!((CURRENT.min(), CURRENT.max(), CURRENT.unit()), (Some(500), Some(3000), "mA"));
 //! assert_eq!(ZERO.name, "SubIndex 000");
 //! ```
 
 use super::dictionary::natural_bits;
 use super::sub_names::SUB_NAMES;
-use super::types::{Access, DataType, DefaultValue, Entry, PdoMapping};
+use super::types::{Access, DataType, DefaultValue, Entry, Limits, PdoMapping};
 
 /// `"SubIndex nnn"`, the ETG name of an unnamed subindex.
 #[allow(
@@ -48,9 +46,7 @@ pub const fn base(
         access,
         pdo,
         default: DefaultValue::Int(default),
-        min: None,
-        max: None,
-        unit: "",
+        limits: &Limits::NONE,
         backup: false,
         setting: false,
         gap: false,
@@ -74,9 +70,52 @@ pub const fn sub0(highest: u8) -> Entry {
 pub const fn assign_count(count: u8, capacity: u8) -> Entry {
     Entry {
         access: Access::RwPreOp,
-        min: Some(0),
-        max: Some(capacity as i64),
+        limits: capacity_limits(capacity),
         ..sub0(count)
+    }
+}
+
+/// `0..=capacity` for 0x1C12:00 / 0x1C13:00. A `'static` reference built in
+/// a `const fn` must come from constants, so the capacities a device can
+/// have (0..=32 PDOs per assignment) are spelled out; a larger capacity (a
+/// twin's, built at run time) gets its `Limits` from its builder.
+#[rustfmt::skip]
+const fn capacity_limits(capacity: u8) -> &'static Limits {
+    match capacity {
+            0 => &Limits { min: Some(0), max: Some(0), unit: "" },
+            1 => &Limits { min: Some(0), max: Some(1), unit: "" },
+            2 => &Limits { min: Some(0), max: Some(2), unit: "" },
+            3 => &Limits { min: Some(0), max: Some(3), unit: "" },
+            4 => &Limits { min: Some(0), max: Some(4), unit: "" },
+            5 => &Limits { min: Some(0), max: Some(5), unit: "" },
+            6 => &Limits { min: Some(0), max: Some(6), unit: "" },
+            7 => &Limits { min: Some(0), max: Some(7), unit: "" },
+            8 => &Limits { min: Some(0), max: Some(8), unit: "" },
+            9 => &Limits { min: Some(0), max: Some(9), unit: "" },
+            10 => &Limits { min: Some(0), max: Some(10), unit: "" },
+            11 => &Limits { min: Some(0), max: Some(11), unit: "" },
+            12 => &Limits { min: Some(0), max: Some(12), unit: "" },
+            13 => &Limits { min: Some(0), max: Some(13), unit: "" },
+            14 => &Limits { min: Some(0), max: Some(14), unit: "" },
+            15 => &Limits { min: Some(0), max: Some(15), unit: "" },
+            16 => &Limits { min: Some(0), max: Some(16), unit: "" },
+            17 => &Limits { min: Some(0), max: Some(17), unit: "" },
+            18 => &Limits { min: Some(0), max: Some(18), unit: "" },
+            19 => &Limits { min: Some(0), max: Some(19), unit: "" },
+            20 => &Limits { min: Some(0), max: Some(20), unit: "" },
+            21 => &Limits { min: Some(0), max: Some(21), unit: "" },
+            22 => &Limits { min: Some(0), max: Some(22), unit: "" },
+            23 => &Limits { min: Some(0), max: Some(23), unit: "" },
+            24 => &Limits { min: Some(0), max: Some(24), unit: "" },
+            25 => &Limits { min: Some(0), max: Some(25), unit: "" },
+            26 => &Limits { min: Some(0), max: Some(26), unit: "" },
+            27 => &Limits { min: Some(0), max: Some(27), unit: "" },
+            28 => &Limits { min: Some(0), max: Some(28), unit: "" },
+            29 => &Limits { min: Some(0), max: Some(29), unit: "" },
+            30 => &Limits { min: Some(0), max: Some(30), unit: "" },
+            31 => &Limits { min: Some(0), max: Some(31), unit: "" },
+            32 => &Limits { min: Some(0), max: Some(32), unit: "" },
+            _ => &Limits { min: Some(0), max: Some(255), unit: "" },
     }
 }
 
@@ -181,37 +220,33 @@ pub const fn output(sub: u8, name: &'static str, t: DataType) -> Entry {
     base(sub, name, t, Access::Rw, PdoMapping::Rx, 0)
 }
 
-/// A stored device setting (RW, backup, setting) without a range.
+/// A stored device setting (RW, backup, setting), with its unit and range
+/// (`&Limits::unit("ms")`, `&Limits::NONE`).
 pub const fn setting(
     sub: u8,
     name: &'static str,
     t: DataType,
     default: i64,
-    unit: &'static str,
+    limits: &'static Limits,
 ) -> Entry {
     Entry {
-        unit,
+        limits,
         backup: true,
         setting: true,
         ..base(sub, name, t, Access::Rw, PdoMapping::None, default)
     }
 }
 
-/// A stored setting with a range.
+/// A stored setting with a range (`&Limits::range(min, max, unit)`): the
+/// same as [`setting`], named for what the table says.
 pub const fn ranged(
     sub: u8,
     name: &'static str,
     t: DataType,
     default: i64,
-    min: i64,
-    max: i64,
-    unit: &'static str,
+    limits: &'static Limits,
 ) -> Entry {
-    Entry {
-        min: Some(min),
-        max: Some(max),
-        ..setting(sub, name, t, default, unit)
-    }
+    setting(sub, name, t, default, limits)
 }
 
 /// ETG.1020 sync modes of 0x1C32:01 / 0x1C33:01.
@@ -238,8 +273,7 @@ pub const SYNC_MODES_SUPPORTED: i64 = 0x0007;
 pub const SYNC_PARAMETER_ENTRIES: &[Entry] = &[
     sub0(12),
     Entry {
-        min: Some(sync_mode::FREE_RUN),
-        max: Some(sync_mode::DC_SYNC0),
+        limits: &Limits::range(sync_mode::FREE_RUN, sync_mode::DC_SYNC0, ""),
         ..base(
             1,
             "Sync mode",

@@ -102,12 +102,14 @@ pub fn upload(store: &Od, index: u16, sub: u8, out: &mut [u8]) -> Result<usize, 
     Ok(n)
 }
 
-/// Values a complete download would store: `(flat, value)` pairs, checked
-/// but not yet applied (all or nothing).
-pub type Changes = heapless::Vec<(usize, i64), MAX_ENTRIES>;
+/// Values a complete download would store: `(subindex, value)` pairs,
+/// checked but not yet applied (all or nothing).
+pub type Changes = heapless::Vec<(u8, i64), MAX_ENTRIES>;
 
 /// Checks a complete download of `data` into `index` in AL state `state`
-/// and returns the changes to apply. Read-only entries must be written with
+/// and puts the changes to apply into `changes` (cleared first; an out
+/// parameter, so the 1 KiB list is not copied out of a `Result` on a
+/// microcontroller's stack). Read-only entries must be written with
 /// their current value (0x06010002 otherwise); arrays take their element
 /// count from the data.
 pub fn check_download(
@@ -116,7 +118,9 @@ pub fn check_download(
     sub: u8,
     data: &[u8],
     state: AlState,
-) -> Result<Changes, SdoAbortCode> {
+    changes: &mut Changes,
+) -> Result<(), SdoAbortCode> {
+    changes.clear();
     let (pos, obj) = object(store, index)?;
     if sub > 1 {
         return Err(SdoAbortCode::CompleteAccessNotSupported);
@@ -144,7 +148,6 @@ pub fn check_download(
         core::cmp::Ordering::Equal => {}
     }
     let mut bit = 0u16;
-    let mut changes = Changes::new();
     for (flat, e) in members(store, pos, obj, with_sub0, elements) {
         let size = bit_size(e);
         let value_bits = if e.sub == 0 {
@@ -176,16 +179,28 @@ pub fn check_download(
         let bytes = raw.to_le_bytes();
         let value = Od::check(e, bytes.get(..n).unwrap_or(&[]), state)?;
         changes
-            .push((flat, value))
+            .push((e.sub, value))
             .map_err(|_| SdoAbortCode::ObjectTooLong)?;
     }
-    Ok(changes)
+    Ok(())
 }
 
 #[cfg(test)]
 #[allow(clippy::unwrap_used, clippy::indexing_slicing)]
 mod tests {
     use super::*;
+
+    /// [`check_download`] returning its changes.
+    fn check(
+        store: &Od,
+        index: u16,
+        sub: u8,
+        data: &[u8],
+        state: AlState,
+    ) -> Result<Changes, SdoAbortCode> {
+        let mut changes = Changes::new();
+        check_download(store, index, sub, data, state, &mut changes).map(|()| changes)
+    }
     use crate::testing::store;
 
     #[test]
@@ -204,23 +219,23 @@ mod tests {
     fn an_array_downloads_whole_and_all_or_nothing() {
         let s = store();
         let img = [4u8, 0, 1, 0, 2, 0, 3, 0, 4, 0];
-        let c = check_download(&s, 0x8001, 0, &img, AlState::Op).unwrap();
+        let c = check(&s, 0x8001, 0, &img, AlState::Op).unwrap();
         assert_eq!(c.len(), 4);
         let mut bad = img;
         bad[2..4].copy_from_slice(&2000i16.to_le_bytes());
         assert_eq!(
-            check_download(&s, 0x8001, 0, &bad, AlState::Op),
+            check(&s, 0x8001, 0, &bad, AlState::Op),
             Err(SdoAbortCode::ValueTooHigh)
         );
         assert_eq!(
-            check_download(&s, 0x8001, 0, &img[..9], AlState::Op),
+            check(&s, 0x8001, 0, &img[..9], AlState::Op),
             Err(SdoAbortCode::LengthTooLow)
         );
     }
 
     mod signed {
         use crate::od::build::{constant, ranged, sub0};
-        use crate::od::{DataType, Object, ObjectCode};
+        use crate::od::{DataType, Limits, Object, ObjectCode};
 
         /// A record with a read-only signed member holding a negative value.
         #[rustfmt::skip]
@@ -228,7 +243,7 @@ mod tests {
             Object { index: 0x8000, name: "Calibration", code: ObjectCode::Record, entries: &[
                 sub0(2),
                 constant(1, "Factory offset", DataType::Int16, -300),
-                ranged(2, "Gain", DataType::Int32, -7, -1000, 1000, ""),
+                ranged(2, "Gain", DataType::Int32, -7, &Limits::range(-1000, 1000, "")),
             ] },
         ];
 
@@ -241,11 +256,11 @@ mod tests {
         let mut out = [0u8; 16];
         let n = upload(&s, 0x8000, 0, &mut out).unwrap();
         assert_eq!(&out[..n], &[2, 0, 0xD4, 0xFE, 0xF9, 0xFF, 0xFF, 0xFF]);
-        let c = check_download(&s, 0x8000, 0, &out[..n], AlState::PreOp).unwrap();
+        let c = check(&s, 0x8000, 0, &out[..n], AlState::PreOp).unwrap();
         assert_eq!(c.as_slice(), &[(2, -7)], "only the RW member is written");
         out[2] ^= 1;
         assert_eq!(
-            check_download(&s, 0x8000, 0, &out[..n], AlState::PreOp),
+            check(&s, 0x8000, 0, &out[..n], AlState::PreOp),
             Err(SdoAbortCode::ReadOnly),
             "a changed RO member"
         );
@@ -257,12 +272,12 @@ mod tests {
         let mut out = [0u8; 32];
         let n = upload(&s, 0x1018, 0, &mut out).unwrap();
         assert_eq!(
-            check_download(&s, 0x1018, 0, &out[..n], AlState::PreOp).map(|c| c.len()),
+            check(&s, 0x1018, 0, &out[..n], AlState::PreOp).map(|c| c.len()),
             Ok(0)
         );
         out[2] ^= 1;
         assert_eq!(
-            check_download(&s, 0x1018, 0, &out[..n], AlState::PreOp),
+            check(&s, 0x1018, 0, &out[..n], AlState::PreOp),
             Err(SdoAbortCode::ReadOnly)
         );
         assert_eq!(

@@ -434,17 +434,17 @@ const fn check_entry(
             if e.bit_len != natural_bits(&e.data_type) && !byte_bool {
                 return Err(DescriptionError::BitLength { index, sub });
             }
-            if let (Some(lo), Some(hi)) = (e.min, e.max)
+            if let (Some(lo), Some(hi)) = (e.min(), e.max())
                 && !value_le(&e.data_type, lo, hi)
             {
                 return Err(DescriptionError::EmptyRange { index, sub });
             }
             if e.data_type.is_real() {
-                let below = match e.min {
+                let below = match e.min() {
                     Some(m) => !value_le(&e.data_type, m, v),
                     None => false,
                 };
-                let above = match e.max {
+                let above = match e.max() {
                     Some(m) => !value_le(&e.data_type, v, m),
                     None => false,
                 };
@@ -454,11 +454,11 @@ const fn check_entry(
                 return Ok(());
             }
             let (lo, hi) = natural_range(&e.data_type, e.bit_len);
-            let lo = match e.min {
+            let lo = match e.min() {
                 Some(m) if m > lo => m,
                 _ => lo,
             };
-            let hi = match e.max {
+            let hi = match e.max() {
                 Some(m) if m < hi => m,
                 _ => hi,
             };
@@ -692,7 +692,7 @@ impl Dictionary {
 mod tests {
     use super::*;
     use crate::od::build::{constant, gap, sub0, var};
-    use crate::od::types::PdoMapping;
+    use crate::od::types::{Limits, PdoMapping};
 
     const GOOD: &[Object] = &[
         Object {
@@ -751,8 +751,7 @@ mod tests {
         name: "Setting",
         code: ObjectCode::Var,
         entries: &[Entry {
-            min: Some(10),
-            max: Some(20),
+            limits: &Limits::range(10, 20, ""),
             ..var("Setting", DataType::UInt16, PdoMapping::None, 30)
         }],
     }];

@@ -338,12 +338,12 @@ impl Od {
             return Err(SdoAbortCode::ValueTooHigh);
         }
         let t = &entry.data_type;
-        if let Some(max) = entry.max
+        if let Some(max) = entry.max()
             && !value_le(t, value, max)
         {
             return Err(SdoAbortCode::ValueTooHigh);
         }
-        if let Some(min) = entry.min
+        if let Some(min) = entry.min()
             && !value_le(t, min, value)
         {
             return Err(SdoAbortCode::ValueTooLow);
@@ -405,6 +405,7 @@ impl Od {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+    use crate::od::types::Limits;
     use crate::testing::store;
 
     fn up(s: &Od, index: u16, sub: u8) -> Result<u64, SdoAbortCode> {
@@ -476,7 +477,7 @@ mod tests {
 
     #[test]
     fn a_64_bit_enumeration_accepts_its_members_and_refuses_others_with_0609_0030() {
-        let e = crate::od::build::setting(1, "Wide", DataType::Enum(&WIDE), 1, "");
+        let e = crate::od::build::setting(1, "Wide", DataType::Enum(&WIDE), 1, &Limits::NONE);
         assert_eq!(e.bit_len, 64);
         let w = |v: u64| Od::check(&e, &v.to_le_bytes(), AlState::PreOp);
         assert_eq!(w(1), Ok(1));
@@ -501,7 +502,8 @@ mod tests {
 
     #[test]
     fn an_enumeration_with_negative_members_takes_their_bit_patterns() {
-        let e = crate::od::build::setting(1, "Quick stop", DataType::Enum(&SIGNED), -1, "");
+        let e =
+            crate::od::build::setting(1, "Quick stop", DataType::Enum(&SIGNED), -1, &Limits::NONE);
         assert_eq!(e.bit_len, 16);
         assert!(e.data_type.is_signed());
         let w = |v: i16| Od::check(&e, &v.to_le_bytes(), AlState::PreOp);

@@ -534,12 +534,9 @@ pub struct Entry {
     pub pdo: PdoMapping,
     /// Default value (process data: the power-on value).
     pub default: DefaultValue,
-    /// Smallest allowed value, where the manual gives a range.
-    pub min: Option<i64>,
-    /// Largest allowed value, where the manual gives a range.
-    pub max: Option<i64>,
-    /// Unit text as the manual gives it (`ms`, `mA`, `Hz`, `0.01 %`), or "".
-    pub unit: &'static str,
+    /// Range and unit, where the device gives them ([`Limits::NONE`] for
+    /// none); read them with [`Entry::min`], [`Entry::max`], [`Entry::unit`].
+    pub limits: &'static Limits,
     /// Stored by SAVE and part of the backup (ETG.1000.6 access bit 8).
     pub backup: bool,
     /// A device setting (ETG.1000.6 access bit 9).
@@ -547,6 +544,50 @@ pub struct Entry {
     /// A padding gap (blank subindex in the manual): not accessible by SDO,
     /// packed as zero bits in complete access and PDOs.
     pub gap: bool,
+}
+
+/// The range and unit of an entry. Most entries have neither and share
+/// [`Limits::NONE`]; an entry holds one reference (4 bytes on a 32-bit
+/// microcontroller) instead of two `Option<i64>` and a `&str` (40 bytes),
+/// which is most of what a dictionary table costs in flash.
+///
+/// In a `const` item a reference to a `Limits` built by a `const fn` is
+/// `'static`: `ranged(1, "Filter", DataType::UInt16, 10, &Limits::range(0, 100, "ms"))`.
+#[derive(Debug, PartialEq, Eq)]
+pub struct Limits {
+    /// Smallest allowed value, where the manual gives a range.
+    pub min: Option<i64>,
+    /// Largest allowed value, where the manual gives a range.
+    pub max: Option<i64>,
+    /// Unit text as the manual gives it (`ms`, `mA`, `Hz`, `0.01 %`), or "".
+    pub unit: &'static str,
+}
+
+impl Limits {
+    /// No range, no unit.
+    pub const NONE: Limits = Limits {
+        min: None,
+        max: None,
+        unit: "",
+    };
+
+    /// The range `min..=max` in `unit` ("" for none).
+    pub const fn range(min: i64, max: i64, unit: &'static str) -> Limits {
+        Limits {
+            min: Some(min),
+            max: Some(max),
+            unit,
+        }
+    }
+
+    /// A unit without a range.
+    pub const fn unit(unit: &'static str) -> Limits {
+        Limits {
+            min: None,
+            max: None,
+            unit,
+        }
+    }
 }
 
 /// One object of the dictionary.
@@ -563,6 +604,21 @@ pub struct Object {
 }
 
 impl Entry {
+    /// Smallest allowed value, where the device gives a range.
+    pub const fn min(&self) -> Option<i64> {
+        self.limits.min
+    }
+
+    /// Largest allowed value, where the device gives a range.
+    pub const fn max(&self) -> Option<i64> {
+        self.limits.max
+    }
+
+    /// Unit text (`ms`, `mA`, `Hz`, `0.01 %`), or "".
+    pub const fn unit(&self) -> &'static str {
+        self.limits.unit
+    }
+
     /// Bytes of the entry's value kept in the store's byte area: the
     /// length of an octet string, `UNICODE_STRING`, `GUID` or an array held
     /// as one value; 0 for numbers (their `i64` slot) and for visible

@@ -87,7 +87,7 @@ pub(super) fn drop_impossible_ranges(
                     return false;
                 }
                 let t = &e.data_type;
-                let (lo, hi) = (e.min.unwrap_or(v), e.max.unwrap_or(v));
+                let (lo, hi) = (e.min().unwrap_or(v), e.max().unwrap_or(v));
                 let (nlo, nhi) = natural_range(t, e.bit_len);
                 let natural = t.is_real() || (lo >= nlo && hi <= nhi);
                 !(value_le(t, lo, hi) && value_le(t, lo, v) && value_le(t, v, hi) && natural)
@@ -104,11 +104,10 @@ pub(super) fn drop_impossible_ranges(
                     at: dev.at.clone(),
                     message: format!(
                         "{:#06x}:{:02x}: the range {:?}..{:?} of its type does not hold the default {:?} or is empty: served without a range, the default cut to its type",
-                        o.index, e.sub, e.min, e.max, e.default
+                        o.index, e.sub, e.min(), e.max(), e.default
                     ),
                 });
-                e.min = None;
-                e.max = None;
+                e.limits = crate::leak_limits(None, None, e.unit());
                 // A default outside its type: its bits in the type's size.
                 if let DefaultValue::Int(v) = e.default {
                     let (lo, hi) =

@@ -192,8 +192,7 @@ pub(super) fn modular_objects(
     let ident_list = |access: Access| -> &'static [Entry] {
         let mut l = vec![Entry {
             access,
-            min: Some(0),
-            max: Some(i64::from(slots)),
+            limits: crate::leak_limits(Some(0), Some(i64::from(slots)), ""),
             ..sub0(slots)
         }];
         if access == Access::RwPreOp {

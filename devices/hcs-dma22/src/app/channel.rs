@@ -239,7 +239,7 @@ fn write(od: &mut Od, slot: u8, id: u16, word: u16) -> Result<i64, WriteExceptio
     } else {
         i64::from(word)
     };
-    if e.min.is_some_and(|min| v < min) || e.max.is_some_and(|max| v > max) {
+    if e.min().is_some_and(|min| v < min) || e.max().is_some_and(|max| v > max) {
         return Err(WriteException::WrongDataValue);
     }
     od.set(index, sub, v);

@@ -5,7 +5,7 @@
 //! of them.
 
 use ecat_slave::od::build::ranged;
-use ecat_slave::od::{Access, DataType, Entry};
+use ecat_slave::od::{Access, DataType, Entry, Limits};
 
 /// Vendor ID used for the DMA-22(A) twin. HCS has no EtherCAT vendor ID
 /// we know of: this is a placeholder from the range our examples use, not
@@ -29,15 +29,13 @@ pub const fn ro(
     name: &'static str,
     t: DataType,
     default: i64,
-    min: i64,
-    max: i64,
-    unit: &'static str,
+    limits: &'static Limits,
 ) -> Entry {
     Entry {
         access: Access::Ro,
         backup: false,
         setting: false,
-        ..rw(sub, name, t, default, min, max, unit)
+        ..rw(sub, name, t, default, limits)
     }
 }
 
@@ -48,11 +46,9 @@ pub const fn rw(
     name: &'static str,
     t: DataType,
     default: i64,
-    min: i64,
-    max: i64,
-    unit: &'static str,
+    limits: &'static Limits,
 ) -> Entry {
-    ranged(sub, name, t, default, min, max, unit)
+    ranged(sub, name, t, default, limits)
 }
 
 /// Index of slot `n`'s copy of `base`.

@@ -21,7 +21,7 @@ use ecat_slave::od::build::{
     sub_name, sub0, var,
 };
 use ecat_slave::od::modules::{ModularLayout, ModuleType, SlotRange};
-use ecat_slave::od::{Access, DataType, Entry, Object, ObjectCode, PdoMapping};
+use ecat_slave::od::{Access, DataType, Entry, Limits, Object, ObjectCode, PdoMapping};
 
 use super::map::{DEVICE_NAME, MODULE_IDENT, PRODUCT_CODE, REVISION, SLOTS, VENDOR_ID};
 pub use super::map::{
@@ -41,8 +41,11 @@ const fn telegram_entries(access: Access) -> [Entry; MAX_TELEGRAM + 2] {
     let mut l = [const { sub0(0) }; MAX_TELEGRAM + 2];
     l[0] = sub0(MAX_TELEGRAM as u8 + 1);
     let mut len = base(1, "Length", DataType::UInt8, access, PdoMapping::None, 0);
-    len.min = Some(0);
-    len.max = Some(MAX_TELEGRAM as i64);
+    len.limits = &Limits {
+        min: Some(0),
+        max: Some(MAX_TELEGRAM as i64),
+        unit: "",
+    };
     l[1] = len;
     let mut k = 2;
     while k < l.len() {
@@ -148,8 +151,11 @@ const fn ident_list(access: Access) -> [Entry; 6] {
         l[k].access = access;
         k += 1;
     }
-    l[0].min = Some(0);
-    l[0].max = Some(SLOTS as i64);
+    l[0].limits = &Limits {
+        min: Some(0),
+        max: Some(SLOTS as i64),
+        unit: "",
+    };
     l
 }
 

@@ -25,9 +25,9 @@ use ObjectCode::{Array, Record, Var};
 use PdoMapping::None as NoPdo;
 use ecat_slave::od::build::{
     SYNC_PARAMETER_ENTRIES, assign, assign_count, base, constant, gap, input, map, output, pad,
-    setting, string, sub_name, sub0, var,
+    ranged, setting, string, sub_name, sub0, var,
 };
-use ecat_slave::od::{Access, DataType, Entry, EnumDesc, Object, ObjectCode, PdoMapping};
+use ecat_slave::od::{Access, DataType, Entry, EnumDesc, Limits, Object, ObjectCode, PdoMapping};
 
 // ---------------------------------------------------------------------------
 // Enumeration data types (manual 6.1.7)
@@ -123,20 +123,28 @@ const PWM_2500_HZ: i64 = 0x09;
 /// A TxPDO-mappable solenoid current in mA.
 const fn current(sub: u8, name: &'static str) -> Entry {
     Entry {
-        unit: "mA",
+        limits: &Limits {
+            min: None,
+            max: None,
+            unit: "mA",
+        },
         ..input(sub, name, DataType::UInt16)
     }
 }
 
 /// An enumerated setting: the enumeration's values are its range.
 const fn choice(sub: u8, name: &'static str, e: &'static EnumDesc, default: i64) -> Entry {
-    setting(sub, name, DataType::Enum(e), default, "")
+    setting(sub, name, DataType::Enum(e), default, &Limits::NONE)
 }
 
 /// The PWM frequency setting (DT0803EN05, unit Hz, default 2500 Hz).
 const fn pwm(sub: u8, name: &'static str) -> Entry {
     Entry {
-        unit: "Hz",
+        limits: &Limits {
+            min: None,
+            max: None,
+            unit: "Hz",
+        },
         ..choice(sub, name, &DT0803EN05, PWM_2500_HZ)
     }
 }
@@ -145,54 +153,43 @@ const fn pwm(sub: u8, name: &'static str) -> Entry {
 #[derive(Clone, Copy)]
 struct Kind {
     data_type: DataType,
-    min: i64,
-    max: i64,
-    unit: &'static str,
+    limits: &'static Limits,
 }
 
-const fn kind(data_type: DataType, min: i64, max: i64, unit: &'static str) -> Kind {
-    Kind {
-        data_type,
-        min,
-        max,
-        unit,
-    }
+const fn kind(data_type: DataType, limits: &'static Limits) -> Kind {
+    Kind { data_type, limits }
 }
 
 /// Unit of percentages ("0,01 %" in the manual).
 const PCT: &str = "0.01 %";
 /// RA (6.3.1): 1 ... 120000 ms.
-const RA: Kind = kind(DataType::UInt32, 1, 120_000, "ms");
+const RA: Kind = kind(DataType::UInt32, &Limits::range(1, 120_000, "ms"));
 /// TRIGGER (6.3.5): 0 ... 3000.
-const TRIGGER: Kind = kind(DataType::UInt16, 0, 3000, PCT);
+const TRIGGER: Kind = kind(DataType::UInt16, &Limits::range(0, 3000, PCT));
 /// MIN (6.3.6): 0 ... 6000.
-const MIN: Kind = kind(DataType::UInt16, 0, 6000, PCT);
+const MIN: Kind = kind(DataType::UInt16, &Limits::range(0, 6000, PCT));
 /// MAX (6.3.7): 5000 ... 10000.
-const MAX: Kind = kind(DataType::UInt16, 5000, 10_000, PCT);
+const MAX: Kind = kind(DataType::UInt16, &Limits::range(5000, 10_000, PCT));
 /// CURRENT (6.4.1): 500 ... 3000 mA.
-const CURRENT: Kind = kind(DataType::UInt16, 500, 3000, "mA");
+const CURRENT: Kind = kind(DataType::UInt16, &Limits::range(500, 3000, "mA"));
 /// DAMPL (6.4.2): 0 ... 3000.
-const DAMPL: Kind = kind(DataType::UInt16, 0, 3000, PCT);
+const DAMPL: Kind = kind(DataType::UInt16, &Limits::range(0, 3000, PCT));
 /// DFREQ (6.4.3): 50 ... 400 Hz.
-const DFREQ: Kind = kind(DataType::UInt16, 50, 400, "Hz");
+const DFREQ: Kind = kind(DataType::UInt16, &Limits::range(50, 400, "Hz"));
 /// PPWM (6.4.6): 0 ... 300.
-const PPWM: Kind = kind(DataType::UInt16, 0, 300, "");
+const PPWM: Kind = kind(DataType::UInt16, &Limits::range(0, 300, ""));
 /// IPWM (6.4.7): 0 ... 100.
-const IPWM: Kind = kind(DataType::UInt16, 0, 100, "");
+const IPWM: Kind = kind(DataType::UInt16, &Limits::range(0, 100, ""));
 /// IO_BASE (6.2.1): 100 ... 32767.
-const IO_BASE: Kind = kind(DataType::UInt16, 100, 32_767, "");
+const IO_BASE: Kind = kind(DataType::UInt16, &Limits::range(100, 32_767, ""));
 /// CC curve points, directional (6.3.3): -10000 ... 10000.
-const CC_DIR: Kind = kind(DataType::Int16, -10_000, 10_000, PCT);
+const CC_DIR: Kind = kind(DataType::Int16, &Limits::range(-10_000, 10_000, PCT));
 /// CC curve points, independent (6.3.3): 0 ... 10000.
-const CC_IND: Kind = kind(DataType::Int16, 0, 10_000, PCT);
+const CC_IND: Kind = kind(DataType::Int16, &Limits::range(0, 10_000, PCT));
 
 /// A stored device setting with the type, range and unit of `kind`.
 const fn param(sub: u8, name: &'static str, default: i64, kind: Kind) -> Entry {
-    Entry {
-        min: Some(kind.min),
-        max: Some(kind.max),
-        ..setting(sub, name, kind.data_type, default, kind.unit)
-    }
+    ranged(sub, name, kind.data_type, default, kind.limits)
 }
 
 /// A command of 0xF801 (UDINT, not stored).
@@ -593,8 +590,8 @@ pub const OBJECTS: &[Object] = &[
     ] },
     Object { index: 0xF80F, name: "MANU", code: Record, entries: &[
         sub0(0x02),
-        setting(0x01, "RESERVED1", UInt16, 0, ""), // unnamed (note 17)
-        setting(0x02, "RESERVED2", UInt16, 0, ""),
+        setting(0x01, "RESERVED1", UInt16, 0, &Limits::NONE), // unnamed (note 17)
+        setting(0x02, "RESERVED2", UInt16, 0, &Limits::NONE),
     ] },
 ];
 
@@ -768,16 +765,16 @@ mod tests {
                 let DefaultValue::Int(v) = e.default else {
                     continue;
                 };
-                if let Some(min) = e.min {
+                if let Some(min) = e.min() {
                     assert!(v >= min, "{:#06x}:{} {}", o.index, e.sub, e.name);
                 }
-                if let Some(max) = e.max {
+                if let Some(max) = e.max() {
                     assert!(v <= max, "{:#06x}:{} {}", o.index, e.sub, e.name);
                 }
                 if let DataType::Enum(en) = e.data_type {
                     assert!(en.contains(v), "{} default {v} not in {}", e.name, en.name);
-                    assert_eq!(e.min, None);
-                    assert_eq!(e.max, None);
+                    assert_eq!(e.min(), None);
+                    assert_eq!(e.max(), None);
                 }
                 if e.bit_len < 64 {
                     let bits = u32::from(e.bit_len);
@@ -999,7 +996,7 @@ mod tests {
             let (_, e) = find_entry(idx, sub).unwrap_or_else(|| panic!("{idx:#06x}:{sub}"));
             assert_eq!(e.name, name, "{idx:#06x}:{sub}");
             assert_eq!(
-                (e.min, e.max, e.unit),
+                (e.min(), e.max(), e.unit()),
                 (Some(min), Some(max), unit),
                 "{name}"
             );
@@ -1064,7 +1061,7 @@ mod tests {
         for i in [0x1C12, 0x1C13] {
             let (_, o) = find(i).unwrap();
             assert!(o.entries.iter().all(|e| e.access == Access::RwPreOp));
-            assert_eq!(o.entries[0].max, Some(i64::from(o.max_sub())));
+            assert_eq!(o.entries[0].max(), Some(i64::from(o.max_sub())));
         }
     }
 

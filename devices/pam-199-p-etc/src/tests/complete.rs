@@ -1,8 +1,21 @@
 //! Complete access (core) on the PAM's records and arrays.
 
 use ecat_slave::al::AlState;
-use ecat_slave::od::complete::{check_download, upload};
+use ecat_slave::od::Od;
+use ecat_slave::od::complete::{Changes, check_download, upload};
 use ecat_slave::wire::coe::SdoAbortCode;
+
+/// [`check_download`] returning its `(subindex, value)` changes.
+fn check(
+    s: &Od,
+    index: u16,
+    sub: u8,
+    data: &[u8],
+    state: AlState,
+) -> Result<Changes, SdoAbortCode> {
+    let mut changes = Changes::new();
+    check_download(s, index, sub, data, state, &mut changes).map(|()| changes)
+}
 
 #[test]
 fn curve_object_uploads_42_points_after_a_padded_subindex_0() {
@@ -41,28 +54,28 @@ fn complete_download_of_the_curve_round_trips_and_is_all_or_nothing() {
         let v = (i as i16 - 21) * 100;
         img[2 + 2 * i..4 + 2 * i].copy_from_slice(&v.to_le_bytes());
     }
-    let changes = check_download(&s, 0x8006, 0, &img, AlState::Op).unwrap();
+    let changes = check(&s, 0x8006, 0, &img, AlState::Op).unwrap();
     assert_eq!(changes.len(), 42);
-    for (f, v) in &changes {
-        s.set_value(*f, *v);
+    for (sub, v) in &changes {
+        s.set(0x8006, *sub, *v);
     }
     assert_eq!(s.get(0x8006, 1), Some(-2100));
     // One point out of range: nothing is applied.
     img[2..4].copy_from_slice(&(-20000i16).to_le_bytes());
     assert_eq!(
-        check_download(&s, 0x8006, 0, &img, AlState::Op),
+        check(&s, 0x8006, 0, &img, AlState::Op),
         Err(SdoAbortCode::ValueTooLow)
     );
     // Wrong length.
     assert_eq!(
-        check_download(&s, 0x8006, 0, &img[..85], AlState::Op),
+        check(&s, 0x8006, 0, &img[..85], AlState::Op),
         Err(SdoAbortCode::LengthTooLow)
     );
     let mut long = [0u8; 90];
     long[..86].copy_from_slice(&img);
     long[2..4].copy_from_slice(&0i16.to_le_bytes());
     assert_eq!(
-        check_download(&s, 0x8006, 0, &long, AlState::Op),
+        check(&s, 0x8006, 0, &long, AlState::Op),
         Err(SdoAbortCode::LengthTooHigh)
     );
 }
@@ -71,15 +84,15 @@ fn complete_download_of_the_curve_round_trips_and_is_all_or_nothing() {
 fn pdo_assignment_array_is_written_whole_only_in_preop() {
     let s = crate::store();
     let img = [2u8, 0, 0x00, 0x1A, 0x02, 0x1A];
-    let c = check_download(&s, 0x1C13, 0, &img, AlState::PreOp).unwrap();
+    let c = check(&s, 0x1C13, 0, &img, AlState::PreOp).unwrap();
     assert_eq!(c.len(), 3);
     assert_eq!(
-        check_download(&s, 0x1C13, 0, &img, AlState::SafeOp),
+        check(&s, 0x1C13, 0, &img, AlState::SafeOp),
         Err(SdoAbortCode::InvalidState)
     );
     let too_many = [3u8, 0, 0, 0x1A, 2, 0x1A, 3, 0x1A];
     assert_eq!(
-        check_download(&s, 0x1C13, 0, &too_many, AlState::PreOp),
+        check(&s, 0x1C13, 0, &too_many, AlState::PreOp),
         Err(SdoAbortCode::ValueTooHigh)
     );
 }
@@ -91,12 +104,12 @@ fn read_only_members_must_keep_their_value() {
     let n = upload(&s, 0x1018, 0, &mut out).unwrap();
     assert_eq!(n, 2 + 16);
     assert_eq!(
-        check_download(&s, 0x1018, 0, &out[..n], AlState::PreOp).map(|c| c.len()),
+        check(&s, 0x1018, 0, &out[..n], AlState::PreOp).map(|c| c.len()),
         Ok(0)
     );
     out[2] ^= 1;
     assert_eq!(
-        check_download(&s, 0x1018, 0, &out[..n], AlState::PreOp),
+        check(&s, 0x1018, 0, &out[..n], AlState::PreOp),
         Err(SdoAbortCode::ReadOnly)
     );
 }

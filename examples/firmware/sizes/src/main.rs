@@ -19,7 +19,9 @@ use ecat_slave::firmware::EfwValidator;
 use ecat_slave::foe::{FoeServer, FoeState};
 use ecat_slave::hal::{NvError, NvStorage};
 use ecat_slave::mailbox::MailboxServer;
-use ecat_slave::od::{DataType, DefaultValue, Dictionary, Entry, EnumDesc, Object, ObjectStore};
+use ecat_slave::od::{
+    DataType, DefaultValue, Dictionary, Entry, EnumDesc, Limits, Object, ObjectStore,
+};
 use ecat_slave::pdo::ProcessImage;
 
 struct NoEsc;
@@ -90,17 +92,23 @@ fn od_tables(device: &str, desc: &DeviceDescription) {
     let enum_values: usize = enums.iter().map(|e| e.values.len()).sum();
     let mut strings: Vec<&'static str> = Vec::new();
     let mut ranged = 0usize;
+    let mut limits: Vec<*const Limits> = Vec::new();
     for o in objects {
         strings.push(o.name);
         for e in o.entries {
             strings.push(e.name);
-            strings.push(e.unit);
+            strings.push(e.unit());
             if let DefaultValue::Str(s) = e.default {
                 strings.push(s);
             }
-            ranged += usize::from(e.min.is_some() || e.max.is_some());
+            ranged += usize::from(e.min().is_some() || e.max().is_some());
+            if !core::ptr::eq(e.limits, &Limits::NONE) {
+                limits.push(e.limits);
+            }
         }
     }
+    limits.sort();
+    limits.dedup();
     for e in enums {
         strings.push(e.name);
         strings.extend(e.values.iter().map(|(_, t)| *t));
@@ -110,10 +118,11 @@ fn od_tables(device: &str, desc: &DeviceDescription) {
     let distinct_bytes: usize = distinct.iter().map(|s| s.len()).sum();
     let object_bytes = objects.len() * size_of::<Object>();
     let entry_bytes = entries * size_of::<Entry>();
+    let limits_bytes = (limits.len() + 1) * size_of::<Limits>();
     let enum_bytes = enums.len() * (size_of::<EnumDesc>() + size_of::<&EnumDesc>())
         + enum_values * size_of::<(i64, &str)>();
     let base_bytes = objects.len() * size_of::<u16>();
-    let pointer_tables = object_bytes + entry_bytes + enum_bytes;
+    let pointer_tables = object_bytes + entry_bytes + limits_bytes + enum_bytes;
     println!(
         "  {device}: {} objects, {entries} entries ({ranged} with a range), {} enumerations ({enum_values} values), {} value slots",
         objects.len(),
@@ -130,12 +139,20 @@ fn od_tables(device: &str, desc: &DeviceDescription) {
     );
     row(
         &format!(
-            "Entry table ({entries} x {} B: 2 x &str, DataType {} B, DefaultValue {} B, 2 x Option<i64>, flags)",
+            "Entry table ({entries} x {} B: &str name, DataType {} B, DefaultValue {} B, &Limits, flags)",
             size_of::<Entry>(),
             size_of::<DataType>(),
             size_of::<DefaultValue>()
         ),
         entry_bytes,
+    );
+    row(
+        &format!(
+            "range and unit tables (at most {} distinct Limits + the shared NONE, {} B each)",
+            limits.len(),
+            size_of::<Limits>()
+        ),
+        limits_bytes,
     );
     row(
         "enumeration tables (EnumDesc, (i64, &str) values)",

@@ -62,9 +62,6 @@ pub enum SyncMode {
     DcSync0,
 }
 
-/// Most changes one SDO download hands to the application.
-const MAX_CHANGES: usize = complete::MAX_ENTRIES;
-
 /// A device's firmware on an ESC reached through the PDI.
 ///
 /// The last four parameters size its buffers (a firmware sizes them for

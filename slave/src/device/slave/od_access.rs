@@ -237,15 +237,10 @@ impl<A: Application> ObjectAccess for OdAccess<'_, A> {
             return Err(SdoAbortCode::ObjectNotFound);
         }
         if complete_access {
-            let flat_changes = complete::check_download(self.od, index, sub, data, self.state)?;
-            let dict = self.od.dictionary();
-            let mut changes: heapless::Vec<(u8, i64), MAX_CHANGES> = heapless::Vec::new();
-            for (flat, v) in flat_changes {
-                let s = dict.entry_at(flat).map_or(0, |e| e.sub);
-                changes
-                    .push((s, v))
-                    .map_err(|_| SdoAbortCode::ObjectTooLong)?;
-            }
+            // (subindex, value) pairs, built once: this frame is the
+            // deepest of a poll on a microcontroller.
+            let mut changes = complete::Changes::new();
+            complete::check_download(self.od, index, sub, data, self.state, &mut changes)?;
             return self.hand_over(index, sub, true, &changes);
         }
         let (_, entry) = self.od.lookup(index, sub)?;

@@ -15,7 +15,7 @@ fn pam_range(index: u16, sub: u8) -> (i64, i64, &'static str) {
     pam_199_p_etc::DEVICE
         .dictionary
         .find_entry(index, sub)
-        .and_then(|(_, e)| Some((e.min?, e.max?, e.unit)))
+        .and_then(|(_, e)| Some((e.min()?, e.max()?, e.unit())))
         .unwrap_or((0, i64::from(u16::MAX), ""))
 }
 
