@@ -69,10 +69,11 @@ impl<const N: usize> Text<N> {
         let mut i = digits.len();
         loop {
             i -= 1;
+            let (q, r) = div_rem_10(n);
             if let Some(d) = digits.get_mut(i) {
-                *d = b'0' + (n % 10) as u8;
+                *d = b'0' + r;
             }
-            n /= 10;
+            n = q;
             if n == 0 || i == 0 {
                 break;
             }
@@ -114,9 +115,44 @@ impl<const N: usize> Text<N> {
     }
 }
 
+/// `(n / 10, n % 10)` from 32-bit divisions only, 16 bits at a time: a
+/// Cortex-M has no 64-bit divide, and one `u64 / 10` links the compiler's
+/// 64-bit division routine (about 1 KB of flash) into a firmware.
+fn div_rem_10(n: u64) -> (u64, u8) {
+    let mut q = 0u64;
+    let mut rem = 0u32;
+    for shift in [48u32, 32, 16, 0] {
+        // rem < 10, so `cur` < 10 * 2^16 fits a u32.
+        let cur = (rem << 16) | ((n >> shift) & 0xFFFF) as u32;
+        q |= u64::from(cur / 10) << shift;
+        rem = cur % 10;
+    }
+    (q, rem as u8)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn decimal_digits_come_from_32_bit_divisions_for_every_magnitude() {
+        for n in [
+            0u64,
+            9,
+            10,
+            65_535,
+            65_536,
+            4_294_967_295,
+            4_294_967_296,
+            10u64.pow(19),
+            u64::MAX,
+        ] {
+            assert_eq!(div_rem_10(n), (n / 10, (n % 10) as u8), "{n}");
+            let mut t: Text<24> = Text::new();
+            t.push_dec(n);
+            assert_eq!(t.as_str(), n.to_string(), "{n}");
+        }
+    }
     extern crate std;
     use std::format;
 
