@@ -251,7 +251,12 @@ fn sources(scope: &Scope) -> Vec<(String, String)> {
             continue;
         }
         let text = std::fs::read_to_string(&p).expect("source");
-        map.entry(name).or_default().push_str(&text);
+        // Each file cut at its own test module: a folder module's files
+        // joined first would hide everything after the first one's tests.
+        let code = code_of(&text);
+        let joined = map.entry(name).or_default();
+        joined.push_str(&code);
+        joined.push('\n');
     }
     map.into_iter().collect()
 }
@@ -316,4 +321,37 @@ fn a_planted_upward_edge_is_reported() {
         "fn f() {}\n#[cfg(test)]\nmod tests {\n use crate::top::T;\n}\n".to_string(),
     )];
     assert!(violations(&layers, &tests, &p).is_empty());
+}
+
+#[test]
+fn an_upward_edge_after_another_files_test_module_is_reported() {
+    // A folder module of two files: the first ends in a test module, the
+    // second uses a layer above its own.
+    let dir = std::env::temp_dir().join(format!("layers-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("leaf")).expect("temp dir");
+    std::fs::write(dir.join("lib.rs"), "//! Layers: `top` → `leaf`\n//!\n").expect("lib.rs");
+    std::fs::write(dir.join("top.rs"), "use crate::leaf::Y;\n").expect("top.rs");
+    std::fs::write(
+        dir.join("leaf/a.rs"),
+        "pub struct Y;\n#[cfg(test)]\nmod tests {\n    use super::*;\n}\n",
+    )
+    .expect("a.rs");
+    std::fs::write(dir.join("leaf/b.rs"), "use crate::top::X;\n").expect("b.rs");
+    let scope = Scope {
+        dir: Box::leak(dir.to_string_lossy().into_owned().into_boxed_str()),
+        doc: "lib.rs",
+        top_level: true,
+        path: "",
+        test_only: &[],
+    };
+    let layers =
+        layers_of(&std::fs::read_to_string(dir.join("lib.rs")).expect("lib.rs")).expect("layers");
+    let v = violations(&layers, &sources(&scope), &["crate::".to_string()]);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(v.len(), 1, "{v:#?}");
+    assert!(
+        v[0].contains("`leaf` (layer 1) uses `top` (layer 0)"),
+        "{v:#?}"
+    );
 }

@@ -77,8 +77,11 @@ pub const fn assign_count(count: u8, capacity: u8) -> Entry {
 
 /// `0..=capacity` for 0x1C12:00 / 0x1C13:00. A `'static` reference built in
 /// a `const fn` must come from constants, so the capacities a device can
-/// have (0..=32 PDOs per assignment) are spelled out; a larger capacity (a
-/// twin's, built at run time) gets its `Limits` from its builder.
+/// have (0..=32 PDOs per assignment) are spelled out. A larger capacity
+/// gets `0..=255`, the entry type's range (what SDO Information shows; a
+/// count beyond the array's entries is still refused with 0x06090031 when
+/// written); a builder that needs the exact bound sets its own `Limits`,
+/// as the twins do.
 #[rustfmt::skip]
 const fn capacity_limits(capacity: u8) -> &'static Limits {
     match capacity {

@@ -522,10 +522,11 @@ pub(super) fn complete(
             .map(|p| p.index)
             .collect();
         let cap = u8::try_from(pdos.len().max(1)).unwrap_or(u8::MAX);
-        let mut entries = vec![assign_count(
-            u8::try_from(def.len()).unwrap_or(u8::MAX),
-            cap,
-        )];
+        let mut entries = vec![Entry {
+            // `assign_count` spells out capacities up to 32 only.
+            limits: crate::leak_limits(Some(0), Some(i64::from(cap)), ""),
+            ..assign_count(u8::try_from(def.len()).unwrap_or(u8::MAX), cap)
+        }];
         for k in 1..=cap {
             let pdo = def.get(usize::from(k) - 1).copied().unwrap_or(0);
             entries.push(assign(k, pdo));

@@ -102,7 +102,7 @@ fn od_tables(device: &str, desc: &DeviceDescription) {
                 strings.push(s);
             }
             ranged += usize::from(e.min().is_some() || e.max().is_some());
-            if !core::ptr::eq(e.limits, &Limits::NONE) {
+            if *e.limits != Limits::NONE {
                 limits.push(e.limits);
             }
         }
