@@ -524,6 +524,17 @@ mod tests {
     }
 
     #[test]
+    fn an_assignment_of_more_than_32_pdos_keeps_its_exact_capacity() {
+        // 40 RxPDOs on SM2, no dictionary: 0x1C12 is made from them.
+        let pdos: String = (0..40u16)
+            .map(|k| pdo("RxPdo", 0x1600 + k, Some(2), &[], 0x7000 + 0x10 * k))
+            .collect();
+        let (desc, _) = describe(&dev_with(&pdos)).unwrap();
+        let (_, e) = desc.dictionary.find_entry(0x1C12, 0).unwrap();
+        assert_eq!((e.min(), e.max()), (Some(0), Some(40)));
+    }
+
+    #[test]
     fn a_device_with_coe_is_described_and_its_errors_are_named() {
         // No dictionary: made from the PDOs; both PDO sets valid.
         let d = dev_with(
