@@ -741,13 +741,13 @@ impl Chain {
                 }
                 // An FMMU may map registers, even the FMMUs' own.
                 if cmd.is_write() {
+                    let mut moved = false;
                     for &i in &hits {
                         self.check_fmmus(i);
-                        if self.moved(i) {
-                            self.windows_stale = true;
-                        }
+                        moved |= self.moved(i);
                     }
-                    if hits.iter().any(|&i| self.moved(i)) {
+                    if moved {
+                        self.windows_stale = true;
                         self.reindex();
                     }
                 }

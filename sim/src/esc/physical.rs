@@ -54,11 +54,13 @@ impl SoftEsc {
         let src = self.mem.get(from..mem_end).unwrap_or(&[]);
         match mode {
             ReadMode::Copy => {
-                for (d, v) in out.iter_mut().zip(src) {
-                    *d = *v;
-                }
-                for d in out.iter_mut().skip(src.len()) {
-                    *d = 0;
+                let n = src.len().min(out.len());
+                let (head, tail) = out.split_at_mut(n);
+                head.copy_from_slice(src.get(..n).unwrap_or(&[]));
+                // Bytes beyond the modelled memory: rare, and a memset
+                // call costs more than the copy of a register.
+                if !tail.is_empty() {
+                    tail.fill(0);
                 }
             }
             ReadMode::Or => {
