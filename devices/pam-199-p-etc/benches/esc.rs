@@ -27,7 +27,9 @@ use std::hint::black_box;
 
 #[path = "esc_frames.rs"]
 mod esc_frames;
-use esc_frames::{config_frames, configure_chain, cycle_frames, wkc_sum};
+use esc_frames::{
+    Window, config_frames, configure_chain, cycle_frames, slave_config_frame, wkc_sum,
+};
 
 /// Runs one frame through every ESC of the line.
 fn pass(line: &mut [SoftEsc], frame: &mut [u8]) {
@@ -101,45 +103,17 @@ fn bench(c: &mut Criterion) {
 /// byte `i`, bits 0..=3 written to SM2 (0x1100, 1 byte) and bits 4..=7
 /// read from SM3 (0x1180, 1 byte), both at physical bit 0.
 fn bit_config_frames(n: usize) -> Vec<Vec<u8>> {
-    let mut frames = Vec::new();
-    for i in 0..n as u16 {
-        let mut buf = vec![0u8; 512];
-        let mut b = FrameBuilder::new(&mut buf, [0x10; 6]).expect("buffer");
-        let adp = 0u16.wrapping_sub(i) as u32;
-        b.push(
-            Command::Apwr,
-            adp | (0x0010 << 16),
-            &(0x1000 + i).to_le_bytes(),
-        )
-        .expect("fits");
-        let sm2 = [0x00, 0x11, 1, 0, 0x64, 0, 1, 0];
-        let sm3 = [0x80, 0x11, 1, 0, 0x20, 0, 1, 0];
-        b.push(Command::Apwr, adp | (0x0810 << 16), &sm2)
-            .expect("fits");
-        b.push(Command::Apwr, adp | (0x0818 << 16), &sm3)
-            .expect("fits");
-        let mut f0 = [0u8; 16];
-        f0[0..4].copy_from_slice(&u32::from(i).to_le_bytes());
-        f0[4..6].copy_from_slice(&1u16.to_le_bytes());
-        f0[6] = 0; // start bit
-        f0[7] = 3; // stop bit
-        f0[8..10].copy_from_slice(&0x1100u16.to_le_bytes());
-        f0[11] = 2;
-        f0[12] = 1;
-        let mut f1 = f0;
-        f1[6] = 4;
-        f1[7] = 7;
-        f1[8..10].copy_from_slice(&0x1180u16.to_le_bytes());
-        f1[11] = 1;
-        b.push(Command::Apwr, adp | (0x0600 << 16), &f0)
-            .expect("fits");
-        b.push(Command::Apwr, adp | (0x0610 << 16), &f1)
-            .expect("fits");
-        let len = b.finish();
-        buf.truncate(len);
-        frames.push(buf);
-    }
-    frames
+    (0..n as u16)
+        .map(|i| {
+            let bits = |start_bit, stop_bit| Window {
+                logical: u32::from(i),
+                len: 1,
+                start_bit,
+                stop_bit,
+            };
+            slave_config_frame(i, (1, 1), bits(0, 3), bits(4, 7))
+        })
+        .collect()
 }
 
 fn bench_bits(c: &mut Criterion) {

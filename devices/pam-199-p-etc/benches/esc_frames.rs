@@ -12,47 +12,83 @@ pub const OUT: u16 = 5;
 /// Input bytes of a PAM slave's image.
 pub const IN: u16 = 14;
 
+/// One FMMU of a configuration frame: logical start and length, first and
+/// last bit (0 and 7 for whole bytes).
+pub struct Window {
+    /// Logical start address.
+    pub logical: u32,
+    /// Length in bytes.
+    pub len: u16,
+    /// First bit of the first byte.
+    pub start_bit: u8,
+    /// Last bit of the last byte.
+    pub stop_bit: u8,
+}
+
+/// The frame that configures slave `i`: station address `0x1000 + i`, SM2
+/// (0x1100, `sm_out` bytes) and SM3 (0x1180, `sm_in` bytes), FMMU0 writing
+/// `out` into SM2 and FMMU1 reading `inp` from SM3 (both at physical bit 0).
+pub fn slave_config_frame(
+    i: u16,
+    (sm_out, sm_in): (u16, u16),
+    out: Window,
+    inp: Window,
+) -> Vec<u8> {
+    let mut buf = vec![0u8; 512];
+    let mut b = FrameBuilder::new(&mut buf, [0x10; 6]).expect("buffer");
+    let station = 0x1000 + i;
+    let adp = 0u16.wrapping_sub(i) as u32;
+    b.push(Command::Apwr, adp | (0x0010 << 16), &station.to_le_bytes())
+        .expect("fits");
+    let [ol, oh] = sm_out.to_le_bytes();
+    let [il, ih] = sm_in.to_le_bytes();
+    let sm2 = [0x00, 0x11, ol, oh, 0x64, 0, 1, 0];
+    let sm3 = [0x80, 0x11, il, ih, 0x20, 0, 1, 0];
+    b.push(Command::Apwr, adp | (0x0810 << 16), &sm2)
+        .expect("fits");
+    b.push(Command::Apwr, adp | (0x0818 << 16), &sm3)
+        .expect("fits");
+    let fmmu = |w: &Window, physical: u16, kind: u8| {
+        let mut f = [0u8; 16];
+        f[0..4].copy_from_slice(&w.logical.to_le_bytes());
+        f[4..6].copy_from_slice(&w.len.to_le_bytes());
+        f[6] = w.start_bit;
+        f[7] = w.stop_bit;
+        f[8..10].copy_from_slice(&physical.to_le_bytes());
+        f[11] = kind; // 2 = write, 1 = read
+        f[12] = 1; // active
+        f
+    };
+    b.push(Command::Apwr, adp | (0x0600 << 16), &fmmu(&out, 0x1100, 2))
+        .expect("fits");
+    b.push(Command::Apwr, adp | (0x0610 << 16), &fmmu(&inp, 0x1180, 1))
+        .expect("fits");
+    let len = b.finish();
+    buf.truncate(len);
+    buf
+}
+
 /// The frames that configure slave `i` of a line as ethercrab does:
 /// station address, SM2/SM3 and FMMU0/1 (each slave's 5 output bytes then
 /// 14 input bytes, back to back).
 pub fn config_frames(n: usize) -> Vec<Vec<u8>> {
-    let mut frames = Vec::new();
-    for i in 0..n as u16 {
-        let mut buf = vec![0u8; 2048];
-        let mut b = FrameBuilder::new(&mut buf, [0x10; 6]).expect("buffer");
-        let station = 0x1000 + i;
-        let adp = 0u16.wrapping_sub(i) as u32;
-        b.push(Command::Apwr, adp | (0x0010 << 16), &station.to_le_bytes())
-            .expect("fits");
-        let sm2 = [0x00, 0x11, OUT as u8, 0, 0x64, 0, 1, 0];
-        let sm3 = [0x80, 0x11, IN as u8, 0, 0x20, 0, 1, 0];
-        b.push(Command::Apwr, adp | (0x0810 << 16), &sm2)
-            .expect("fits");
-        b.push(Command::Apwr, adp | (0x0818 << 16), &sm3)
-            .expect("fits");
-        let log_out = u32::from(i) * u32::from(OUT + IN);
-        let log_in = log_out + u32::from(OUT);
-        let mut f0 = [0u8; 16];
-        f0[0..4].copy_from_slice(&log_out.to_le_bytes());
-        f0[4..6].copy_from_slice(&OUT.to_le_bytes());
-        f0[7] = 7;
-        f0[8..10].copy_from_slice(&0x1100u16.to_le_bytes());
-        f0[11] = 2;
-        f0[12] = 1;
-        let mut f1 = f0;
-        f1[0..4].copy_from_slice(&log_in.to_le_bytes());
-        f1[4..6].copy_from_slice(&IN.to_le_bytes());
-        f1[8..10].copy_from_slice(&0x1180u16.to_le_bytes());
-        f1[11] = 1;
-        b.push(Command::Apwr, adp | (0x0600 << 16), &f0)
-            .expect("fits");
-        b.push(Command::Apwr, adp | (0x0610 << 16), &f1)
-            .expect("fits");
-        let len = b.finish();
-        buf.truncate(len);
-        frames.push(buf);
-    }
-    frames
+    (0..n as u16)
+        .map(|i| {
+            let log_out = u32::from(i) * u32::from(OUT + IN);
+            let whole = |logical, len| Window {
+                logical,
+                len,
+                start_bit: 0,
+                stop_bit: 7,
+            };
+            slave_config_frame(
+                i,
+                (OUT, IN),
+                whole(log_out, OUT),
+                whole(log_out + u32::from(OUT), IN),
+            )
+        })
+        .collect()
 }
 
 /// Largest EtherCAT payload in a standard Ethernet frame.
