@@ -589,6 +589,48 @@ fn a_modular_devices_generated_esi_as_a_twin_reports_what_the_device_does() {
 }
 
 #[test]
+fn a_twin_whose_esi_offers_no_sdo_information_nor_complete_access_refuses_both() {
+    // The IO8's ESI with `SdoInfo` and `CompleteAccess` cleared: the twin's
+    // SII says so, and the core refuses what the description does not
+    // offer instead of serving it anyway.
+    let xml =
+        String::from_utf8(ecat_esi::generate(&io8_example::DEVICE).expect("ESI")).expect("utf-8");
+    let edited = xml
+        .replacen("SdoInfo=\"1\"", "SdoInfo=\"0\"", 1)
+        .replacen("CompleteAccess=\"1\"", "CompleteAccess=\"0\"", 1);
+    assert_ne!(edited, xml, "the ESI offered both");
+    let file = EsiFile::parse(&edited).expect("parses");
+    let dev = file.device(None, None).expect("device");
+    let twin = ecat_twin::twin(dev, None, InputRule::Hold).expect("twin");
+    let general = inspect(twin.esc().sii()).expect("SII").general.expect("General");
+    assert_eq!(general.0.coe_details & 0x22, 0, "SII: no SDO Info, no CA");
+    smol::block_on(async {
+        use master_test::mailbox::{ClientError, MailboxClient, MailboxGeometry};
+        use master_test::sdo_info::od_list;
+        let bus = VirtualBus::with_chain(Chain::with_slaves(vec![twin]), Clock::simulated(), None)
+            .expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let sd = group.subdevice(md, 0).expect("slave");
+        let mut c = MailboxClient::new(
+            md,
+            sd.configured_address(),
+            MailboxGeometry::of(&io8_example::DEVICE.layout()),
+        );
+        match od_list(&mut c, 1).await {
+            Err(ClientError::Mailbox(code)) => assert_eq!(u16::from(code), 0x0004),
+            other => panic!("SDO Information answered: {other:?}"),
+        }
+        match c.sdo_upload(0x1018, 1, true).await {
+            Err(ClientError::Abort { code, .. }) => assert_eq!(u32::from(code), 0x0601_0000),
+            other => panic!("complete access answered: {other:?}"),
+        }
+        let vendor = c.sdo_upload(0x1018, 1, false).await.expect("0x1018:01");
+        assert_eq!(vendor, io8_example::DEVICE.identity.vendor_id.to_le_bytes());
+    });
+}
+
+#[test]
 fn a_coe_device_whose_esi_has_no_dictionary_gets_one_from_its_pdos_and_runs() {
     // The IO8's ESI with its <Dictionary> removed (a <ChannelInfo>-only
     // shape): the twin makes 0x1000, 0x1018, the PDO mapping and

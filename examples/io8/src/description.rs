@@ -164,10 +164,10 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
         size: 128,
         boot_size: Some(512),
         coe: CoeServices {
-            sdo_info: true,
+            sdo_info: !cfg!(feature = "coe-minimal"),
             pdo_assign: true,
             pdo_config: false,
-            complete_access: true,
+            complete_access: !cfg!(feature = "coe-minimal"),
         },
         foe: true,
         foe_security: FoeSecurity::OPEN,

@@ -25,6 +25,22 @@ pub trait ObjectAccess {
         ObjectView::all(self.dictionary())
     }
 
+    /// Whether the device offers SDO Information (SII CoE details bit 1,
+    /// ESI `Mailbox/CoE@SdoInfo`); `true` by default. Without it an SDO
+    /// Information request gets the mailbox error "service not supported"
+    /// (0x0004), as every other CoE service the device does not offer.
+    fn sdo_info(&self) -> bool {
+        true
+    }
+
+    /// Whether the device offers SDO complete access (CoE details bit 5,
+    /// ESI `Mailbox/CoE@CompleteAccess`); `true` by default. Without it a
+    /// complete-access request is aborted with 0x0601_0000 "unsupported
+    /// access to an object" at its initiate.
+    fn complete_access(&self) -> bool {
+        true
+    }
+
     /// Reads `index:sub` (or the whole object with `complete_access`) into
     /// `out`; returns the number of bytes.
     fn sdo_upload(
@@ -84,7 +100,7 @@ impl<const T: usize> CoeServer<T> {
                 CoeHeader::emit_into(head, 0, out.service);
                 Ok(Some(out.len + CoeHeader::<&[u8]>::HEADER_LEN))
             }
-            CoeService::SdoInformation => {
+            CoeService::SdoInformation if od.sdo_info() => {
                 let (head, rest) = out
                     .split_at_mut_checked(CoeHeader::<&[u8]>::HEADER_LEN)
                     .ok_or(MailboxErrorCode::NoMoreMemory)?;
@@ -114,5 +130,56 @@ impl<const T: usize> CoeServer<T> {
         let n = self.info.next_fragment(rest, view)?;
         CoeHeader::emit_into(head, 0, CoeService::SdoInformation);
         Some(n + CoeHeader::<&[u8]>::HEADER_LEN)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An object access that answers nothing, with or without SDO
+    /// Information.
+    struct Access {
+        sdo_info: bool,
+    }
+
+    impl ObjectAccess for Access {
+        fn dictionary(&self) -> &'static Dictionary {
+            &crate::testing::DICT
+        }
+
+        fn sdo_info(&self) -> bool {
+            self.sdo_info
+        }
+
+        fn sdo_upload(&mut self, _: u16, _: u8, _: bool, _: &mut [u8]) -> Result<usize, SdoAbortCode> {
+            Err(SdoAbortCode::ObjectNotFound)
+        }
+
+        fn sdo_download(&mut self, _: u16, _: u8, _: bool, _: &[u8]) -> Result<(), SdoAbortCode> {
+            Err(SdoAbortCode::ObjectNotFound)
+        }
+    }
+
+    /// CoE header of service 8, then "Get OD List request" (opcode 1) of
+    /// all objects (list type 1).
+    const OD_LIST_REQUEST: [u8; 8] = [0x00, 0x80, 0x01, 0x00, 0x00, 0x00, 0x01, 0x00];
+
+    #[test]
+    fn sdo_information_on_a_device_without_it_is_mailbox_error_0004() {
+        let mut out = [0u8; 128];
+        let mut without = Access { sdo_info: false };
+        let got = <CoeServer>::new().handle(&OD_LIST_REQUEST, &mut out, &mut without);
+        assert_eq!(got, Err(MailboxErrorCode::ServiceNotSupported));
+        assert_eq!(u16::from(MailboxErrorCode::ServiceNotSupported), 0x0004);
+        // The same request on a device that offers it: an OD list response
+        // (opcode 2) in service 8.
+        let mut with = Access { sdo_info: true };
+        let n = <CoeServer>::new()
+            .handle(&OD_LIST_REQUEST, &mut out, &mut with)
+            .expect("served")
+            .expect("an answer");
+        assert!(n > 8);
+        assert_eq!((out[1] >> 4, out[2] & 0x7F), (8, 2));
     }
 }

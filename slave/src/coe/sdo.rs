@@ -162,6 +162,28 @@ impl<const T: usize> SdoServer<T> {
         let segment_room = room.saturating_sub(1);
         let busy = self.state != SdoState::Idle;
         match req {
+            SdoRequest::InitiateDownload {
+                index,
+                sub,
+                complete_access: true,
+                ..
+            }
+            | SdoRequest::InitiateUpload {
+                index,
+                sub,
+                complete_access: true,
+            } if !od.complete_access() => {
+                // A device without complete access (ETG.1000.6: CoE details
+                // bit 5 clear) refuses it before anything is transferred;
+                // a segmented transfer in progress is dropped as by any
+                // new initiate.
+                self.state = SdoState::Idle;
+                Reply::Abort {
+                    index,
+                    sub,
+                    code: SdoAbortCode::UnsupportedAccess,
+                }
+            }
             SdoRequest::InitiateDownload { index, sub, .. }
             | SdoRequest::InitiateUpload { index, sub, .. }
                 if busy =>
@@ -431,11 +453,17 @@ mod tests {
         big: [u8; 100],
         small: [u8; 2],
         writes: u32,
+        reads: u32,
+        complete_access: bool,
     }
 
     impl ObjectAccess for Od {
         fn dictionary(&self) -> &'static crate::od::Dictionary {
             &crate::testing::DICT
+        }
+
+        fn complete_access(&self) -> bool {
+            self.complete_access
         }
 
         fn sdo_upload(
@@ -445,6 +473,7 @@ mod tests {
             _ca: bool,
             out: &mut [u8],
         ) -> Result<usize, SdoAbortCode> {
+            self.reads += 1;
             let src: &[u8] = match index {
                 0x2000 => &self.big,
                 0x2001 => &self.small,
@@ -481,6 +510,8 @@ mod tests {
             big,
             small: [1, 2],
             writes: 0,
+            reads: 0,
+            complete_access: true,
         }
     }
 
@@ -516,6 +547,45 @@ mod tests {
             },
         };
         ask(srv, od, init, 64);
+    }
+
+    #[test]
+    fn complete_access_to_a_device_without_it_aborts_0601_0000_at_the_initiate() {
+        let (mut srv, mut od) = (<SdoServer>::default(), od());
+        od.complete_access = false;
+        let abort = |index: u16, sub: u8| {
+            let mut v = vec![0x80, index as u8, (index >> 8) as u8, sub];
+            v.extend_from_slice(&0x0601_0000u32.to_le_bytes());
+            v
+        };
+        let up = SdoRequest::InitiateUpload {
+            index: 0x2000,
+            sub: 1,
+            complete_access: true,
+        };
+        assert_eq!(ask(&mut srv, &mut od, up, 64), abort(0x2000, 1));
+        // A normal (segmented) complete download is refused before its
+        // first segment: nothing reaches the object.
+        let data = [7u8; 100];
+        let down = SdoRequest::InitiateDownload {
+            index: 0x2000,
+            sub: 1,
+            complete_access: true,
+            kind: DownloadKind::Normal {
+                complete_size: 100,
+                data: &data[..20],
+            },
+        };
+        assert_eq!(ask(&mut srv, &mut od, down, 64), abort(0x2000, 1));
+        assert_eq!((od.reads, od.writes), (0, 0), "no object was touched");
+        // The same object by subindex still works.
+        let plain = SdoRequest::InitiateUpload {
+            index: 0x2001,
+            sub: 0,
+            complete_access: false,
+        };
+        let got = ask(&mut srv, &mut od, plain, 64);
+        assert_eq!(&got[4..6], &[1, 2]);
     }
 
     #[test]

@@ -82,16 +82,24 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             // Nothing new: continue a response that spans several mailboxes.
             let (_, inp) = self.mailbox_layout();
             let emergency = self.emergencies_enabled && !self.emergencies.is_empty();
-            if !self.mailbox.has_pending() && !emergency {
+            // Only SDO Information spans several mailboxes; the flag is a
+            // constant of a static description, so a firmware without SDO
+            // Information does not link the fragment code.
+            let fragments =
+                self.app.description().mailbox.coe.sdo_info && self.mailbox.has_pending();
+            if !fragments && !emergency {
                 return Ok(());
             }
             let max = usize::from(inp.1).min(MBX);
             // `tx` is free: nothing is pending.
             self.tx.fill(0);
-            let mut produced = self
-                .tx
-                .get_mut(..max)
-                .and_then(|r| self.mailbox.next_pending(r, view));
+            let mut produced = None;
+            if fragments {
+                produced = self
+                    .tx
+                    .get_mut(..max)
+                    .and_then(|r| self.mailbox.next_pending(r, view));
+            }
             if produced.is_none() && emergency {
                 produced = self.tx.get_mut(..max).and_then(|r| {
                     let body = r.get_mut(crate::wire::mailbox::HEADER_LEN..)?;

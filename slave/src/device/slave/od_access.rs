@@ -209,6 +209,14 @@ impl<A: Application> ObjectAccess for OdAccess<'_, A> {
         object_view(self.app.description(), self.od)
     }
 
+    fn sdo_info(&self) -> bool {
+        self.app.description().mailbox.coe.sdo_info
+    }
+
+    fn complete_access(&self) -> bool {
+        self.app.description().mailbox.coe.complete_access
+    }
+
     fn sdo_upload(
         &mut self,
         index: u16,
@@ -221,6 +229,12 @@ impl<A: Application> ObjectAccess for OdAccess<'_, A> {
         }
         self.app.sdo_upload(self.od, index, sub)?;
         if complete_access {
+            // Checked here too, not only at the initiate: for a static
+            // description the flag is a constant and a firmware without
+            // complete access does not link its code.
+            if !self.complete_access() {
+                return Err(SdoAbortCode::UnsupportedAccess);
+            }
             return complete::upload(self.od, index, sub, out);
         }
         self.od.upload(index, sub, out)
@@ -237,6 +251,9 @@ impl<A: Application> ObjectAccess for OdAccess<'_, A> {
             return Err(SdoAbortCode::ObjectNotFound);
         }
         if complete_access {
+            if !self.complete_access() {
+                return Err(SdoAbortCode::UnsupportedAccess);
+            }
             // (subindex, value) pairs, built once: this frame is the
             // deepest of a poll on a microcontroller.
             let mut changes = complete::Changes::new();
