@@ -575,15 +575,20 @@ impl FoeServer {
 
     /// Ends the transfer with an error reply.
     fn fail(&mut self, out: &mut [u8], code: FoeErrorCode, text: &str) -> Option<usize> {
+        self.fail_bytes(out, code, text.as_bytes())
+    }
+
+    /// [`Self::fail`] with the text's bytes (a built [`Text`] is passed
+    /// as bytes: no UTF-8 check on the firmware path).
+    fn fail_bytes(&mut self, out: &mut [u8], code: FoeErrorCode, text: &[u8]) -> Option<usize> {
         self.state = FoeState::Error { code };
         let room = out.len().saturating_sub(HEADER_LEN);
-        let text = text.as_bytes();
         let text = text.get(..room).unwrap_or(text);
         emit(out, FoeRepr::Error { code, text })
     }
 
     fn fail_efw(&mut self, out: &mut [u8], e: EfwError) -> Option<usize> {
-        self.fail(out, e.foe_code(), e.text().as_str())
+        self.fail_bytes(out, e.foe_code(), e.text().as_bytes())
     }
 
     fn fail_store(&mut self, out: &mut [u8], e: StoreError) -> Option<usize> {

@@ -15,20 +15,56 @@ macro_rules! abort_codes {
             Unknown(u32),
         }
 
+        /// The known codes in the order of the variants: both conversions
+        /// index or walk this table instead of a `match` of 35 arms (a few
+        /// hundred bytes of firmware each).
+        const CODES: &[u32] = &[$($code,)*];
+
+        impl SdoAbortCode {
+            /// The known variant at position `n` of [`CODES`] (the
+            /// compiler reduces this chain to a store of the tag).
+            const fn from_ordinal(n: usize) -> Option<Self> {
+                let mut i = 0;
+                $(
+                    if n == i {
+                        return Some(SdoAbortCode::$name);
+                    }
+                    i += 1;
+                )*
+                let _ = i;
+                None
+            }
+
+            /// Position of a known variant in [`CODES`] (the compiler
+            /// reduces this `match` to the enum's tag).
+            const fn ordinal(self) -> Option<usize> {
+                let mut i = 0;
+                $(
+                    if let SdoAbortCode::$name = self {
+                        return Some(i);
+                    }
+                    i += 1;
+                )*
+                let _ = i;
+                None
+            }
+        }
+
         impl From<u32> for SdoAbortCode {
             fn from(raw: u32) -> Self {
-                match raw {
-                    $($code => Self::$name,)*
-                    other => Self::Unknown(other),
-                }
+                CODES
+                    .iter()
+                    .position(|code| *code == raw)
+                    .and_then(Self::from_ordinal)
+                    .unwrap_or(Self::Unknown(raw))
             }
         }
 
         impl From<SdoAbortCode> for u32 {
             fn from(code: SdoAbortCode) -> Self {
                 match code {
-                    $(SdoAbortCode::$name => $code,)*
                     SdoAbortCode::Unknown(raw) => raw,
+                    known => known.ordinal().and_then(|i| CODES.get(i)).copied().unwrap_or(0),
                 }
             }
         }

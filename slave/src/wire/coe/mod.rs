@@ -591,6 +591,9 @@ mod tests {
             SdoAbortCode::Unknown(0x1234_5678)
         );
         assert_eq!(u32::from(SdoAbortCode::Unknown(7)), 7);
+        // The first and the last of the table, by value.
+        assert_eq!(u32::from(SdoAbortCode::ToggleBit), 0x0503_0000);
+        assert_eq!(u32::from(*SdoAbortCode::ALL.last().unwrap()), 0x0800_0023);
         let mut s: heapless::String<96> = heapless::String::new();
         write!(s, "{}", SdoAbortCode::ObjectNotFound).unwrap();
         assert_eq!(
