@@ -35,6 +35,16 @@ impl<const T: usize> MailboxServer<T> {
         Self::default()
     }
 
+    /// Back to the initial state in place: what [`MailboxServer::new`]
+    /// gives, without a new server (about 0.7 KiB of buffers on a
+    /// microcontroller) built on the stack and copied over.
+    pub fn reset(&mut self) {
+        self.coe.reset();
+        self.foe.abort();
+        self.last_request = None;
+        self.tx_counter = 0;
+    }
+
     fn next_counter(&mut self) -> u8 {
         self.tx_counter = next_counter(self.tx_counter);
         self.tx_counter

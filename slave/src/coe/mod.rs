@@ -114,6 +114,13 @@ impl<const T: usize> CoeServer<T> {
         }
     }
 
+    /// Drops every transfer in progress, in place: what [`CoeServer::new`]
+    /// gives, without building a new server (its buffers) on the stack.
+    pub fn reset(&mut self) {
+        self.sdo.reset();
+        self.info.reset();
+    }
+
     /// Whether an SDO Information response is in progress (more fragments
     /// to send).
     pub fn has_fragment(&self) -> bool {

@@ -94,6 +94,12 @@ impl<const T: usize> Default for SdoServer<T> {
 }
 
 impl<const T: usize> SdoServer<T> {
+    /// Drops a transfer in progress, in place (the buffer's stale bytes
+    /// are never read: a new transfer sets its own length).
+    pub fn reset(&mut self) {
+        self.state = SdoState::Idle;
+    }
+
     /// The transfer state.
     pub fn state(&self) -> SdoState {
         self.state

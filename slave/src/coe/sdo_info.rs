@@ -350,6 +350,12 @@ impl SdoInfoServer {
         }
     }
 
+    /// Drops a response in progress, in place (no new server built on
+    /// the stack; the buffer's stale bytes are never sent).
+    pub fn reset(&mut self) {
+        self.state = InfoState::Idle;
+    }
+
     /// The transfer state.
     pub fn state(&self) -> InfoState {
         self.state

@@ -263,7 +263,7 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         self.al = AlStatus::INIT;
         self.outputs = ProcessImage::default();
         self.inputs = ProcessImage::default();
-        self.mailbox = MailboxServer::new();
+        self.mailbox.reset();
         self.pending = None;
         self.last_sent = None;
         self.emergencies = Emergencies::default();
@@ -582,7 +582,7 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         if matches!(state, AlState::Init) {
             self.pending = None;
             self.last_sent = None;
-            self.mailbox = MailboxServer::new();
+            self.mailbox.reset();
         }
         self.al = AlStatus {
             state,

@@ -290,7 +290,7 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         if matches!(after.state, AlState::Init | AlState::Boot) && before.state != after.state {
             self.pending = None;
             self.last_sent = None;
-            self.mailbox = MailboxServer::new();
+            self.mailbox.reset();
         }
         self.al = after;
         self.esc.write_u16(reg::AL_STATUS_CODE, after.code.code())?;
