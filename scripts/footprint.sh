@@ -53,7 +53,7 @@ DEVICES=(base io8 pam io8-et1100 io8-lan9252)
 # driver of drivers/esc-spi instead of the board's C spi_read/spi_write;
 # "io8-lan9252" the same with the LAN9252 driver).
 declare -A FEATURES=([base]="" [io8]="io8" [pam]="pam" [io8-et1100]="io8 spi-et1100"
-    [io8-lan9252]="io8 spi-lan9252")
+    [io8-lan9252]="io8 spi-lan9252" [io8-min]="io8-minimal")
 # Builds measured for size only: the harness speaks the ET1100's SPI byte
 # protocol, not the LAN9252's, so running this one would test nothing.
 declare -A SIZE_ONLY=([io8-lan9252]=1)
@@ -247,7 +247,9 @@ done
 # ---------------------------------------------------------------------
 # Cortex-M4: the same crate, features and profile for thumbv7em-none-eabihf.
 ARM_TARGET=thumbv7em-none-eabihf
-ARM_DEVICES=(base io8 pam io8-lan9252)
+# io8-min: the IO8 whose description offers neither SDO Information nor
+# complete access (feature coe-minimal of io8-example): what the two cost.
+ARM_DEVICES=(base io8 pam io8-lan9252 io8-min)
 SYSROOT=$(rustc --print sysroot)
 echo
 if [ ! -d "$SYSROOT/lib/rustlib/$ARM_TARGET/lib" ]; then
@@ -286,18 +288,20 @@ for dev in "${ARM_DEVICES[@]}"; do
 done
 echo
 echo "== Cortex-M4 sizes (bytes): firmware = device ELF - baseline (stubs + empty no_std staticlib)"
-echo "+ arm-none-eabi-size -A -d $OUT/fw-{base,io8,pam,io8-lan9252}-m4.elf"
+echo "+ arm-none-eabi-size -A -d $OUT/fw-{base,io8,pam,io8-lan9252,io8-min}-m4.elf"
 printf '    %-22s %8s %8s %6s %7s %12s %12s\n' "" text rodata data bss "flash total" "static RAM"
 mrow() { # label text ro data bss
     printf '    %-22s %8d %8d %6d %7d %12d %12d\n' "$1" "$2" "$3" "$4" "$5" $(($2 + $3 + $4)) $(($4 + $5))
 }
 mrow "stubs alone (base)" "${MTEXT[base]}" "${MRO[base]}" "${MDATA[base]}" "${MBSS[base]}"
-for dev in io8 pam io8-lan9252; do
+for dev in io8 pam io8-lan9252 io8-min; do
     mrow "$dev firmware" $((MTEXT[$dev] - MTEXT[base])) $((MRO[$dev] - MRO[base])) \
         $((MDATA[$dev] - MDATA[base])) $((MBSS[$dev] - MBSS[base]))
 done
 mrow "LAN9252 driver added" $((MTEXT[io8-lan9252] - MTEXT[io8])) $((MRO[io8-lan9252] - MRO[io8])) \
     $((MDATA[io8-lan9252] - MDATA[io8])) $((MBSS[io8-lan9252] - MBSS[io8]))
+mrow "SDO Info + CA cost" $((MTEXT[io8] - MTEXT[io8-min])) $((MRO[io8] - MRO[io8-min])) \
+    $((MDATA[io8] - MDATA[io8-min])) $((MBSS[io8] - MBSS[io8-min]))
 cat <<'EOF2'
     text: Thumb-2 code. rodata: constants, the object dictionary's tables
     (no .data.rel.ro without dynamic relocations) and .ARM.exidx. data/bss
@@ -310,14 +314,14 @@ echo
 echo "== Cortex-M4 stack of one fw_poll (static estimate: call graph of the Thumb-2 disassembly;"
 echo "   frames from push / vpush / stmdb / sub sp; bl calls, b tail calls; indirect calls listed)"
 declare -A MSTACK
-for dev in io8 pam; do
+for dev in io8 pam io8-min; do
     echo "  $dev:"
     run "$STACK_TOOL" --thumb "$OUT/fw-$dev-m4.elf" fw_poll fw_init | tee "$OUT/stack-$dev-m4.txt"
     MSTACK[$dev]=$(awk '/^  fw_poll: [0-9]+ bytes on the worst path/ { print $2 }' "$OUT/stack-$dev-m4.txt")
 done
 echo
 echo "== Summary (bytes; firmware minus baseline; Cortex-M4, thumbv7em-none-eabihf)"
-for dev in io8 pam; do
+for dev in io8 pam io8-min; do
     printf '    %-4s text %6d  rodata %5d  data %4d  bss %5d  flash %6d  static RAM %5d  poll stack (static) %6s\n' \
         "$dev" $((MTEXT[$dev] - MTEXT[base])) $((MRO[$dev] - MRO[base])) $((MDATA[$dev] - MDATA[base])) \
         $((MBSS[$dev] - MBSS[base])) \

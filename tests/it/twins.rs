@@ -595,14 +595,19 @@ fn a_twin_whose_esi_offers_no_sdo_information_nor_complete_access_refuses_both()
     // offer instead of serving it anyway.
     let xml =
         String::from_utf8(ecat_esi::generate(&io8_example::DEVICE).expect("ESI")).expect("utf-8");
-    let edited = xml
-        .replacen("SdoInfo=\"1\"", "SdoInfo=\"0\"", 1)
-        .replacen("CompleteAccess=\"1\"", "CompleteAccess=\"0\"", 1);
+    let edited = xml.replacen("SdoInfo=\"1\"", "SdoInfo=\"0\"", 1).replacen(
+        "CompleteAccess=\"1\"",
+        "CompleteAccess=\"0\"",
+        1,
+    );
     assert_ne!(edited, xml, "the ESI offered both");
     let file = EsiFile::parse(&edited).expect("parses");
     let dev = file.device(None, None).expect("device");
     let twin = ecat_twin::twin(dev, None, InputRule::Hold).expect("twin");
-    let general = inspect(twin.esc().sii()).expect("SII").general.expect("General");
+    let general = inspect(twin.esc().sii())
+        .expect("SII")
+        .general
+        .expect("General");
     assert_eq!(general.0.coe_details & 0x22, 0, "SII: no SDO Info, no CA");
     smol::block_on(async {
         use master_test::mailbox::{ClientError, MailboxClient, MailboxGeometry};

@@ -159,7 +159,13 @@ mod tests {
             self.sdo_info
         }
 
-        fn sdo_upload(&mut self, _: u16, _: u8, _: bool, _: &mut [u8]) -> Result<usize, SdoAbortCode> {
+        fn sdo_upload(
+            &mut self,
+            _: u16,
+            _: u8,
+            _: bool,
+            _: &mut [u8],
+        ) -> Result<usize, SdoAbortCode> {
             Err(SdoAbortCode::ObjectNotFound)
         }
 
