@@ -4,7 +4,7 @@
 
 use ecat_sim::SoftSlave;
 use ecat_slave::al::{AlState, AlStatus, AlStatusCode};
-use ecat_slave::device::{Application, Download, SM_CONTROL, Write};
+use ecat_slave::device::{Application, Changes, Download, SM_CONTROL, Write};
 use ecat_slave::esc::registers as reg;
 use ecat_slave::od::ObjectStore;
 use ecat_slave::pdo::Direction;
@@ -277,13 +277,14 @@ fn writing_save_to_0x1010_stores_the_parameters_for_the_next_power_on() {
     let mut m = Master::new();
     let save = |m: &mut Master, value: i64| {
         let (app, od) = m.slave.slave_mut().app_and_od();
+        let pairs = [(1, value)];
         let download = Download {
             index: STORE_PARAMETERS,
             sub: 1,
             complete_access: false,
             state: AlState::PreOp,
             now_ns: 0,
-            changes: &[(1, value)],
+            changes: Changes::list(&pairs),
         };
         app.sdo_download(od, &download)
     };
@@ -309,7 +310,7 @@ fn other_writes_are_stored_as_the_core_checked_them() {
         complete_access: false,
         state: AlState::Op,
         now_ns: 0,
-        changes: &[(1, 20)],
+        changes: Changes::list(&[(1, 20)]),
     };
     assert_eq!(app.sdo_download(&mut store, &download), Ok(Write::Store));
 }

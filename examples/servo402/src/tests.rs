@@ -7,7 +7,7 @@ use ecat_cia402::objects::{RX_PDO_BYTES, TX_PDO_BYTES, index};
 use ecat_cia402::state::control;
 use ecat_sim::SoftSlave;
 use ecat_slave::al::{AlState, AlStatus};
-use ecat_slave::device::{Application, Download, SM_CONTROL, Write};
+use ecat_slave::device::{Application, Changes, Download, SM_CONTROL, Write};
 use ecat_slave::esc::registers as reg;
 use ecat_slave::pdo::Direction;
 use ecat_slave::sii::SiiReader;
@@ -197,7 +197,7 @@ impl<A: Application> Master<A> {
             complete_access: false,
             state,
             now_ns: 0,
-            changes: &changes,
+            changes: Changes::list(&changes),
         };
         let r = app.sdo_download(od, &d);
         if r == Ok(Write::Store) {

@@ -365,7 +365,7 @@ impl<A: Axis> Cia402Axis<A> {
     /// docs/SAFETY.md S4).
     pub fn check_download(&self, d: &Download<'_>) -> Result<(), SdoAbortCode> {
         let i = d.index.wrapping_sub(self.offset);
-        for &(_, v) in d.changes {
+        for (_, v) in d.changes.iter() {
             match i {
                 index::MODES_OF_OPERATION if v != 0 && Mode::from_code(v).is_none() => {
                     return Err(SdoAbortCode::ValueRange);
@@ -389,6 +389,7 @@ mod tests {
     use crate::objects::{self, join, object_count};
     use crate::state::PowerState;
     use ecat_slave::AlState;
+    use ecat_slave::device::Changes;
     use ecat_slave::od::build::var;
     use ecat_slave::od::{DataType, Object, ObjectCode, ObjectStore, PdoMapping};
 
@@ -445,7 +446,7 @@ mod tests {
             complete_access: false,
             state: AlState::PreOp,
             now_ns: 0,
-            changes,
+            changes: Changes::list(changes),
         }
     }
 

@@ -68,7 +68,7 @@ mod schedule;
 mod sii_image;
 mod slave;
 
-pub use application::{Application, Download, StateChange, Tick, Write};
+pub use application::{Application, Changes, ChangesIter, Download, StateChange, Tick, Write};
 pub use description::{
     CoeServices, DeviceDescription, DeviceNames, EscConfig, FoeSecurity, Identity, MAX_MAILBOX,
     MailboxConfig, MemoryLayout, PdoSet, ProcessData,

@@ -18,9 +18,6 @@ use crate::wire::coe::SdoAbortCode;
 /// Largest complete-access image handled.
 pub const MAX_COMPLETE: usize = 256;
 
-/// Most entries one complete download can change.
-pub const MAX_ENTRIES: usize = 64;
-
 fn object(od: &Od, index: u16) -> Result<(usize, &'static Object), SdoAbortCode> {
     let (pos, obj) = od
         .dictionary()
@@ -102,25 +99,84 @@ pub fn upload(store: &Od, index: u16, sub: u8, out: &mut [u8]) -> Result<usize, 
     Ok(n)
 }
 
-/// Values a complete download would store: `(subindex, value)` pairs,
-/// checked but not yet applied (all or nothing).
-pub type Changes = heapless::Vec<(u8, i64), MAX_ENTRIES>;
+/// The values a checked complete download stores: `(subindex, value)`
+/// of every writable entry, in subindex order, decoded from the download's
+/// image on each walk. No list is kept: on a microcontroller a list of
+/// (u8, i64) pairs was the deepest stack frame of a poll (1 KiB), and the
+/// decoding is a few shifts per entry. Read-only entries (checked equal
+/// to what they hold) and gaps are left out.
+#[derive(Debug, Clone, Copy)]
+pub struct CompleteChanges<'a> {
+    obj: &'static Object,
+    with_sub0: bool,
+    elements: Option<u8>,
+    data: &'a [u8],
+}
+
+impl<'a> CompleteChanges<'a> {
+    /// The `(subindex, value)` pairs, in subindex order.
+    pub fn iter(&self) -> CompleteIter<'a> {
+        CompleteIter {
+            entries: self.obj.entries.iter(),
+            with_sub0: self.with_sub0,
+            elements: self.elements,
+            data: self.data,
+            bit: 0,
+        }
+    }
+}
+
+/// The walk of [`CompleteChanges::iter`].
+#[derive(Debug, Clone)]
+pub struct CompleteIter<'a> {
+    entries: core::slice::Iter<'static, Entry>,
+    with_sub0: bool,
+    elements: Option<u8>,
+    data: &'a [u8],
+    bit: u16,
+}
+
+impl Iterator for CompleteIter<'_> {
+    type Item = (u8, i64);
+
+    fn next(&mut self) -> Option<(u8, i64)> {
+        let start = if self.with_sub0 { 0 } else { 1 };
+        for e in self.entries.by_ref() {
+            if e.sub < start || self.elements.is_some_and(|n| e.sub > n) {
+                continue;
+            }
+            let at = self.bit;
+            self.bit = self.bit.saturating_add(bit_size(e));
+            if e.gap || e.access == Access::Ro || e.data_type.is_bytes() {
+                continue;
+            }
+            let raw = read_bits(self.data, at, value_bits(e));
+            return Some((e.sub, from_raw(e, raw)));
+        }
+        None
+    }
+}
+
+/// Bits of an entry's value in the image (subindex 0 is a UINT8 in 16).
+fn value_bits(e: &Entry) -> u8 {
+    if e.sub == 0 {
+        8
+    } else {
+        e.bit_len.min(64) as u8
+    }
+}
 
 /// Checks a complete download of `data` into `index` in AL state `state`
-/// and puts the changes to apply into `changes` (cleared first; an out
-/// parameter, so the 1 KiB list is not copied out of a `Result` on a
-/// microcontroller's stack). Read-only entries must be written with
-/// their current value (0x06010002 otherwise); arrays take their element
-/// count from the data.
-pub fn check_download(
+/// and returns the changes it makes (all or nothing: nothing is applied
+/// here). Read-only entries must be written with their current value
+/// (0x06010002 otherwise); arrays take their element count from the data.
+pub fn check_download<'a>(
     store: &Od,
     index: u16,
     sub: u8,
-    data: &[u8],
+    data: &'a [u8],
     state: AlState,
-    changes: &mut Changes,
-) -> Result<(), SdoAbortCode> {
-    changes.clear();
+) -> Result<CompleteChanges<'a>, SdoAbortCode> {
     let (pos, obj) = object(store, index)?;
     if sub > 1 {
         return Err(SdoAbortCode::CompleteAccessNotSupported);
@@ -150,15 +206,10 @@ pub fn check_download(
     let mut bit = 0u16;
     for (flat, e) in members(store, pos, obj, with_sub0, elements) {
         let size = bit_size(e);
-        let value_bits = if e.sub == 0 {
-            8
-        } else {
-            e.bit_len.min(64) as u8
-        };
         if usize::from(bit) + usize::from(size) > data.len() * 8 {
             return Err(SdoAbortCode::LengthTooLow);
         }
-        let raw = read_bits(data, bit, value_bits);
+        let raw = read_bits(data, bit, value_bits(e));
         bit += size;
         if e.gap {
             continue;
@@ -177,12 +228,16 @@ pub fn check_download(
         }
         let n = byte_len(e);
         let bytes = raw.to_le_bytes();
-        let value = Od::check(e, bytes.get(..n).unwrap_or(&[]), state)?;
-        changes
-            .push((e.sub, value))
-            .map_err(|_| SdoAbortCode::ObjectTooLong)?;
+        // The value the walk of `CompleteChanges` decodes again (the same
+        // `from_raw` of the same bits).
+        Od::check(e, bytes.get(..n).unwrap_or(&[]), state)?;
     }
-    Ok(())
+    Ok(CompleteChanges {
+        obj,
+        with_sub0,
+        elements,
+        data,
+    })
 }
 
 #[cfg(test)]
@@ -190,16 +245,15 @@ pub fn check_download(
 mod tests {
     use super::*;
 
-    /// [`check_download`] returning its changes.
+    /// [`check_download`] returning its changes as a list.
     fn check(
         store: &Od,
         index: u16,
         sub: u8,
         data: &[u8],
         state: AlState,
-    ) -> Result<Changes, SdoAbortCode> {
-        let mut changes = Changes::new();
-        check_download(store, index, sub, data, state, &mut changes).map(|()| changes)
+    ) -> Result<Vec<(u8, i64)>, SdoAbortCode> {
+        check_download(store, index, sub, data, state).map(|c| c.iter().collect())
     }
     use crate::testing::store;
 
@@ -263,6 +317,63 @@ mod tests {
             check(&s, 0x8000, 0, &out[..n], AlState::PreOp),
             Err(SdoAbortCode::ReadOnly),
             "a changed RO member"
+        );
+    }
+
+    mod wide {
+        use crate::od::build::{setting, sub_name, sub0};
+        use crate::od::{DataType, Entry, Limits, Object, ObjectCode};
+
+        /// Subindex 0 (RW: an array's element count) and 100 UINT8
+        /// elements.
+        const fn elements() -> [Entry; 101] {
+            const FIRST: Entry = sub0(100);
+            let mut all = [FIRST; 101];
+            all[0].access = crate::od::Access::Rw;
+            let mut i = 1;
+            while i < 101 {
+                all[i] = setting(
+                    i as u8,
+                    sub_name(i as u8),
+                    DataType::UInt8,
+                    0,
+                    &Limits::NONE,
+                );
+                i += 1;
+            }
+            all
+        }
+
+        const ENTRIES_100: [Entry; 101] = elements();
+
+        pub const OBJECTS: &[Object] = &[Object {
+            index: 0x8000,
+            name: "Table",
+            code: ObjectCode::Array,
+            entries: &ENTRIES_100,
+        }];
+
+        crate::dictionary!(pub DICT, pub ENTRIES = OBJECTS, &[]);
+    }
+
+    #[test]
+    fn a_complete_download_of_100_elements_changes_every_one_in_order() {
+        // A list of changes held 64 pairs: this download was refused with
+        // 0x06010005 before the changes were decoded from the image.
+        let s = crate::od::ObjectStore::<[i64; wide::ENTRIES]>::new(&wide::DICT);
+        let mut img = [0u8; 102];
+        img[0] = 100;
+        for (i, b) in img[2..].iter_mut().enumerate() {
+            *b = i as u8 + 1;
+        }
+        let c = check(&s, 0x8000, 0, &img, AlState::PreOp).unwrap();
+        assert_eq!(c.len(), 101);
+        assert_eq!(c[0], (0, 100));
+        assert!(
+            c[1..]
+                .iter()
+                .enumerate()
+                .all(|(i, &(sub, v))| { usize::from(sub) == i + 1 && v == i as i64 + 1 })
         );
     }
 

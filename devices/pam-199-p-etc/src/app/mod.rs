@@ -309,7 +309,7 @@ impl<P: PowerStage + Send + 'static, N: NvStorage + Send + 'static> Application 
         // In OP the cyclic outputs own the mapped output objects: an SDO
         // write there would drive the valve until the next cycle
         // overwrote it (docs/SAFETY.md P2, found by invariant I1).
-        if d.state == AlState::Op && d.changes.iter().any(|(sub, _)| rx_mapped(od, index, *sub)) {
+        if d.state == AlState::Op && d.changes.iter().any(|(sub, _)| rx_mapped(od, index, sub)) {
             return Err(SdoAbortCode::InvalidState);
         }
         // 0xF801: PASSWORD unlocks (or with 0 locks) the manufacturer

@@ -2,7 +2,7 @@
 
 use ecat_slave::al::AlState;
 use ecat_slave::od::Od;
-use ecat_slave::od::complete::{Changes, check_download, upload};
+use ecat_slave::od::complete::{check_download, upload};
 use ecat_slave::wire::coe::SdoAbortCode;
 
 /// [`check_download`] returning its `(subindex, value)` changes.
@@ -12,9 +12,8 @@ fn check(
     sub: u8,
     data: &[u8],
     state: AlState,
-) -> Result<Changes, SdoAbortCode> {
-    let mut changes = Changes::new();
-    check_download(s, index, sub, data, state, &mut changes).map(|()| changes)
+) -> Result<Vec<(u8, i64)>, SdoAbortCode> {
+    check_download(s, index, sub, data, state).map(|c| c.iter().collect())
 }
 
 #[test]

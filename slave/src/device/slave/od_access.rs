@@ -3,6 +3,7 @@
 //! dependent access) and the application's write hooks.
 
 use super::*;
+use crate::device::Changes;
 
 /// The object dictionary as the CoE server sees it: the store, the core's
 /// rules for the PDO assignment, and the application's hooks.
@@ -26,19 +27,19 @@ pub(super) fn object_view(desc: &'static DeviceDescription, od: &Od) -> ObjectVi
 impl<A: Application> OdAccess<'_, A> {
     /// A configured module list (0xF030) holds idents of module types the
     /// device knows (0 for an empty slot), at most one per slot.
-    fn check_module_list(&self, index: u16, changes: &[(u8, i64)]) -> Result<(), SdoAbortCode> {
+    fn check_module_list(&self, index: u16, changes: Changes<'_>) -> Result<(), SdoAbortCode> {
         let Some(m) = self.app.description().modules else {
             return Ok(());
         };
         if index != CONFIGURED_MODULES {
             return Ok(());
         }
-        for (s, v) in changes {
-            if *s == 0 {
-                if *v > i64::from(m.slots) {
+        for (s, v) in changes.iter() {
+            if s == 0 {
+                if v > i64::from(m.slots) {
                     return Err(SdoAbortCode::ValueTooHigh);
                 }
-            } else if *v != 0 && m.module(*v as u32).is_none() {
+            } else if v != 0 && m.module(v as u32).is_none() {
                 return Err(SdoAbortCode::ValueRange);
             }
         }
@@ -47,19 +48,13 @@ impl<A: Application> OdAccess<'_, A> {
 
     /// The core's rules for 0x1C12/0x1C13: only PDOs of the assignment's
     /// direction that exist, no more than its capacity, all of one PDO set.
-    fn check_assignment(&self, index: u16, changes: &[(u8, i64)]) -> Result<(), SdoAbortCode> {
+    fn check_assignment(&self, index: u16, changes: Changes<'_>) -> Result<(), SdoAbortCode> {
         let dir = match index {
             0x1C12 => Direction::Outputs,
             0x1C13 => Direction::Inputs,
             _ => return Ok(()),
         };
-        let new = |s: u8| -> Option<i64> {
-            changes
-                .iter()
-                .find(|(x, _)| *x == s)
-                .map(|(_, v)| *v)
-                .or_else(|| self.od.get(index, s))
-        };
+        let new = |s: u8| -> Option<i64> { changes.value(s).or_else(|| self.od.get(index, s)) };
         let dict = self.od.dictionary();
         let cap = dict.find(index).map_or(0, |(_, o)| o.max_sub());
         let count = new(0).unwrap_or(0);
@@ -68,10 +63,9 @@ impl<A: Application> OdAccess<'_, A> {
         }
         let (lo, hi) = dir.pdo_range();
         // Every written PDO must be one of the direction's mapping objects.
-        for (s, v) in changes.iter().filter(|(s, _)| *s != 0) {
-            let pdo = *v as u16;
+        for (_, v) in changes.iter().filter(|(s, _)| *s != 0) {
+            let pdo = v as u16;
             if pdo < lo || pdo > hi || self.view().find(pdo).is_none() {
-                let _ = s;
                 return Err(SdoAbortCode::ValueRange);
             }
         }
@@ -107,7 +101,7 @@ impl<A: Application> OdAccess<'_, A> {
         &self,
         index: u16,
         complete_access: bool,
-        changes: &[(u8, i64)],
+        changes: Changes<'_>,
     ) -> Result<(), SdoAbortCode> {
         let dir = if (0x1600..=0x17FF).contains(&index) {
             Direction::Outputs
@@ -130,13 +124,11 @@ impl<A: Application> OdAccess<'_, A> {
         }
         let new = |s: u8| -> i64 {
             changes
-                .iter()
-                .find(|(x, _)| *x == s)
-                .map(|(_, v)| *v)
+                .value(s)
                 .or_else(|| self.od.get(index, s))
                 .unwrap_or(0)
         };
-        let entries_written = changes.iter().any(|(s, _)| *s != 0);
+        let entries_written = changes.iter().any(|(s, _)| s != 0);
         if entries_written && !complete_access && self.od.get(index, 0).unwrap_or(0) != 0 {
             return Err(SdoAbortCode::SubindexCannotBeWritten);
         }
@@ -146,17 +138,17 @@ impl<A: Application> OdAccess<'_, A> {
         let unchanged = |s: u8, v: i64| self.od.get(index, s) == Some(v);
         for (s, v) in changes
             .iter()
-            .filter(|(s, v)| *s != 0 && *v != 0 && !unchanged(*s, *v))
+            .filter(|&(s, v)| s != 0 && v != 0 && !unchanged(s, v))
         {
-            if !(complete_access && i64::from(*s) > new(0)) {
-                crate::pdo::check_mapping_value(dict, dir, *v as u32)?;
+            if !(complete_access && i64::from(s) > new(0)) {
+                crate::pdo::check_mapping_value(dict, dir, v as u32)?;
             }
         }
         let count = new(0);
         if count > i64::from(o.max_sub()) {
             return Err(SdoAbortCode::ValueTooHigh);
         }
-        if changes.iter().any(|(s, _)| *s == 0) && count > 0 {
+        if changes.iter().any(|(s, _)| s == 0) && count > 0 {
             let mut bits = 0u32;
             for s in 1..=count.clamp(0, 255) as u8 {
                 let m = new(s) as u32;
@@ -179,7 +171,7 @@ impl<A: Application> OdAccess<'_, A> {
         index: u16,
         sub: u8,
         complete_access: bool,
-        changes: &[(u8, i64)],
+        changes: Changes<'_>,
     ) -> Result<(), SdoAbortCode> {
         self.check_mapping(index, complete_access, changes)?;
         self.check_assignment(index, changes)?;
@@ -254,14 +246,13 @@ impl<A: Application> ObjectAccess for OdAccess<'_, A> {
             if !self.complete_access() {
                 return Err(SdoAbortCode::UnsupportedAccess);
             }
-            // (subindex, value) pairs, built once: this frame is the
-            // deepest of a poll on a microcontroller.
-            let mut changes = complete::Changes::new();
-            complete::check_download(self.od, index, sub, data, self.state, &mut changes)?;
-            return self.hand_over(index, sub, true, &changes);
+            // Checked here; the (subindex, value) pairs are decoded from
+            // `data` wherever they are walked (no list on the stack).
+            let changes = complete::check_download(self.od, index, sub, data, self.state)?;
+            return self.hand_over(index, sub, true, Changes::complete(changes));
         }
         let (_, entry) = self.od.lookup(index, sub)?;
         let value = Od::check(entry, data, self.state)?;
-        self.hand_over(index, sub, false, &[(sub, value)])
+        self.hand_over(index, sub, false, Changes::list(&[(sub, value)]))
     }
 }
