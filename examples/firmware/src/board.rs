@@ -160,14 +160,15 @@ fn store_rc(rc: i32) -> Result<(), StoreError> {
 
 impl FlashStore {
     /// Both boot-state copies as stored.
-    fn state_copies() -> Result<[[u8; STATE_RECORD_LEN]; 2], StoreError> {
-        let mut copies = [[0u8; STATE_RECORD_LEN]; 2];
+    /// (Into the caller's buffer: returned in a `Result`, the 192 bytes
+    /// were copied once more on the stack.)
+    fn state_copies(copies: &mut [[u8; STATE_RECORD_LEN]; 2]) -> Result<(), StoreError> {
         for (n, copy) in (0u8..).zip(copies.iter_mut()) {
             // SAFETY (FFI call with a pointer): `copy` is a valid, writable
             // array of STATE_RECORD_LEN bytes during the call.
             store_rc(unsafe { ffi::flash_state_read(n, copy.as_mut_ptr(), copy.len()) })?;
         }
-        Ok(copies)
+        Ok(())
     }
 }
 
@@ -204,15 +205,19 @@ impl ImageStore for FlashStore {
     }
 
     fn read_state(&self) -> Result<BootState, StoreError> {
-        let [a, b] = Self::state_copies()?;
-        BootState::read_bank([&a, &b])
+        let mut copies = [[0u8; STATE_RECORD_LEN]; 2];
+        Self::state_copies(&mut copies)?;
+        let [a, b] = &copies;
+        BootState::read_bank([a, b])
             .map(|(_, s)| s)
             .ok_or(StoreError::NoState)
     }
 
     fn write_state(&mut self, state: &BootState) -> Result<(), StoreError> {
-        let [a, b] = Self::state_copies()?;
-        let (index, record) = BootState::bank_write([&a, &b], state);
+        let mut copies = [[0u8; STATE_RECORD_LEN]; 2];
+        Self::state_copies(&mut copies)?;
+        let [a, b] = &copies;
+        let (index, record) = BootState::bank_write([a, b], state);
         let copy = u8::try_from(index).map_err(|_| StoreError::Io)?;
         // SAFETY (FFI call with a pointer): `record` is a valid array of
         // STATE_RECORD_LEN bytes during the call; the C side only reads it.

@@ -400,9 +400,20 @@ impl BootState {
 
     /// The newest valid record of two copies, with its copy index.
     pub fn read_bank(copies: [&[u8]; 2]) -> Option<(usize, Self)> {
-        let [a, b] = copies.map(Self::decode);
+        let (index, _) = Self::newest(copies)?;
+        Some((index, Self::decode(copies.get(index)?)?))
+    }
+
+    /// The copy index and sequence number of the newest valid record of
+    /// two copies. One decoded record at a time is held (on a
+    /// microcontroller two side by side made this the deepest frame of a
+    /// state write).
+    fn newest(copies: [&[u8]; 2]) -> Option<(usize, u32)> {
+        let [a, b] = copies;
+        let a = Self::decode(a).map(|s| s.sequence);
+        let b = Self::decode(b).map(|s| s.sequence);
         match (a, b) {
-            (Some(a), Some(b)) if newer(b.sequence, a.sequence) => Some((1, b)),
+            (Some(a), Some(b)) if newer(b, a) => Some((1, b)),
             (Some(a), _) => Some((0, a)),
             (None, Some(b)) => Some((1, b)),
             (None, None) => None,
@@ -413,8 +424,8 @@ impl BootState {
     /// (sequence one above the newest valid copy), so that a torn write
     /// leaves the newest valid copy intact.
     pub fn bank_write(copies: [&[u8]; 2], state: &Self) -> (usize, [u8; STATE_RECORD_LEN]) {
-        let (index, sequence) = match Self::read_bank(copies) {
-            Some((newest, current)) => (1 - newest, current.sequence.wrapping_add(1)),
+        let (index, sequence) = match Self::newest(copies) {
+            Some((newest, sequence)) => (1 - newest, sequence.wrapping_add(1)),
             None => (0, 1),
         };
         let record = Self { sequence, ..*state }.encode();
