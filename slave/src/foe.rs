@@ -341,21 +341,24 @@ impl FoeServer {
                 Err(e) => return self.fail_store(out, e),
             }
         };
-        let validator =
-            EfwValidator::new(ctx.identity, ctx.store.slot_capacity()).with_rollback_floor(floor);
         let slot = match begin_download(ctx.store) {
             Ok(slot) => slot,
             Err(e) => return self.fail_store(out, e),
         };
+        // The validator is set up where it lives (no copies of it on the
+        // stack).
         self.state = FoeState::Receiving {
             slot,
             next_packet: 1,
             segment: out.len().saturating_sub(HEADER_LEN),
-            validator: match ctx.security.public_key {
-                Some(key) => validator.with_public_key(key),
-                None => validator,
-            },
+            validator: EfwValidator::new(ctx.identity, ctx.store.slot_capacity()),
         };
+        if let FoeState::Receiving { validator, .. } = &mut self.state {
+            validator.set_rollback_floor(floor);
+            if let Some(key) = ctx.security.public_key {
+                validator.set_public_key(key);
+            }
+        }
         emit(out, FoeRepr::Ack { packet: 0 })
     }
 
@@ -490,14 +493,19 @@ impl FoeServer {
         if !name.eq_ignore_ascii_case(INFO_FILE_NAME) {
             return self.fail(out, FoeErrorCode::NotFound, "file not found");
         }
-        let file = info_file(ctx);
         self.state = FoeState::Sending {
-            file,
+            file: heapless::Vec::new(),
             packet: 0,
             start: 0,
             len: 0,
             last: false,
         };
+        // Written where it is sent from (a file returned by value was
+        // copied twice on the stack).
+        if let FoeState::Sending { file, .. } = &mut self.state {
+            let text = info_file(ctx);
+            let _ = file.extend_from_slice(text.as_bytes());
+        }
         self.send_next(out)
     }
 
@@ -636,7 +644,7 @@ fn progress(validator: &EfwValidator) -> (u16, u16) {
 }
 
 /// The info file: identity and running version, one `key=value` per line.
-fn info_file(ctx: &FoeContext<'_>) -> heapless::Vec<u8, INFO_FILE_CAPACITY> {
+fn info_file(ctx: &FoeContext<'_>) -> Text<INFO_FILE_CAPACITY> {
     let mut text: Text<INFO_FILE_CAPACITY> = Text::new();
     let id = &ctx.identity;
     for (key, value) in [
@@ -650,7 +658,7 @@ fn info_file(ctx: &FoeContext<'_>) -> heapless::Vec<u8, INFO_FILE_CAPACITY> {
     text.push_str("\nversion=")
         .push_str(ctx.version)
         .push_str("\n");
-    heapless::Vec::from_slice(text.as_bytes()).unwrap_or_default()
+    text
 }
 
 /// Why a DATA packet of a download is not taken.

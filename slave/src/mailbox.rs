@@ -14,6 +14,19 @@ use crate::wire::mailbox::{
     MailboxType, next_counter,
 };
 
+/// What [`MailboxServer::handle`] did with a request.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Handled {
+    /// The request repeats the last one (same counter, same content: the
+    /// master sent it again); it was not executed again and the reply
+    /// buffer was not touched.
+    Repeated,
+    /// The request was executed: the reply's length in the reply buffer,
+    /// or `None` when nothing is to be sent (an SDO abort from the
+    /// master).
+    Done(Option<usize>),
+}
+
 /// The mailbox server of one slave (`T`: the SDO transfer buffer, see
 /// [`crate::coe::sdo::SdoServer`]).
 #[derive(Debug, Default)]
@@ -51,9 +64,32 @@ impl<const T: usize> MailboxServer<T> {
     }
 
     /// Handles one request (the whole SM0 buffer) and writes the reply into
-    /// `out` (the SM1 buffer size). Returns the reply length, or `None` when
-    /// nothing is to be sent.
+    /// `out` (the SM1 buffer size), which it clears first, unless the
+    /// request repeats the last one ([`Handled::Repeated`]: `out` is left
+    /// as it is, so it may hold the last reply for the repeat service).
     pub fn handle(
+        &mut self,
+        request: &[u8],
+        out: &mut [u8],
+        od: &mut impl ObjectAccess,
+        foe: Option<&mut FoeContext<'_>>,
+    ) -> Handled {
+        if let Ok(mbx) = Mailbox::new_checked(request) {
+            let counter = mbx.counter();
+            let digest =
+                crate::firmware::crc32(mbx.payload()) ^ u32::from(u8::from(mbx.mailbox_type()));
+            if counter != 0 && self.last_request == Some((counter, digest)) {
+                // A repeated mailbox (same counter, same content): the
+                // master sent it again; it is not executed twice.
+                return Handled::Repeated;
+            }
+            self.last_request = (counter != 0).then_some((counter, digest));
+        }
+        out.fill(0);
+        Handled::Done(self.execute(request, out, od, foe))
+    }
+
+    fn execute(
         &mut self,
         request: &[u8],
         out: &mut [u8],
@@ -67,15 +103,6 @@ impl<const T: usize> MailboxServer<T> {
             }
             Err(_) => return self.error_reply(out, MailboxErrorCode::InvalidSize),
         };
-        let counter = mbx.counter();
-        let digest =
-            crate::firmware::crc32(mbx.payload()) ^ u32::from(u8::from(mbx.mailbox_type()));
-        if counter != 0 && self.last_request == Some((counter, digest)) {
-            // A repeated mailbox (same counter, same content): the master
-            // sent it again; it is not executed twice.
-            return None;
-        }
-        self.last_request = (counter != 0).then_some((counter, digest));
         let header_len = HEADER_LEN;
         match mbx.mailbox_type() {
             MailboxType::CoE => {

@@ -218,9 +218,36 @@ impl<const N: usize> ProcessImage<N> {
     /// the assigned PDOs must share a PDO set of `pd` (when the device
     /// declares sets).
     pub fn build(store: &Od, dir: Direction, pd: &ProcessData) -> Result<Self, PdoError> {
+        let mut image = ProcessImage::default();
+        image.rebuild(store, dir, pd)?;
+        Ok(image)
+    }
+
+    /// [`ProcessImage::build`] into this image, in place (a firmware keeps
+    /// its images where they live: built by value, each was copied a few
+    /// times on the stack). On an error the image is left empty.
+    pub fn rebuild(
+        &mut self,
+        store: &Od,
+        dir: Direction,
+        pd: &ProcessData,
+    ) -> Result<(), PdoError> {
+        self.entries.clear();
+        self.bits = 0;
+        self.sets = u32::MAX;
+        let result = self.fill(store, dir, pd);
+        if result.is_err() {
+            self.entries.clear();
+            self.bits = 0;
+            self.sets = u32::MAX;
+        }
+        result
+    }
+
+    fn fill(&mut self, store: &Od, dir: Direction, pd: &ProcessData) -> Result<(), PdoError> {
         let assign = dir.assign_index();
         let count = store.get(assign, 0).unwrap_or(0);
-        let mut image = ProcessImage::default();
+        let image = self;
         let (lo, hi) = dir.pdo_range();
         let dict = store.dictionary();
         for i in 1..=count.clamp(0, 254) as u8 {
@@ -242,7 +269,7 @@ impl<const N: usize> ProcessImage<N> {
                 image.push_mapping(dict, pdo, mapping, dir)?;
             }
         }
-        Ok(image)
+        Ok(())
     }
 
     fn push_mapping(
@@ -418,6 +445,34 @@ mod tests {
         assert_eq!(
             <ProcessImage>::build(&s, Direction::Outputs, &DEVICE.process_data),
             Err(PdoError::UnknownPdo(0x1234))
+        );
+    }
+
+    #[test]
+    fn a_rebuild_in_place_that_fails_leaves_the_image_empty() {
+        let mut s = store();
+        let mut image = <ProcessImage>::build(&s, Direction::Inputs, &DEVICE.process_data).unwrap();
+        assert!(image.byte_len() > 0);
+        s.download(0x1C13, 0, &[2], AlState::PreOp).unwrap();
+        s.download(0x1C13, 2, &0x1A01u16.to_le_bytes(), AlState::PreOp)
+            .unwrap();
+        assert_eq!(
+            image.rebuild(&s, Direction::Inputs, &DEVICE.process_data),
+            Err(PdoError::MixedSets(0x1A00, 0x1A01))
+        );
+        assert_eq!(
+            image,
+            ProcessImage::default(),
+            "nothing of a half-built image"
+        );
+        s.download(0x1C13, 0, &[1], AlState::PreOp).unwrap();
+        image
+            .rebuild(&s, Direction::Inputs, &DEVICE.process_data)
+            .unwrap();
+        assert_eq!(
+            image,
+            <ProcessImage>::build(&s, Direction::Inputs, &DEVICE.process_data).unwrap(),
+            "in place or by value: the same image"
         );
     }
 

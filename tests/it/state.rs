@@ -3,6 +3,7 @@
 //! link. The public TF-1200 conformance cases are named `tf1200_*`.
 
 use ecat_slave::led::LedPattern;
+use ecat_slave::wire::mailbox::MailboxType;
 use master_test::link::{Clock, lock};
 use master_test::mailbox::{MailboxClient, MailboxGeometry};
 use master_test::{Group, VirtualBus};
@@ -269,6 +270,65 @@ fn tf1200_mailbox_repeat_returns_the_identical_previous_response() {
             u32::from_le_bytes(first.payload[6..10].try_into().unwrap()),
             0x00C7_03F3
         );
+    });
+}
+
+#[test]
+fn a_request_waits_in_sm0_until_the_master_has_read_sm1_and_a_repeat_still_returns_the_last_response()
+ {
+    // The firmware builds a response where it keeps it for the repeat
+    // service, so it takes the next request only once the master has read
+    // the previous response; a request sent again (same counter and
+    // content) is not executed and leaves that response in place.
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md: &Md = &bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let s = group.subdevice(md, 0).expect("slave").configured_address();
+        let mut c = MailboxClient::new(md, s, MailboxGeometry::standard());
+        let vendor = [0x00, 0x20, 0x40, 0x18, 0x10, 0x01, 0, 0, 0, 0];
+        let product = [0x00, 0x20, 0x40, 0x18, 0x10, 0x02, 0, 0, 0, 0];
+        let sm_status = |sm: u16| async move {
+            let v: u8 = ethercrab::Command::fprd(s, 0x0805 + 8 * sm)
+                .receive(md)
+                .await
+                .expect("SM status");
+            v & 0x08 != 0
+        };
+        c.send_raw(MailboxType::CoE, 1, &vendor)
+            .await
+            .expect("first request");
+        settle(&bus).await;
+        assert!(sm_status(1).await, "the first response waits in SM1");
+        c.send_raw(MailboxType::CoE, 2, &product)
+            .await
+            .expect("second request");
+        for _ in 0..3 {
+            settle(&bus).await;
+        }
+        assert!(sm_status(0).await, "the second request waits in SM0");
+        let first = c.receive().await.expect("first response");
+        let second = c
+            .receive()
+            .await
+            .expect("second response, after the first was read");
+        assert!(!sm_status(0).await, "the second request was taken");
+        let value = |m: &master_test::mailbox::Message| {
+            u32::from_le_bytes(m.payload[6..10].try_into().unwrap())
+        };
+        assert_eq!(value(&first), 0x0000_05AE, "0x1018:01 answered first");
+        assert_eq!(value(&second), 0x00C7_03F3, "then 0x1018:02");
+        // The same request again: not executed, nothing new in SM1, and the
+        // repeat service still has the last response.
+        c.send_raw(MailboxType::CoE, 2, &product)
+            .await
+            .expect("sent again");
+        for _ in 0..3 {
+            settle(&bus).await;
+        }
+        assert!(!sm_status(1).await, "no response to a request sent again");
+        let again = c.repeat().await.expect("repeated");
+        assert_eq!(again, second, "the repeat gives the last response");
     });
 }
 

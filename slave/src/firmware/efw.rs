@@ -804,6 +804,18 @@ impl EfwValidator {
         self
     }
 
+    /// [`EfwValidator::with_rollback_floor`] on a validator in place (a
+    /// firmware builds it where it lives: by value, the builders copy its
+    /// few hundred bytes on the stack).
+    pub const fn set_rollback_floor(&mut self, floor: FirmwareVersion) {
+        self.floor = floor;
+    }
+
+    /// [`EfwValidator::with_public_key`] on a validator in place.
+    pub const fn set_public_key(&mut self, key: [u8; 32]) {
+        self.key = Some(key);
+    }
+
     /// Bytes accepted so far.
     pub const fn received(&self) -> usize {
         self.received

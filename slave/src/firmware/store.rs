@@ -309,9 +309,15 @@ impl BootState {
     /// password whose floor is the active image's version: a store written before passwords existed keeps working
     /// and is rewritten in format 2 at its next state change.
     pub fn encode(&self) -> [u8; STATE_RECORD_LEN] {
+        self.encode_as(self.sequence)
+    }
+
+    /// [`BootState::encode`] with another sequence number (no copy of the
+    /// state to change it).
+    fn encode_as(&self, sequence: u32) -> [u8; STATE_RECORD_LEN] {
         let mut buf = [0u8; STATE_RECORD_LEN];
         put(&mut buf, rec::MAGIC.start, &STATE_MAGIC);
-        put(&mut buf, rec::SEQUENCE.start, &self.sequence.to_le_bytes());
+        put(&mut buf, rec::SEQUENCE.start, &sequence.to_le_bytes());
         put(&mut buf, rec::ACTIVE, &[self.active.index() as u8]);
         let (stage, slot, image) = match &self.candidate {
             Some(c) => (c.stage.raw(), c.slot.index() as u8, c.image),
@@ -428,8 +434,7 @@ impl BootState {
             Some((newest, sequence)) => (1 - newest, sequence.wrapping_add(1)),
             None => (0, 1),
         };
-        let record = Self { sequence, ..*state }.encode();
-        (index, record)
+        (index, state.encode_as(sequence))
     }
 }
 

@@ -15,30 +15,37 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         }
     }
 
-    /// Writes the waiting response into SM1 if SM1 is free. The whole
-    /// buffer is written so that the ESC sees its last byte and marks the
-    /// mailbox full.
+    /// Writes the waiting response (in `sent`) into SM1 if SM1 is free;
+    /// it then stays in `sent` for the repeat service. The whole buffer is
+    /// written so that the ESC sees its last byte and marks the mailbox
+    /// full.
     pub(super) fn deliver_pending(&mut self) -> Result<(), EscError> {
         if self.pending.is_none() || self.sm_full(1)? {
             return Ok(());
         }
         let (_, inp) = self.mailbox_layout();
-        if let Some(len) = self.pending.take() {
+        if let Some(len) = self.pending {
             let n = usize::from(inp.1).min(MBX);
             // The whole SM1 buffer goes out: zeros after the response.
-            if let Some(tail) = self.tx.get_mut(len.min(n)..n) {
+            if let Some(tail) = self.sent.get_mut(len.min(n)..n) {
                 tail.fill(0);
             }
-            if let Some(f) = self.tx.get(..n) {
+            if let Some(f) = self.sent.get(..n) {
                 self.esc.write(inp.0, f)?;
                 self.sm1_writes = self.sm1_writes.wrapping_add(1);
             }
-            // What was sent is kept for the repeat service (swapped in
-            // place: no buffer-sized copy on the stack).
-            core::mem::swap(&mut self.tx, &mut self.sent);
+            self.pending = None;
             self.last_sent = Some(len);
         }
         Ok(())
+    }
+
+    /// Whether a new response may be built in `sent`: nothing waits to be
+    /// delivered, and SM1 is empty, so the master has read the last
+    /// response (it stays in `sent` for the repeat service until then).
+    /// The response is then written at once, in the same pass.
+    fn may_respond(&mut self) -> Result<bool, EscError> {
+        Ok(self.pending.is_none() && !self.sm_full(1)?)
     }
 
     /// Mailbox repeat (ETG.1000.4 SyncManager repeat): when the master
@@ -73,7 +80,7 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         self.serve_repeat()?;
         self.deliver_pending()?;
         // One request at a time: a new request waits in SM0 until the
-        // previous response has left.
+        // previous response has left and the master has read it.
         if self.pending.is_some() {
             return Ok(());
         }
@@ -87,21 +94,22 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             // Information does not link the fragment code.
             let fragments =
                 self.app.description().mailbox.coe.sdo_info && self.mailbox.has_pending();
-            if !fragments && !emergency {
+            if (!fragments && !emergency) || !self.may_respond()? {
                 return Ok(());
             }
             let max = usize::from(inp.1).min(MBX);
-            // `tx` is free: nothing is pending.
-            self.tx.fill(0);
+            // The last response was read: `sent` takes the next one.
+            self.last_sent = None;
+            self.sent.fill(0);
             let mut produced = None;
             if fragments {
                 produced = self
-                    .tx
+                    .sent
                     .get_mut(..max)
                     .and_then(|r| self.mailbox.next_pending(r, view));
             }
             if produced.is_none() && emergency {
-                produced = self.tx.get_mut(..max).and_then(|r| {
+                produced = self.sent.get_mut(..max).and_then(|r| {
                     let body = r.get_mut(crate::wire::mailbox::HEADER_LEN..)?;
                     let n = self.emergencies.pop_into(body)?;
                     self.mailbox.frame_coe(r, n)
@@ -113,15 +121,16 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             }
             return Ok(());
         }
+        if !self.may_respond()? {
+            // The request waits in SM0 until the master has read SM1.
+            return Ok(());
+        }
         let (out, inp) = self.mailbox_layout();
-        let mut request = [0u8; MBX];
         let n = usize::from(out.1).min(MBX);
-        let Some(req) = request.get_mut(..n) else {
+        let Some(req) = self.request.get_mut(..n) else {
             return Ok(());
         };
         self.esc.read(out.0, req)?;
-        // The response is built in `tx` (free: nothing is pending).
-        self.tx.fill(0);
         let max = usize::from(inp.1).min(MBX);
         let state = self.al.state;
         let version = self.firmware_version();
@@ -141,24 +150,34 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             busy: false,
         });
         let now_ns = self.now_ns;
-        let produced = match self.tx.get_mut(..max) {
-            // Disjoint field borrows: no copy of the mailbox server.
-            Some(resp) => self.mailbox.handle(
-                req,
-                resp,
-                &mut OdAccess {
-                    app: &mut self.app,
-                    od: A::Values::view_mut(&mut self.store),
-                    state,
-                    now_ns,
-                },
-                ctx.as_mut(),
-            ),
-            None => None,
+        let (Some(req), Some(resp)) = (self.request.get(..n), self.sent.get_mut(..max)) else {
+            return Ok(());
         };
-        if let Some(len) = produced {
-            self.pending = Some(len);
-            self.deliver_pending()?;
+        // Disjoint field borrows: no copy of the mailbox server, and the
+        // response is built where it stays for the repeat service.
+        let handled = self.mailbox.handle(
+            req,
+            resp,
+            &mut OdAccess {
+                app: &mut self.app,
+                od: A::Values::view_mut(&mut self.store),
+                state,
+                now_ns,
+            },
+            ctx.as_mut(),
+        );
+        match handled {
+            // The master sent the last request again: not executed, and
+            // `sent` still holds the last response.
+            Handled::Repeated => {}
+            Handled::Done(produced) => {
+                // `sent` was cleared for the new response.
+                self.last_sent = None;
+                if let Some(len) = produced {
+                    self.pending = Some(len);
+                    self.deliver_pending()?;
+                }
+            }
         }
         Ok(())
     }

@@ -25,7 +25,7 @@ use crate::esc::registers::{self as reg, sm as smr};
 use crate::esc::{Esc, EscError};
 use crate::firmware::{self, DeviceIdentity, ImageStore};
 use crate::foe::FoeContext;
-use crate::mailbox::MailboxServer;
+use crate::mailbox::{Handled, MailboxServer};
 use crate::od::complete;
 use crate::od::modules::{CONFIGURED_MODULES, ObjectView};
 use crate::od::store::{ObjectStore, Od};
@@ -101,14 +101,17 @@ pub struct Slave<
     outputs: ProcessImage<PDO>,
     inputs: ProcessImage<PDO>,
     mailbox: MailboxServer<SDO>,
-    /// The length of a response waiting in `tx` for SM1 to become free.
+    /// The length of a response in `sent` waiting for SM1 to become free
+    /// (only after a failed PDI write: a response is built when SM1 is
+    /// empty and written in the same pass).
     pending: Option<usize>,
-    /// The response being built or waiting (`pending`).
-    tx: [u8; MBX],
+    /// The request read from SM0.
+    request: [u8; MBX],
     /// The length of the last response written to SM1 (in `sent`), for
     /// the repeat service.
     last_sent: Option<usize>,
-    /// The last response written to SM1.
+    /// The response: built here once the master has read the previous
+    /// one, written to SM1, and kept for the repeat service.
     sent: [u8; MBX],
     emergencies: Emergencies,
     emergencies_enabled: bool,
@@ -229,7 +232,7 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             inputs: ProcessImage::default(),
             mailbox: MailboxServer::new(),
             pending: None,
-            tx: [0; MBX],
+            request: [0; MBX],
             last_sent: None,
             sent: [0; MBX],
             emergencies: Emergencies::default(),

@@ -38,7 +38,11 @@ pub(super) struct Checks<'a, E: Esc, A: Application, const PDO: usize, const IMG
     pub(super) app: &'a mut A,
     pub(super) od: &'a mut Od,
     pub(super) layout: MemoryLayout,
-    pub(super) images: Option<(ProcessImage<PDO>, ProcessImage<PDO>)>,
+    /// The process images, rebuilt in place by the PRE-OP→SAFE-OP check
+    /// (`images_built`); in the states before SAFE-OP nothing reads them.
+    pub(super) outputs: &'a mut ProcessImage<PDO>,
+    pub(super) inputs: &'a mut ProcessImage<PDO>,
+    pub(super) images_built: bool,
     pub(super) now_ns: u64,
     /// A PDI access that failed during a check: the check refuses with
     /// 0x0001 and the firmware goes to its fail-safe state (never "assume
@@ -152,16 +156,20 @@ impl<E: Esc, A: Application, const PDO: usize, const IMG: usize> TransitionCheck
         let pd = &desc.process_data;
         // An image beyond this firmware's buffers is refused as any image
         // the device cannot serve.
-        let outputs = ProcessImage::<PDO>::build(self.od, Direction::Outputs, pd)
-            .ok()
-            .filter(|i| i.byte_len() <= IMG)
-            .ok_or(AlStatusCode::InvalidOutputConfig)?;
-        let inputs = ProcessImage::<PDO>::build(self.od, Direction::Inputs, pd)
-            .ok()
-            .filter(|i| i.byte_len() <= IMG)
-            .ok_or(AlStatusCode::InvalidInputConfig)?;
+        self.images_built = true;
+        let od = &*self.od;
+        if self.outputs.rebuild(od, Direction::Outputs, pd).is_err()
+            || self.outputs.byte_len() > IMG
+        {
+            return Err(AlStatusCode::InvalidOutputConfig);
+        }
+        if self.inputs.rebuild(od, Direction::Inputs, pd).is_err() || self.inputs.byte_len() > IMG {
+            return Err(AlStatusCode::InvalidInputConfig);
+        }
+        let (outputs, inputs) = (self.outputs.byte_len(), self.inputs.byte_len());
+        let sets = self.outputs.sets() & self.inputs.sets();
         // Both directions must come from one PDO set.
-        if outputs.sets() & inputs.sets() == 0 {
+        if sets == 0 {
             return Err(AlStatusCode::InvalidInputConfig);
         }
         let sm2 = read_sm(self.esc, 2).map_err(|e| self.pdi_failed(e))?;
@@ -169,30 +177,29 @@ impl<E: Esc, A: Application, const PDO: usize, const IMG: usize> TransitionCheck
         // With no PDO in a direction its SM is unused: disabled, or
         // enabled with length 0 as SOEM leaves it (an ESC does not activate
         // a SyncManager of length 0; SOES accepts it too).
-        let out_ok = if outputs.byte_len() == 0 {
+        let out_ok = if outputs == 0 {
             !sm2.3 || sm2.1 == 0
         } else {
             sm2.3
                 && sm2.0 == self.layout.pd_out
-                && usize::from(sm2.1) == outputs.byte_len()
+                && usize::from(sm2.1) == outputs
                 && sm2.2 & 0x0F == SM_CONTROL[2] & 0x0F
         };
         if !out_ok {
             return Err(AlStatusCode::InvalidOutputConfig);
         }
-        let in_ok = if inputs.byte_len() == 0 {
+        let in_ok = if inputs == 0 {
             !sm3.3 || sm3.1 == 0
         } else {
             sm3.3
                 && sm3.0 == self.layout.pd_in
-                && usize::from(sm3.1) == inputs.byte_len()
+                && usize::from(sm3.1) == inputs
                 && sm3.2 & 0x0F == SM_CONTROL[3] & 0x0F
         };
         if !in_ok {
             return Err(AlStatusCode::InvalidInputConfig);
         }
         self.sync_mode = Some(self.check_dc()?);
-        self.images = Some((outputs, inputs));
         Ok(())
     }
 
@@ -214,10 +221,11 @@ impl<E: Esc, A: Application, const PDO: usize, const IMG: usize> TransitionCheck
     }
 
     fn accept(&mut self, from: AlState, to: AlState) -> Result<(), AlStatusCode> {
-        let (rx_sets, tx_sets) = self
-            .images
-            .as_ref()
-            .map_or((u32::MAX, u32::MAX), |(o, i)| (o.sets(), i.sets()));
+        let (rx_sets, tx_sets) = if self.images_built {
+            (self.outputs.sets(), self.inputs.sets())
+        } else {
+            (u32::MAX, u32::MAX)
+        };
         let change = StateChange {
             from,
             to,
@@ -239,7 +247,9 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             app: &mut self.app,
             od: A::Values::view_mut(&mut self.store),
             layout: self.layout,
-            images: None,
+            outputs: &mut self.outputs,
+            inputs: &mut self.inputs,
+            images_built: false,
             now_ns: self.now_ns,
             pdi_error: None,
             sync_mode: None,
@@ -252,10 +262,6 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         }
         if after.error && !before.error && before.state == AlState::PreOp && (control & 0x0F) == 4 {
             self.emergencies.transition_refused(after.code.code());
-        }
-        if let Some((o, i)) = checks.images.take() {
-            self.outputs = o;
-            self.inputs = i;
         }
         // The synchronisation the check found counts only if SAFE-OP was
         // reached (the application may still have refused it).
