@@ -108,17 +108,23 @@ mod device {
     #[cfg(feature = "pam")]
     use pam_199_p_etc::DEVICE;
 
+    /// The largest mailbox and process image of the device, from its
+    /// description.
+    const MBX: usize = DEVICE.largest_mailbox();
+    const IMAGE: (usize, usize) = DEVICE.largest_image();
+
     /// The whole firmware state: ESC handle, application, dictionary,
     /// mailbox servers, process images, with buffers sized for the device
     /// (`Slave`'s MBX, SDO, PDO and IMG: the largest mailbox, the largest
     /// object an SDO transfer carries, the entries and bytes of one
-    /// direction's process image). `Slave::with_buffers` refuses sizes
-    /// smaller than the description needs at `fw_init`.
+    /// direction's process image; all but SDO read from the description).
+    /// `Slave::with_buffers` refuses sizes smaller than the description
+    /// needs at `fw_init`.
     #[cfg(feature = "io8")]
-    pub type Firmware = Slave<Pdi, App, 512, 128, 16, 8>;
+    pub type Firmware = Slave<Pdi, App, MBX, 128, { IMAGE.0 }, { IMAGE.1 }>;
     /// The whole firmware state (see the IO8's).
     #[cfg(feature = "pam")]
-    pub type Firmware = Slave<Pdi, App, 1024, 256, 32, 32>;
+    pub type Firmware = Slave<Pdi, App, MBX, 256, { IMAGE.0 }, { IMAGE.1 }>;
 
     const LAYOUT: MemoryLayout = DEVICE.layout();
 

@@ -162,7 +162,12 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
     },
     mailbox: MailboxConfig {
         size: 128,
-        boot_size: Some(512),
+        // 128 bytes in BOOT too, as SOES's defaults (MBXSIZE and
+        // MBXSIZEBOOT 128): a firmware holds two mailbox-sized buffers
+        // (the request and the response kept for the repeat service), so
+        // 512 bytes would cost 768 bytes of RAM for a faster FoE download
+        // (116 instead of 500 image bytes per packet).
+        boot_size: Some(128),
         coe: CoeServices {
             sdo_info: !cfg!(feature = "coe-minimal"),
             pdo_assign: true,

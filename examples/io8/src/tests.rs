@@ -145,7 +145,7 @@ fn the_sii_image_carries_identity_names_and_mailboxes() {
     assert_eq!(general.order, "IO8");
     assert_eq!(general.group, "DigIO");
     assert_eq!(sii.standard_mailbox().rx_size, 128);
-    assert_eq!(sii.bootstrap_mailbox().rx_size, 512);
+    assert_eq!(sii.bootstrap_mailbox().rx_size, 128);
     let foe = ecat_slave::sii::protocols::FOE;
     assert_eq!(sii.mailbox_protocols() & foe, foe);
 }

@@ -274,6 +274,77 @@ const fn find_object(objects: &'static [Object], index: u16) -> Option<&'static 
 }
 
 impl DeviceDescription {
+    /// The largest mailbox of the device (standard or bootstrap), in
+    /// bytes: the least `MBX` of a [`Slave`](super::Slave) for it. A
+    /// `const fn`, so a firmware sizes its buffers from the description:
+    /// `Slave<E, A, { DEVICE.largest_mailbox() }, ...>`.
+    pub const fn largest_mailbox(&self) -> usize {
+        let m = &self.mailbox;
+        match m.boot_size {
+            Some(b) if b > m.size => b as usize,
+            _ => m.size as usize,
+        }
+    }
+
+    /// The most entries and bytes one direction's process image takes in
+    /// any PDO set of the description (`(entries, bytes)`): the least `PDO`
+    /// and `IMG` of a [`Slave`](super::Slave) for it. A master assigns the
+    /// PDOs of one set (the core refuses mixed sets) and, without
+    /// `pdo_config`, cannot change a mapping, so no image is larger; with
+    /// writable mappings (`pdo_config`, a twin's `rw` mapping entries) the
+    /// bounds of the core ([`MAX_MAPPED`], [`MAX_IMAGE`]), as without PDO
+    /// sets (any PDOs may then be assigned together). An assignment beyond
+    /// these sizes (a PDO assigned twice) is refused at PRE-OP→SAFE-OP
+    /// with 0x001D/0x001E, as any image the firmware cannot serve.
+    pub const fn largest_image(&self) -> (usize, usize) {
+        if self.mailbox.coe.pdo_config || self.process_data.sets.is_empty() {
+            return (MAX_MAPPED, MAX_IMAGE);
+        }
+        let objects = self.dictionary.objects();
+        let (mut entries, mut bytes) = (0, 0);
+        let mut sets = self.process_data.sets;
+        while let Some((set, rest)) = sets.split_first() {
+            sets = rest;
+            let mut d = 0;
+            while d < 2 {
+                let mut list = if d == 0 { set.rx } else { set.tx };
+                let (mut mapped, mut bits) = (0usize, 0usize);
+                while let Some((&pdo, tail)) = list.split_first() {
+                    list = tail;
+                    if let Some(o) = find_object(objects, pdo) {
+                        let count = match int_default(o, 0) {
+                            Some(c) => c,
+                            None => 0,
+                        };
+                        let mut es = o.entries;
+                        while let Some((e, tail)) = es.split_first() {
+                            es = tail;
+                            if e.sub == 0 || e.sub as i64 > count {
+                                continue;
+                            }
+                            if e.access.writable() {
+                                // A mapping the master may rewrite.
+                                return (MAX_MAPPED, MAX_IMAGE);
+                            }
+                            if let DefaultValue::Int(m) = e.default {
+                                bits += (m & 0xFF) as usize;
+                                mapped += 1;
+                            }
+                        }
+                    }
+                }
+                if mapped > entries {
+                    entries = mapped;
+                }
+                if bits.div_ceil(8) > bytes {
+                    bytes = bits.div_ceil(8);
+                }
+                d += 1;
+            }
+        }
+        (entries, bytes)
+    }
+
     /// The memory layout the mailbox sizes imply.
     pub const fn layout(&self) -> MemoryLayout {
         match MemoryLayout::new(self.mailbox.size, self.mailbox.boot_size) {
@@ -469,5 +540,22 @@ impl DeviceDescription {
         if let Err(e) = self.validate() {
             panic!("{}", e.message());
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::testing::DEVICE;
+
+    #[test]
+    fn buffer_sizes_come_from_the_largest_mailbox_and_pdo_set() {
+        // 128-byte standard and 1024-byte bootstrap mailboxes.
+        assert_eq!(DEVICE.largest_mailbox(), 1024);
+        // Set A: 3 entries (BOOL, 7 padding bits, INT16) in 3 bytes per
+        // direction; set B's inputs: one UDINT, 4 bytes.
+        assert_eq!(DEVICE.largest_image(), (3, 4));
+        // Constants: usable as `Slave`'s const generics.
+        const SIZES: (usize, usize) = DEVICE.largest_image();
+        assert_eq!(SIZES.0, 3);
     }
 }

@@ -731,6 +731,18 @@ impl ValidatedImage {
     }
 }
 
+/// The key a validator checks signatures with; without `signed-images`
+/// only whether one was set (every image is then refused), so a firmware
+/// without signatures does not hold 96 bytes of key and signature.
+#[cfg(feature = "signed-images")]
+type Key = Option<[u8; 32]>;
+#[cfg(not(feature = "signed-images"))]
+type Key = bool;
+#[cfg(feature = "signed-images")]
+const NO_KEY: Key = None;
+#[cfg(not(feature = "signed-images"))]
+const NO_KEY: Key = false;
+
 /// Checks an `.efw` image fed in arbitrary chunks (e.g. FoE DATA packets)
 /// without buffering it: the header is checked as soon as its last byte
 /// arrives (magic and format even earlier), the length and payload CRC at
@@ -742,8 +754,9 @@ pub struct EfwValidator {
     /// Anti-rollback floor ([`FirmwareVersion::EMPTY`]: none).
     floor: FirmwareVersion,
     /// The Ed25519 key images must be signed with (`None`: any image).
-    key: Option<[u8; 32]>,
+    key: Key,
     /// The signature bytes of a signed image.
+    #[cfg(feature = "signed-images")]
     signature: [u8; 64],
     /// The running signature check.
     check: SignatureCheck,
@@ -766,7 +779,8 @@ impl EfwValidator {
             device,
             capacity,
             floor: FirmwareVersion::EMPTY,
-            key: None,
+            key: NO_KEY,
+            #[cfg(feature = "signed-images")]
             signature: [0; 64],
             check: SignatureCheck {
                 #[cfg(feature = "signed-images")]
@@ -800,7 +814,7 @@ impl EfwValidator {
     /// ([`EfwError::SignatureUnsupported`]).
     #[must_use]
     pub const fn with_public_key(mut self, key: [u8; 32]) -> Self {
-        self.key = Some(key);
+        self.set_public_key(key);
         self
     }
 
@@ -813,7 +827,23 @@ impl EfwValidator {
 
     /// [`EfwValidator::with_public_key`] on a validator in place.
     pub const fn set_public_key(&mut self, key: [u8; 32]) {
-        self.key = Some(key);
+        #[cfg(feature = "signed-images")]
+        {
+            self.key = Some(key);
+        }
+        #[cfg(not(feature = "signed-images"))]
+        {
+            let _ = key;
+            self.key = true;
+        }
+    }
+
+    /// Whether images must be signed (a key was set).
+    const fn keyed(&self) -> bool {
+        #[cfg(feature = "signed-images")]
+        return self.key.is_some();
+        #[cfg(not(feature = "signed-images"))]
+        self.key
     }
 
     /// Bytes accepted so far.
@@ -885,14 +915,19 @@ impl EfwValidator {
             self.header_crc.update(&[byte]);
         } else if pos < header_len.saturating_sub(4) {
             self.header_crc.update(&[byte]);
-            let signed = get_u16(&self.head, field::FLAGS) & EFW_FLAG_SIGNED != 0;
-            match self
-                .signature
-                .get_mut(pos.wrapping_sub(EFW_SIGNATURE.start))
+            #[cfg(feature = "signed-images")]
             {
-                Some(slot) if signed => *slot = byte,
-                _ => self.check.absorb(&[byte]),
+                let signed = get_u16(&self.head, field::FLAGS) & EFW_FLAG_SIGNED != 0;
+                match self
+                    .signature
+                    .get_mut(pos.wrapping_sub(EFW_SIGNATURE.start))
+                {
+                    Some(slot) if signed => *slot = byte,
+                    _ => self.check.absorb(&[byte]),
+                }
             }
+            // Without signature checks the signature bytes are not kept
+            // (an image is refused before them when a key is set).
         } else {
             // CRC bytes: stored at the end of the fixed head buffer.
             let at = field::FIXED_END + (pos + 4 - header_len);
@@ -916,11 +951,11 @@ impl EfwValidator {
         }
         if self.received == field::FLAGS.end {
             check_signed_len(view.flags(), view.header_len())?;
-            if self.key.is_some() && view.flags() & EFW_FLAG_SIGNED == 0 {
+            if self.keyed() && view.flags() & EFW_FLAG_SIGNED == 0 {
                 return Err(EfwError::Unsigned);
             }
             #[cfg(not(feature = "signed-images"))]
-            if self.key.is_some() {
+            if self.keyed() {
                 return Err(EfwError::SignatureUnsupported);
             }
         }
@@ -997,7 +1032,7 @@ impl EfwValidator {
                 computed,
             });
         }
-        if self.key.is_some() {
+        if self.keyed() {
             self.check.verify()?;
         }
         Ok(ValidatedImage { header })
