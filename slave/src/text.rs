@@ -62,6 +62,15 @@ impl<const N: usize> Text<N> {
         self
     }
 
+    /// Appends `bytes` as printable ASCII, `?` for any other byte (no
+    /// UTF-8 check linked: a version read from an image may hold any byte).
+    pub fn push_ascii(&mut self, bytes: &[u8]) -> &mut Self {
+        for &b in bytes {
+            self.push_byte(if (0x20..0x7F).contains(&b) { b } else { b'?' });
+        }
+        self
+    }
+
     /// Appends `v` in decimal.
     pub fn push_dec(&mut self, v: u64) -> &mut Self {
         let mut digits = [0u8; 20];
@@ -133,6 +142,13 @@ fn div_rem_10(n: u64) -> (u64, u8) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bytes_pushed_as_ascii_keep_printable_ones_and_mark_the_rest() {
+        let mut t: Text<16> = Text::new();
+        t.push_ascii(b"2.1\xFF\x00-rc\n");
+        assert_eq!(t.as_str(), "2.1??-rc?");
+    }
 
     #[test]
     fn decimal_digits_come_from_32_bit_divisions_for_every_magnitude() {

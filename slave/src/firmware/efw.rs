@@ -251,9 +251,9 @@ impl EfwError {
             }
             Self::Rollback { version, floor } => t
                 .push_str("version ")
-                .push_str(version.as_str())
+                .push_ascii(version.as_bytes())
                 .push_str(" is older than the minimum ")
-                .push_str(floor.as_str())
+                .push_ascii(floor.as_bytes())
                 .push_str(": downgrade refused"),
         };
         t
