@@ -236,6 +236,30 @@ impl MemoryLayout {
     }
 }
 
+/// The largest process image of a description's PDO sets.
+struct ImageBounds {
+    /// Most entries one direction maps.
+    entries: usize,
+    /// Most bits one direction maps.
+    bits: usize,
+    /// A mapping entry of a set is writable (the master may change it).
+    writable: bool,
+}
+
+/// The number of entries a PDO mapping object maps by default (its
+/// subindex 0; 0 without one).
+const fn mapped_count(o: &Object) -> i64 {
+    match int_default(o, 0) {
+        Some(c) => c,
+        None => 0,
+    }
+}
+
+/// Whether entry `e` of a mapping object is one of the `count` it maps.
+const fn is_mapped(e: &crate::od::Entry, count: i64) -> bool {
+    e.sub != 0 && e.sub as i64 <= count
+}
+
 const fn name_ok(s: &str) -> bool {
     !s.is_empty() && s.len() <= crate::sii::MAX_NAME_LEN
 }
@@ -300,49 +324,12 @@ impl DeviceDescription {
         if self.mailbox.coe.pdo_config || self.process_data.sets.is_empty() {
             return (MAX_MAPPED, MAX_IMAGE);
         }
-        let objects = self.dictionary.objects();
-        let (mut entries, mut bytes) = (0, 0);
-        let mut sets = self.process_data.sets;
-        while let Some((set, rest)) = sets.split_first() {
-            sets = rest;
-            let mut d = 0;
-            while d < 2 {
-                let mut list = if d == 0 { set.rx } else { set.tx };
-                let (mut mapped, mut bits) = (0usize, 0usize);
-                while let Some((&pdo, tail)) = list.split_first() {
-                    list = tail;
-                    if let Some(o) = find_object(objects, pdo) {
-                        let count = match int_default(o, 0) {
-                            Some(c) => c,
-                            None => 0,
-                        };
-                        let mut es = o.entries;
-                        while let Some((e, tail)) = es.split_first() {
-                            es = tail;
-                            if e.sub == 0 || e.sub as i64 > count {
-                                continue;
-                            }
-                            if e.access.writable() {
-                                // A mapping the master may rewrite.
-                                return (MAX_MAPPED, MAX_IMAGE);
-                            }
-                            if let DefaultValue::Int(m) = e.default {
-                                bits += (m & 0xFF) as usize;
-                                mapped += 1;
-                            }
-                        }
-                    }
-                }
-                if mapped > entries {
-                    entries = mapped;
-                }
-                if bits.div_ceil(8) > bytes {
-                    bytes = bits.div_ceil(8);
-                }
-                d += 1;
-            }
+        match self.pdo_sets() {
+            Ok(b) if !b.writable => (b.entries, b.bits.div_ceil(8)),
+            // A mapping the master may rewrite (or a description
+            // `validate` refuses).
+            _ => (MAX_MAPPED, MAX_IMAGE),
         }
-        (entries, bytes)
     }
 
     /// The memory layout the mailbox sizes imply.
@@ -424,6 +411,27 @@ impl DeviceDescription {
                 k += 1;
             }
         }
+        if let Err(e) = self.pdo_sets() {
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// The checks of the PDO sets (every PDO a mapping object whose
+    /// entries exist and may be mapped in its direction, the image within
+    /// the core's bounds, the first set the default assignment) and the
+    /// largest image one direction takes in any set.
+    #[allow(
+        clippy::indexing_slicing,
+        reason = "const fn loops: every index is checked against the length first"
+    )]
+    const fn pdo_sets(&self) -> Result<ImageBounds, DescriptionError> {
+        let objects = self.dictionary.objects();
+        let mut bounds = ImageBounds {
+            entries: 0,
+            bits: 0,
+            writable: false,
+        };
         let sets = self.process_data.sets;
         let mut s = 0usize;
         while s < sets.len() {
@@ -451,16 +459,14 @@ impl DeviceDescription {
                     if pdo < lo || pdo > hi {
                         return Err(DescriptionError::UnknownPdo { set: s, pdo });
                     }
-                    let count = match int_default(o, 0) {
-                        Some(c) => c,
-                        None => 0,
-                    };
+                    let count = mapped_count(o);
                     let mut es = o.entries;
                     while let Some((e, tail)) = es.split_first() {
                         es = tail;
-                        if e.sub == 0 || e.sub as i64 > count {
+                        if !is_mapped(e, count) {
                             continue;
                         }
+                        bounds.writable |= e.access.writable();
                         let DefaultValue::Int(mapping) = e.default else {
                             return Err(DescriptionError::BadMapping { pdo, sub: e.sub });
                         };
@@ -502,6 +508,12 @@ impl DeviceDescription {
                 if bits > MAX_IMAGE * 8 || mapped > MAX_MAPPED {
                     return Err(DescriptionError::ImageTooLarge { set: s });
                 }
+                if mapped > bounds.entries {
+                    bounds.entries = mapped;
+                }
+                if bits > bounds.bits {
+                    bounds.bits = bits;
+                }
                 // The default assignment is the first set.
                 if s == 0
                     && let Some(a) = find_object(objects, dir.assign_index())
@@ -526,7 +538,7 @@ impl DeviceDescription {
             }
             s += 1;
         }
-        Ok(())
+        Ok(bounds)
     }
 
     /// [`Self::validate`] as a `const` assertion: `const _: () =
