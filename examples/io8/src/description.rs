@@ -137,6 +137,22 @@ pub const OBJECTS: &[Object] = &[
 
 ecat_slave::dictionary!(pub DICT, pub ENTRIES = OBJECTS, &[]);
 
+/// Who may update the IO8's firmware: anyone with the password 0, and
+/// unsigned images (`FoeSecurity::OPEN`). With the feature
+/// `footprint-signed`, images must be signed with a placeholder key (a
+/// build measured for the size of the signature check only).
+#[cfg(not(feature = "footprint-signed"))]
+const FOE_SECURITY: FoeSecurity = FoeSecurity::OPEN;
+#[cfg(feature = "footprint-signed")]
+const FOE_SECURITY: FoeSecurity = FoeSecurity {
+    factory_password: 0,
+    public_key: Some([
+        0xd8, 0x4e, 0x79, 0xd1, 0x51, 0x53, 0x29, 0x1e, 0x01, 0x8e, 0xd3, 0x1d, 0x9e, 0xbf, 0x05,
+        0x61, 0xe7, 0xdf, 0xd9, 0x45, 0x62, 0x2e, 0x5c, 0xda, 0x66, 0xeb, 0x30, 0x53, 0xad, 0xc2,
+        0x23, 0x9a,
+    ]),
+};
+
 /// The IO8, described once.
 pub const DEVICE: DeviceDescription = DeviceDescription {
     identity: Identity {
@@ -175,7 +191,7 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
             complete_access: !cfg!(feature = "coe-minimal"),
         },
         foe: true,
-        foe_security: FoeSecurity::OPEN,
+        foe_security: FOE_SECURITY,
     },
     esc: EscConfig::DEFAULT,
     modules: None,
