@@ -53,7 +53,8 @@ DEVICES=(base io8 pam io8-et1100 io8-lan9252)
 # driver of drivers/esc-spi instead of the board's C spi_read/spi_write;
 # "io8-lan9252" the same with the LAN9252 driver).
 declare -A FEATURES=([base]="" [io8]="io8" [pam]="pam" [io8-et1100]="io8 spi-et1100"
-    [io8-lan9252]="io8 spi-lan9252" [io8-min]="io8-minimal" [io8-signed]="io8-signed")
+    [io8-lan9252]="io8 spi-lan9252" [io8-min]="io8-minimal" [io8-signed]="io8-signed"
+    [io8-nofoe]="io8-no-foe")
 # Builds measured for size only: the harness speaks the ET1100's SPI byte
 # protocol, not the LAN9252's, so running this one would test nothing.
 declare -A SIZE_ONLY=([io8-lan9252]=1)
@@ -250,7 +251,8 @@ ARM_TARGET=thumbv7em-none-eabihf
 # io8-min: the IO8 whose description offers neither SDO Information nor
 # complete access (feature coe-minimal of io8-example): what the two cost.
 # io8-signed: the IO8 requiring Ed25519-signed images (the check's size).
-ARM_DEVICES=(base io8 pam io8-lan9252 io8-min io8-signed)
+# io8-nofoe: the IO8 without BOOT and FoE (the firmware update's size).
+ARM_DEVICES=(base io8 pam io8-lan9252 io8-min io8-signed io8-nofoe)
 SYSROOT=$(rustc --print sysroot)
 echo
 if [ ! -d "$SYSROOT/lib/rustlib/$ARM_TARGET/lib" ]; then
@@ -289,13 +291,13 @@ for dev in "${ARM_DEVICES[@]}"; do
 done
 echo
 echo "== Cortex-M4 sizes (bytes): firmware = device ELF - baseline (stubs + empty no_std staticlib)"
-echo "+ arm-none-eabi-size -A -d $OUT/fw-{base,io8,pam,io8-lan9252,io8-min,io8-signed}-m4.elf"
+echo "+ arm-none-eabi-size -A -d $OUT/fw-{base,io8,pam,io8-lan9252,io8-min,io8-signed,io8-nofoe}-m4.elf"
 printf '    %-22s %8s %8s %6s %7s %12s %12s\n' "" text rodata data bss "flash total" "static RAM"
 mrow() { # label text ro data bss
     printf '    %-22s %8d %8d %6d %7d %12d %12d\n' "$1" "$2" "$3" "$4" "$5" $(($2 + $3 + $4)) $(($4 + $5))
 }
 mrow "stubs alone (base)" "${MTEXT[base]}" "${MRO[base]}" "${MDATA[base]}" "${MBSS[base]}"
-for dev in io8 pam io8-lan9252 io8-min io8-signed; do
+for dev in io8 pam io8-lan9252 io8-min io8-signed io8-nofoe; do
     mrow "$dev firmware" $((MTEXT[$dev] - MTEXT[base])) $((MRO[$dev] - MRO[base])) \
         $((MDATA[$dev] - MDATA[base])) $((MBSS[$dev] - MBSS[base]))
 done
@@ -305,6 +307,8 @@ mrow "SDO Info + CA cost" $((MTEXT[io8] - MTEXT[io8-min])) $((MRO[io8] - MRO[io8
     $((MDATA[io8] - MDATA[io8-min])) $((MBSS[io8] - MBSS[io8-min]))
 mrow "signature check added" $((MTEXT[io8-signed] - MTEXT[io8])) $((MRO[io8-signed] - MRO[io8])) \
     $((MDATA[io8-signed] - MDATA[io8])) $((MBSS[io8-signed] - MBSS[io8]))
+mrow "FoE update cost" $((MTEXT[io8] - MTEXT[io8-nofoe])) $((MRO[io8] - MRO[io8-nofoe])) \
+    $((MDATA[io8] - MDATA[io8-nofoe])) $((MBSS[io8] - MBSS[io8-nofoe]))
 cat <<'EOF2'
     text: Thumb-2 code. rodata: constants, the object dictionary's tables
     (no .data.rel.ro without dynamic relocations) and .ARM.exidx. data/bss

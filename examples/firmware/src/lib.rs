@@ -128,6 +128,9 @@ mod device {
 
     const LAYOUT: MemoryLayout = DEVICE.layout();
 
+    /// Whether the device offers the firmware update over FoE.
+    pub const FOE: bool = DEVICE.mailbox.foe;
+
     pub const FW_LAYOUT: FwLayout = FwLayout {
         mbx_out_start: LAYOUT.mbx_out.0,
         mbx_out_len: LAYOUT.mbx_out.1,
@@ -180,7 +183,10 @@ pub extern "C" fn fw_poll(now_ns: u64) -> i32 {
         FIRMWARE
             .with(|fw| {
                 let mut flash = board::FlashStore;
-                match fw.poll_with(now_ns, Some(&mut flash)) {
+                // A device without FoE gets no image store: the update's
+                // code (FoE, the `.efw` check, the A/B store) is not linked.
+                let images = device::FOE.then_some(&mut flash as &mut dyn ecat_slave::firmware::ImageStore);
+                match fw.poll_with(now_ns, images) {
                     Ok(()) => 0,
                     Err(_) => -1,
                 }

@@ -183,14 +183,18 @@ pub const DEVICE: DeviceDescription = DeviceDescription {
         // (the request and the response kept for the repeat service), so
         // 512 bytes would cost 768 bytes of RAM for a faster FoE download
         // (116 instead of 500 image bytes per packet).
-        boot_size: Some(128),
+        boot_size: if cfg!(feature = "footprint-no-foe") {
+            None
+        } else {
+            Some(128)
+        },
         coe: CoeServices {
             sdo_info: !cfg!(feature = "coe-minimal"),
             pdo_assign: true,
             pdo_config: false,
             complete_access: !cfg!(feature = "coe-minimal"),
         },
-        foe: true,
+        foe: !cfg!(feature = "footprint-no-foe"),
         foe_security: FOE_SECURITY,
     },
     esc: EscConfig::DEFAULT,
