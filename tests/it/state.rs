@@ -21,6 +21,14 @@ async fn status(bus: &VirtualBus, station: u16) -> (u16, u16) {
     crate::common::status(&bus.maindevice, station).await
 }
 
+/// ethercrab's `init` of the bus (PRE-OP); the first slave's station
+/// address.
+async fn first_station(bus: &VirtualBus) -> u16 {
+    let md = &*bus.maindevice;
+    let group = bus.init().await.expect("init");
+    group.subdevice(md, 0).expect("slave").configured_address()
+}
+
 /// Lets the link thread poll the firmware a few times.
 async fn settle(bus: &VirtualBus) {
     crate::common::settle(&bus.maindevice).await;
@@ -253,8 +261,7 @@ fn tf1200_mailbox_repeat_returns_the_identical_previous_response() {
     smol::block_on(async {
         let bus = VirtualBus::new(1).expect("bus");
         let md: &Md = &bus.maindevice;
-        let group = bus.init().await.expect("init");
-        let s = group.subdevice(md, 0).expect("slave").configured_address();
+        let s = first_station(&bus).await;
         let mut c = MailboxClient::new(md, s, MailboxGeometry::standard());
         c.send(
             ecat_slave::wire::mailbox::MailboxType::CoE,
@@ -283,8 +290,7 @@ fn a_request_waits_in_sm0_until_the_master_has_read_sm1_and_a_repeat_still_retur
     smol::block_on(async {
         let bus = VirtualBus::new(1).expect("bus");
         let md: &Md = &bus.maindevice;
-        let group = bus.init().await.expect("init");
-        let s = group.subdevice(md, 0).expect("slave").configured_address();
+        let s = first_station(&bus).await;
         let mut c = MailboxClient::new(md, s, MailboxGeometry::standard());
         let vendor = [0x00, 0x20, 0x40, 0x18, 0x10, 0x01, 0, 0, 0, 0];
         let product = [0x00, 0x20, 0x40, 0x18, 0x10, 0x02, 0, 0, 0, 0];

@@ -615,13 +615,12 @@ fn a_twin_whose_esi_offers_no_sdo_information_nor_complete_access_refuses_both()
         let bus = VirtualBus::with_chain(Chain::with_slaves(vec![twin]), Clock::simulated(), None)
             .expect("bus");
         let md = &*bus.maindevice;
-        let group = bus.init().await.expect("init");
-        let sd = group.subdevice(md, 0).expect("slave");
-        let mut c = MailboxClient::new(
-            md,
-            sd.configured_address(),
-            MailboxGeometry::of(&io8_example::DEVICE.layout()),
-        );
+        let station = {
+            let group = bus.init().await.expect("init");
+            group.subdevice(md, 0).expect("slave").configured_address()
+        };
+        let geometry = MailboxGeometry::of(&io8_example::DEVICE.layout());
+        let mut c = MailboxClient::new(md, station, geometry);
         match od_list(&mut c, 1).await {
             Err(ClientError::Mailbox(code)) => assert_eq!(u16::from(code), 0x0004),
             other => panic!("SDO Information answered: {other:?}"),
