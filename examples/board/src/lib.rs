@@ -132,9 +132,19 @@ impl<I: InputPin, O: OutputPin> Board for PinBoard<I, O> {
     }
 }
 
+/// The IO8's largest mailbox and process image, from its description.
+const MBX: usize = io8_example::DEVICE.largest_mailbox();
+const IMAGE: (usize, usize) = io8_example::DEVICE.largest_image();
+/// The largest object an SDO transfer of the IO8 carries (its device
+/// name, 0x1008, is the longest).
+const SDO: usize = 128;
+
+/// The IO8's firmware, its buffers sized from its description.
+pub type Io8Slave<S, B, N> = Slave<Lan9252Spi<S>, Io8<B, N>, MBX, SDO, { IMAGE.0 }, { IMAGE.1 }>;
+
 /// The IO8 firmware on a LAN9252 over SPI, with the chip's IRQ line.
 pub struct Node<S: SpiDevice, Q: InputPin, B: Board, N: NvStorage = MemNv<STORAGE_SIZE>> {
-    slave: Slave<Lan9252Spi<S>, Io8<B, N>>,
+    slave: Io8Slave<S, B, N>,
     irq: Q,
     schedule: PollSchedule,
     passes: u32,
@@ -148,7 +158,7 @@ impl<S: SpiDevice, Q: InputPin, B: Board, N: NvStorage> Node<S, Q, B, N> {
         let id = esc.init()?;
         esc.enable_irq(false, true)?;
         let node = Node {
-            slave: Slave::new(esc, Io8::new(board, nv)),
+            slave: Slave::with_buffers(esc, Io8::new(board, nv)),
             irq,
             schedule: PollSchedule::new(IDLE_POLL_NS),
             passes: 0,
@@ -218,12 +228,12 @@ impl<S: SpiDevice, Q: InputPin, B: Board, N: NvStorage> Node<S, Q, B, N> {
     }
 
     /// The firmware.
-    pub fn slave(&self) -> &Slave<Lan9252Spi<S>, Io8<B, N>> {
+    pub fn slave(&self) -> &Io8Slave<S, B, N> {
         &self.slave
     }
 
     /// The firmware, mutably.
-    pub fn slave_mut(&mut self) -> &mut Slave<Lan9252Spi<S>, Io8<B, N>> {
+    pub fn slave_mut(&mut self) -> &mut Io8Slave<S, B, N> {
         &mut self.slave
     }
 }
