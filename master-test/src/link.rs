@@ -212,6 +212,22 @@ impl Link {
                 let mut reordered: Option<(Instant, Vec<u8>)> = None;
                 let mut was_down = false;
                 let mut last_frame = Instant::now();
+                // The slaves' time of the passes between frames. A
+                // `Clock::frames` clock moves for the slaves with the
+                // traffic: between frames they run at the last frame's
+                // time, so whether such a pass sees an `advance` of the
+                // test before the next frame does not depend on how the
+                // machine schedules this thread (a drive ticking on that
+                // early pass would take the next target a cycle late).
+                let frames_clock = matches!(clock, Clock::Frames { .. });
+                let mut frame_ns = clock.now_ns();
+                let between_frames = |clock: &Clock, frame_ns: u64| {
+                    if frames_clock {
+                        frame_ns
+                    } else {
+                        clock.now_ns()
+                    }
+                };
                 while !stop2.load(Ordering::Acquire) && !tx.should_exit() {
                     tx.replace_waker(&waker);
                     let mut sent = false;
@@ -230,6 +246,7 @@ impl Link {
                         }
                         clock.frame_passed();
                         let now = clock.now_ns();
+                        frame_ns = now;
                         let fate = faults.as_ref().map_or(Fate::Deliver, |f| {
                             lock_faults(f).fate(Duration::from_nanos(now.saturating_sub(start_ns)))
                         });
@@ -303,11 +320,11 @@ impl Link {
                             // sends the next one within microseconds:
                             // waiting for it without sleeping saves the
                             // wake-up (tens of microseconds per frame).
-                            let _ = lock(&chain).service(clock.now_ns());
+                            let _ = lock(&chain).service(between_frames(&clock, frame_ns));
                             thread::yield_now();
                             continue;
                         }
-                        let _ = lock(&chain).idle(clock.now_ns());
+                        let _ = lock(&chain).idle(between_frames(&clock, frame_ns));
                         let wait = if delayed.is_empty() && reordered.is_none() {
                             Duration::from_millis(1)
                         } else {
