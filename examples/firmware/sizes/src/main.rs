@@ -13,7 +13,7 @@ use ecat_slave::coe::CoeServer;
 use ecat_slave::coe::emergency::Emergencies;
 use ecat_slave::coe::sdo::SdoServer;
 use ecat_slave::coe::sdo_info::SdoInfoServer;
-use ecat_slave::device::{DeviceDescription, MAX_MAILBOX, Slave};
+use ecat_slave::device::{DeviceDescription, Slave};
 use ecat_slave::esc::{Esc, EscError};
 use ecat_slave::firmware::EfwValidator;
 use ecat_slave::foe::{FoeServer, FoeState};
@@ -190,17 +190,26 @@ fn od_tables(device: &str, desc: &DeviceDescription) {
     );
 }
 
+/// The firmware's buffer sizes (as `examples/firmware`): mailboxes and
+/// process images from the description, SDO transfers 128 / 256 bytes.
+const IO8_MBX: usize = io8_example::DEVICE.largest_mailbox();
+const IO8_IMAGE: (usize, usize) = io8_example::DEVICE.largest_image();
+const PAM_MBX: usize = pam_199_p_etc::DEVICE.largest_mailbox();
+const PAM_IMAGE: (usize, usize) = pam_199_p_etc::DEVICE.largest_image();
+type Io8Firmware = Slave<NoEsc, Io8App, IO8_MBX, 128, { IO8_IMAGE.0 }, { IO8_IMAGE.1 }>;
+type PamFirmware = Slave<NoEsc, PamApp, PAM_MBX, 256, { PAM_IMAGE.0 }, { PAM_IMAGE.1 }>;
+
 fn main() {
     println!(
         "Static RAM parts (core::mem::size_of on x86-64, board types zero-sized as in the firmware):"
     );
     row(
-        "Slave<SpiEsc, Io8<..>>  (the whole IO8 firmware object)",
-        size_of::<Slave<NoEsc, Io8App>>(),
+        "Slave<SpiEsc, Io8<..>, ..>  (the whole IO8 firmware object, buffers from its description)",
+        size_of::<Io8Firmware>(),
     );
     row(
-        "Slave<SpiEsc, Pam<..>>  (the whole PAM firmware object)",
-        size_of::<Slave<NoEsc, PamApp>>(),
+        "Slave<SpiEsc, Pam<..>, ..>  (the whole PAM firmware object, buffers from its description)",
+        size_of::<PamFirmware>(),
     );
     row("  Io8<..> application", size_of::<Io8App>());
     row("  Pam<..> application", size_of::<PamApp>());
@@ -222,11 +231,14 @@ fn main() {
         "    of which the string slots (heapless 4 x 32 B)",
         size_of::<ObjectStore<[i64; 0]>>(),
     );
-    row("  MailboxServer", size_of::<MailboxServer>());
-    row("    CoeServer", size_of::<CoeServer>());
+    row(
+        "  MailboxServer (IO8: 128-byte SDO transfers)",
+        size_of::<MailboxServer<128>>(),
+    );
+    row("    CoeServer", size_of::<CoeServer<128>>());
     row(
         "      SdoServer (segmented transfer buffer)",
-        size_of::<SdoServer>(),
+        size_of::<SdoServer<128>>(),
     );
     row(
         "      SdoInfoServer (fragment buffer)",
@@ -242,16 +254,17 @@ fn main() {
         size_of::<EfwValidator>(),
     );
     row(
-        "  pending: Option<(usize, [u8; MAX_MAILBOX])>",
-        size_of::<Option<(usize, [u8; MAX_MAILBOX])>>(),
+        &format!(
+            "  request and response buffers (IO8: 2 x {IO8_MBX} B, PAM: 2 x {PAM_MBX} B; IO8)"
+        ),
+        2 * size_of::<[u8; IO8_MBX]>(),
     );
     row(
-        "  last_sent: Option<(usize, [u8; MAX_MAILBOX])>",
-        size_of::<Option<(usize, [u8; MAX_MAILBOX])>>(),
-    );
-    row(
-        "  ProcessImage (x 2: outputs, inputs)",
-        size_of::<ProcessImage>(),
+        &format!(
+            "  ProcessImage (x 2: outputs, inputs; IO8: {} entries)",
+            IO8_IMAGE.0
+        ),
+        size_of::<ProcessImage<{ IO8_IMAGE.0 }>>(),
     );
     row("  Emergencies (queue)", size_of::<Emergencies>());
     println!(
