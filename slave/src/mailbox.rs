@@ -74,35 +74,38 @@ impl<const T: usize> MailboxServer<T> {
         od: &mut impl ObjectAccess,
         foe: Option<&mut FoeContext<'_>>,
     ) -> Handled {
-        if let Ok(mbx) = Mailbox::new_checked(request) {
-            let counter = mbx.counter();
-            let digest =
-                crate::firmware::crc32(mbx.payload()) ^ u32::from(u8::from(mbx.mailbox_type()));
-            if counter != 0 && self.last_request == Some((counter, digest)) {
-                // A repeated mailbox (same counter, same content): the
-                // master sent it again; it is not executed twice.
-                return Handled::Repeated;
+        let mbx = match Mailbox::new_checked(request) {
+            Ok(m) => m,
+            Err(_) => {
+                out.fill(0);
+                let code = if request.len() < HEADER_LEN {
+                    MailboxErrorCode::InvalidHeader
+                } else {
+                    MailboxErrorCode::InvalidSize
+                };
+                return Handled::Done(self.error_reply(out, code));
             }
-            self.last_request = (counter != 0).then_some((counter, digest));
+        };
+        let counter = mbx.counter();
+        let digest =
+            crate::firmware::crc32(mbx.payload()) ^ u32::from(u8::from(mbx.mailbox_type()));
+        if counter != 0 && self.last_request == Some((counter, digest)) {
+            // A repeated mailbox (same counter, same content): the master
+            // sent it again; it is not executed twice.
+            return Handled::Repeated;
         }
+        self.last_request = (counter != 0).then_some((counter, digest));
         out.fill(0);
-        Handled::Done(self.execute(request, out, od, foe))
+        Handled::Done(self.execute(mbx, out, od, foe))
     }
 
     fn execute(
         &mut self,
-        request: &[u8],
+        mbx: Mailbox<&[u8]>,
         out: &mut [u8],
         od: &mut impl ObjectAccess,
         foe: Option<&mut FoeContext<'_>>,
     ) -> Option<usize> {
-        let mbx = match Mailbox::new_checked(request) {
-            Ok(m) => m,
-            Err(_) if request.len() < HEADER_LEN => {
-                return self.error_reply(out, MailboxErrorCode::InvalidHeader);
-            }
-            Err(_) => return self.error_reply(out, MailboxErrorCode::InvalidSize),
-        };
         let header_len = HEADER_LEN;
         match mbx.mailbox_type() {
             MailboxType::CoE => {

@@ -232,16 +232,19 @@ impl<const N: usize> ProcessImage<N> {
         dir: Direction,
         pd: &ProcessData,
     ) -> Result<(), PdoError> {
+        self.clear();
+        let result = self.fill(store, dir, pd);
+        if result.is_err() {
+            self.clear();
+        }
+        result
+    }
+
+    /// Empty, as [`ProcessImage::default`], in place.
+    fn clear(&mut self) {
         self.entries.clear();
         self.bits = 0;
         self.sets = u32::MAX;
-        let result = self.fill(store, dir, pd);
-        if result.is_err() {
-            self.entries.clear();
-            self.bits = 0;
-            self.sets = u32::MAX;
-        }
-        result
     }
 
     fn fill(&mut self, store: &Od, dir: Direction, pd: &ProcessData) -> Result<(), PdoError> {
