@@ -539,3 +539,32 @@ fn soem_drives_a_coe_twin_built_from_an_esi_file() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The same twin from an ESI that offers neither SDO Information nor
+/// complete access (`esi_twin` reads the ESI's `Mailbox/CoE`): SOEM's OD
+/// list read is refused and its complete-access upload aborted with
+/// 0x06010000, while the rest runs as before.
+#[test]
+fn soem_finds_the_coe_services_a_twins_esi_does_not_offer_refused() {
+    let dir = std::env::temp_dir().join(format!("pam-soem-esi-coe-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let xml =
+        String::from_utf8(ecat_esi::generate(&io8_example::DEVICE).expect("ESI")).expect("utf-8");
+    let edited = xml.replacen("SdoInfo=\"1\"", "SdoInfo=\"0\"", 1).replacen(
+        "CompleteAccess=\"1\"",
+        "CompleteAccess=\"0\"",
+        1,
+    );
+    assert_ne!(edited, xml, "the ESI offered both");
+    let esi = dir.join("IO8-no-info.xml");
+    std::fs::write(&esi, edited).expect("write");
+    let path = esi.to_str().expect("utf-8 path").to_string();
+    soem_phase(
+        "f",
+        "esi-twin-no-info",
+        "",
+        &["--esi", &path, "--inputs", "loopback"],
+        &["esi_twin", &path],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
