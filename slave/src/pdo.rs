@@ -4,8 +4,7 @@
 //! outputs, 0x1C13 for inputs) and the mapping objects it names, as the live
 //! object dictionary holds them. It packs entry values into the SyncManager
 //! buffer at bit granularity (inputs) and unpacks the buffer into entries
-//! (outputs); the bit fields are `bitvec` bit-slices ([`write_bits`],
-//! [`read_bits`]).
+//! (outputs) with [`write_bits`] and [`read_bits`].
 
 use crate::od::Dictionary;
 use crate::od::store::Od;
