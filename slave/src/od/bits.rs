@@ -10,7 +10,11 @@ pub fn write_bits(buf: &mut [u8], offset: u16, len: u8, v: u64) {
         // Flags, the most common bit field: one byte touched.
         if let Some(byte) = buf.get_mut(usize::from(offset / 8)) {
             let mask = 1u8 << (offset % 8);
-            *byte = if v & 1 != 0 { *byte | mask } else { *byte & !mask };
+            *byte = if v & 1 != 0 {
+                *byte | mask
+            } else {
+                *byte & !mask
+            };
         }
         return;
     }
