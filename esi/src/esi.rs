@@ -397,6 +397,7 @@ fn write_value_info(w: &mut W, e: &Entry) -> io::Result<()> {
             text(w, "DefaultData", &hex_binary(&bytes))?;
         }
         DefaultValue::Int(v) => {
+            let v = v.get();
             if let Some(min) = e.min() {
                 text(w, "MinData", &default_data(min, e.bit_len))?;
             }
@@ -752,7 +753,7 @@ pub fn generate(dev: &DeviceDescription) -> Result<Vec<u8>, EsiError> {
     let pdos = sii_pdos(&r)?;
     let profile = match dev.dictionary.find_entry(0x1000, 0) {
         Some((_, e)) => match e.default {
-            DefaultValue::Int(v) => v & 0xFFFF,
+            DefaultValue::Int(v) => v.get() & 0xFFFF,
             DefaultValue::Str(_) | DefaultValue::Bytes(_) => 0,
         },
         None => 0,
@@ -1030,6 +1031,7 @@ mod tests {
                 assert!(d.starts_with(b), "{what}");
             }
             DefaultValue::Int(v) => {
+                let v = v.get();
                 let d = info
                     .text_at("DefaultData")
                     .unwrap_or_else(|| panic!("{what}"));

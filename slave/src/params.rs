@@ -252,7 +252,7 @@ fn decode(e: &Entry, bytes: &[u8]) -> i64 {
 pub fn restore_defaults(store: &mut Od) {
     for (flat, e) in stored_entries(store.dictionary()) {
         if let DefaultValue::Int(v) = e.default {
-            store.set_value(flat, v);
+            store.set_value(flat, v.get());
         }
     }
 }

@@ -363,7 +363,7 @@ struct ValueInfo {
 }
 
 const NO_VALUE_INFO: ValueInfo = ValueInfo {
-    default: DefaultValue::Int(0),
+    default: DefaultValue::int(0),
     min: None,
     max: None,
     unit: "",
@@ -462,7 +462,7 @@ fn value_info(info: Option<&Element>, s: &Scalar) -> Result<ValueInfo, EsiError>
             unit: "",
         });
     }
-    let default = DefaultValue::Int(data("DefaultData")?.or(val("DefaultValue")?).unwrap_or(0));
+    let default = DefaultValue::int(data("DefaultData")?.or(val("DefaultValue")?).unwrap_or(0));
     let min = data("MinData")?.or(val("MinValue")?);
     let max = data("MaxData")?.or(val("MaxValue")?);
     let unit = match info.child("Unit") {
@@ -766,13 +766,13 @@ fn parse_object(
                     // use, as the core reads it.)
                     let list = matches!(index, 0x1C12 | 0x1C13 | 0xF030) || e.access.writable();
                     let want = i64::from(highest);
-                    let ok = matches!(e.default, DefaultValue::Int(v) if v == want || (list && (0..=want).contains(&v)));
+                    let ok = matches!(e.default.as_int(), Some(v) if v == want || (list && (0..=want).contains(&v)));
                     if !ok {
                         warnings.push(Warning::new(
                             o,
                             format!("object {index:#06x}: subindex 0 defaults to {:?}, its highest subindex is {highest}: {highest} assumed", e.default),
                         ));
-                        e.default = DefaultValue::Int(want);
+                        e.default = DefaultValue::int(want);
                     }
                 }
                 entries.push(e);
@@ -891,13 +891,13 @@ mod tests {
         let dt = o(0x1000);
         assert_eq!(
             (dt.code, dt.entries[0].default),
-            (ObjectCode::Var, DefaultValue::Int(0x1389))
+            (ObjectCode::Var, DefaultValue::int(0x1389))
         );
         let off = &o(0x2000).entries[0];
         assert_eq!(off.data_type, DataType::Int16);
         assert_eq!(
             (off.default, off.min(), off.max()),
-            (DefaultValue::Int(-10), Some(-1000), Some(1000))
+            (DefaultValue::int(-10), Some(-1000), Some(1000))
         );
         assert_eq!(
             (off.unit(), off.access, off.pdo, off.backup),
@@ -906,18 +906,18 @@ mod tests {
         let id = o(0x1018);
         assert_eq!(id.code, ObjectCode::Record);
         assert_eq!(id.entries.len(), 4);
-        assert_eq!(id.entries[1].default, DefaultValue::Int(0xABC));
+        assert_eq!(id.entries[1].default, DefaultValue::int(0xABC));
         assert!(id.entries[2].gap, "BIT7 without flags is a gap");
         let mode = &id.entries[3];
         assert_eq!(
             (mode.access, mode.pdo, mode.default),
-            (Access::RwPreOp, PdoMapping::Rx, DefaultValue::Int(1))
+            (Access::RwPreOp, PdoMapping::Rx, DefaultValue::int(1))
         );
         assert!(matches!(mode.data_type, DataType::Enum(e) if e.text(1) == Some("on")));
         let a = o(0x1C12);
         assert_eq!(a.code, ObjectCode::Array);
         assert_eq!(a.entries.len(), 3, "sub 0 and two elements");
-        assert_eq!(a.entries[1].default, DefaultValue::Int(0x1600));
+        assert_eq!(a.entries[1].default, DefaultValue::int(0x1600));
         assert_eq!(a.entries[2].name, "SubIndex 002");
         assert_eq!(o(0x1008).entries[0].default, DefaultValue::Str("Twin 1"));
         let dict = build(objs.into_iter().map(|p| p.object).collect(), enums);
@@ -1017,7 +1017,7 @@ mod tests {
         let rec = o(0x2000);
         assert_eq!(
             rec.entries[0].default,
-            DefaultValue::Int(4),
+            DefaultValue::int(4),
             "subindex 0 = highest"
         );
         let key = &rec.entries[1];
@@ -1032,11 +1032,11 @@ mod tests {
         assert_eq!(gain.data_type, DataType::Real32);
         assert_eq!(
             gain.default,
-            DefaultValue::Int(i64::from((-2.5f32).to_bits()))
+            DefaultValue::int(i64::from((-2.5f32).to_bits()))
         );
         assert_eq!(gain.min(), Some(i64::from((-10f32).to_bits())));
         assert_eq!(o(0x2002).entries[0].data_type, DataType::Int16);
-        assert_eq!(o(0x2002).entries[0].default, DefaultValue::Int(-10));
+        assert_eq!(o(0x2002).entries[0].default, DefaultValue::int(-10));
         assert_eq!(
             o(0x2003).entries[0].data_type,
             DataType::UInt16,
@@ -1139,7 +1139,7 @@ mod tests {
         };
         let qs = e(0x605A);
         assert_eq!((qs.min(), qs.max()), (Some(-2), Some(6)));
-        assert_eq!(qs.default, DefaultValue::Int(-1));
+        assert_eq!(qs.default, DefaultValue::int(-1));
         assert_eq!(e(0x2000).min(), Some(-5), "decimal as written");
         assert_eq!(e(0x2001).max(), Some(0xFFFE), "unsigned hex unchanged");
     }

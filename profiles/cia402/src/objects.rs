@@ -157,7 +157,7 @@ const fn obj(index: u16, name: &'static str, entries: &'static [Entry]) -> Objec
 
 /// 6060h: an output (RxPDO-mappable, RW) defaulting to CSP.
 const MODES_OF_OPERATION: Entry = Entry {
-    default: DefaultValue::Int(Mode::CyclicPosition.code() as i64),
+    default: DefaultValue::int(Mode::CyclicPosition.code() as i64),
     ..output(0, "Modes of operation", DataType::Int8)
 };
 
@@ -178,7 +178,7 @@ pub const OBJECTS: &[Object] = &[
     ]),
     obj(index::MODES_OF_OPERATION, "Modes of operation", &[MODES_OF_OPERATION]),
     obj(index::MODES_DISPLAY, "Modes of operation display", &[Entry {
-        default: DefaultValue::Int(Mode::CyclicPosition.code() as i64),
+        default: DefaultValue::int(Mode::CyclicPosition.code() as i64),
         ..input(0, "Modes of operation display", DataType::Int8)
     }]),
     obj(index::POSITION_DEMAND, "Position demand value", &[input(0, "Position demand value", DataType::Int32)]),
@@ -359,9 +359,9 @@ mod tests {
     #[test]
     fn the_parameter_defaults_are_the_drives_defaults() {
         let d: &Dictionary = &PROFILE;
-        let get = |i| match d.find_entry(i, 0).map(|(_, e)| e.default) {
-            Some(DefaultValue::Int(v)) => v,
-            _ => panic!("{i:#06x}"),
+        let get = |i| match d.find_entry(i, 0).and_then(|(_, e)| e.default.as_int()) {
+            Some(v) => v,
+            None => panic!("{i:#06x}"),
         };
         let p = Parameters::DEFAULT;
         assert_eq!(
@@ -385,7 +385,7 @@ mod tests {
                 .iter()
                 .skip(1)
                 .map(|e| match e.default {
-                    DefaultValue::Int(v) => (v & 0xFF) as u32,
+                    DefaultValue::Int(v) => (v.get() & 0xFF) as u32,
                     _ => 0,
                 })
                 .sum()
@@ -394,7 +394,7 @@ mod tests {
         assert_eq!(bits(&TX_PDO) as usize, 8 * TX_PDO_BYTES);
         let mapped = |pdo: &Object, index: u16| {
             pdo.entries.iter().skip(1).any(|e| match e.default {
-                DefaultValue::Int(v) => (v >> 16) as u16 == index,
+                DefaultValue::Int(v) => (v.get() >> 16) as u16 == index,
                 _ => false,
             })
         };

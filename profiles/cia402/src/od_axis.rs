@@ -99,7 +99,7 @@ impl Cia402Axis<AxisModel> {
     pub fn is_cia402(dict: &Dictionary) -> bool {
         let profile = matches!(
             dict.find_entry(0x1000, 0).map(|(_, e)| e.default),
-            Some(DefaultValue::Int(v)) if v & 0xFFFF == 402
+            Some(DefaultValue::Int(v)) if v.get() & 0xFFFF == 402
         );
         let objects = dict.find_entry(index::CONTROLWORD, 0).is_some()
             && dict.find_entry(index::STATUSWORD, 0).is_some();

@@ -583,7 +583,7 @@ fn write_entry_description(w: &mut Writer<'_>, index: u16, e: &Entry, asked: u8)
     }
     if info & value_info::DEFAULT != 0 {
         match e.default {
-            DefaultValue::Int(v) => w.int(v.into(), n),
+            DefaultValue::Int(v) => w.int(v.get().into(), n),
             DefaultValue::Str(s) => {
                 let text = s.as_bytes();
                 for i in 0..n {

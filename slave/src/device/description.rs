@@ -269,7 +269,7 @@ const fn int_default(o: &Object, sub: u8) -> Option<i64> {
     while let Some((e, tail)) = es.split_first() {
         if e.sub == sub {
             return match e.default {
-                DefaultValue::Int(v) => Some(v),
+                DefaultValue::Int(v) => Some(v.get()),
                 DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
             };
         }
@@ -470,7 +470,7 @@ impl DeviceDescription {
                         let DefaultValue::Int(mapping) = e.default else {
                             return Err(DescriptionError::BadMapping { pdo, sub: e.sub });
                         };
-                        let mapping = mapping as u32;
+                        let mapping = mapping.get() as u32;
                         let index = (mapping >> 16) as u16;
                         let msub = ((mapping >> 8) & 0xFF) as u8;
                         let mbits = (mapping & 0xFF) as u16;

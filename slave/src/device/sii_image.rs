@@ -26,7 +26,7 @@ type PdoEntries = heapless::Vec<sii::SiiPdoEntry<'static>, SII_MAX_ENTRIES>;
 pub fn mapping_entries(dict: &Dictionary, pdo: u16) -> impl Iterator<Item = (u16, u8, u8)> {
     let entries = dict.find(pdo).map_or(&[][..], |(_, o)| o.entries);
     let count = entries.first().map_or(0, |e| match e.default {
-        DefaultValue::Int(v) => v,
+        DefaultValue::Int(v) => v.get(),
         DefaultValue::Str(_) | DefaultValue::Bytes(_) => 0,
     });
     entries
@@ -34,7 +34,7 @@ pub fn mapping_entries(dict: &Dictionary, pdo: u16) -> impl Iterator<Item = (u16
         .filter(move |e| e.sub != 0 && i64::from(e.sub) <= count)
         .filter_map(|e| match e.default {
             DefaultValue::Int(m) => {
-                let m = m as u32;
+                let m = m.get() as u32;
                 Some(((m >> 16) as u16, (m >> 8) as u8, m as u8))
             }
             DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,

@@ -45,7 +45,7 @@ pub const fn base(
         bit_len: natural_bits(&data_type),
         access,
         pdo,
-        default: DefaultValue::Int(default),
+        default: DefaultValue::int(default),
         limits: &Limits::NONE,
         backup: false,
         setting: false,

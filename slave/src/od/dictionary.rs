@@ -454,11 +454,12 @@ const fn check_entry(
         }
         DefaultValue::Int(v) if e.data_type.is_bytes() => {
             // A byte entry whose default is all zeros.
-            if v != 0 || matches!(e.data_type, DataType::VisibleString) {
+            if v.get() != 0 || matches!(e.data_type, DataType::VisibleString) {
                 return Err(DescriptionError::BitLength { index, sub });
             }
         }
         DefaultValue::Int(v) => {
+            let v = v.get();
             // A BOOLEAN is one bit, or a whole byte (ATI's F/T sensor and
             // other SSC-based devices describe it so; TwinCAT accepts it).
             let byte_bool = matches!(e.data_type, DataType::Bool) && e.bit_len == 8;

@@ -136,7 +136,7 @@ impl Od {
         for (flat, _, e) in dict.entries() {
             let slots = e.area_len().div_ceil(8);
             match e.default {
-                DefaultValue::Int(v) if slots == 0 => self.set_value(flat, v),
+                DefaultValue::Int(v) if slots == 0 => self.set_value(flat, v.get()),
                 DefaultValue::Int(_) => self.fill_area(area, slots, &[]),
                 DefaultValue::Bytes(b) => self.fill_area(area, slots, b),
                 DefaultValue::Str(s) if s.len() <= STRING_CAPACITY => {

@@ -58,8 +58,8 @@ pub(super) fn normalize_assignment(
     let mut entries: Vec<Entry> = o.entries.iter().map(copy).collect();
     for e in entries.iter_mut() {
         match e.sub {
-            0 => e.default = DefaultValue::Int(want.len() as i64),
-            s => e.default = DefaultValue::Int(want.get(usize::from(s) - 1).copied().unwrap_or(0)),
+            0 => e.default = DefaultValue::int(want.len() as i64),
+            s => e.default = DefaultValue::int(want.get(usize::from(s) - 1).copied().unwrap_or(0)),
         }
     }
     o.entries = Box::leak(entries.into_boxed_slice());
@@ -80,7 +80,7 @@ pub(super) fn drop_impossible_ranges(
             .iter()
             .enumerate()
             .filter(|(_, e)| {
-                let DefaultValue::Int(v) = e.default else {
+                let Some(v) = e.default.as_int() else {
                     return false;
                 };
                 if e.data_type.is_bytes() || matches!(e.data_type, DataType::Enum(_)) {
@@ -109,11 +109,11 @@ pub(super) fn drop_impossible_ranges(
                 });
                 e.limits = crate::leak_limits(None, None, e.unit());
                 // A default outside its type: its bits in the type's size.
-                if let DefaultValue::Int(v) = e.default {
+                if let Some(v) = e.default.as_int() {
                     let (lo, hi) =
                         ecat_slave::od::dictionary::natural_range(&e.data_type, e.bit_len);
                     if !e.data_type.is_real() && (v < lo || v > hi) {
-                        e.default = DefaultValue::Int(ecat_slave::od::store::from_raw(
+                        e.default = DefaultValue::int(ecat_slave::od::store::from_raw(
                             e,
                             v as u64
                                 & u64::MAX
@@ -167,7 +167,7 @@ pub(super) fn mapped_entry(sub: u8, name: &str, ty: DataType, bits: u8, out: boo
         default: if ty.is_bytes() {
             DefaultValue::Bytes(&[])
         } else {
-            DefaultValue::Int(0)
+            DefaultValue::int(0)
         },
         ..base
     }
@@ -316,7 +316,7 @@ pub(super) fn complete(
             for (k, v) in want.iter().enumerate() {
                 let sub = u8::try_from(k + 1).unwrap_or(u8::MAX);
                 match entries.iter_mut().find(|e| e.sub == sub) {
-                    Some(e) => e.default = DefaultValue::Int(*v),
+                    Some(e) => e.default = DefaultValue::int(*v),
                     None => entries.push(map(sub, ecat_slave::od::build::sub_name(sub), *v as u32)),
                 }
             }
@@ -327,7 +327,7 @@ pub(super) fn complete(
             let highest = entries.iter().map(|e| e.sub).max().unwrap_or(0);
             if let Some(z) = entries.first_mut().filter(|z| z.sub == 0) {
                 z.default =
-                    DefaultValue::Int(i64::from(if z.access.writable() { n } else { highest }));
+                    DefaultValue::int(i64::from(if z.access.writable() { n } else { highest }));
             }
             objects[pos] = Object {
                 entries: Box::leak(entries.into_boxed_slice()),
@@ -355,16 +355,17 @@ pub(super) fn complete(
         if !out && !(0x1A00..=0x1BFF).contains(&o.index) {
             continue;
         }
-        let n = match o.entries.first().map(|e| e.default) {
-            Some(DefaultValue::Int(n)) => n,
-            _ => 0,
-        };
+        let n = o
+            .entries
+            .first()
+            .and_then(|e| e.default.as_int())
+            .unwrap_or(0);
         for e in o
             .entries
             .iter()
             .filter(|e| e.sub >= 1 && i64::from(e.sub) <= n)
         {
-            let DefaultValue::Int(v) = e.default else {
+            let Some(v) = e.default.as_int() else {
                 continue;
             };
             let (index, sub, bits) = ((v >> 16) as u16, (v >> 8) as u8, v as u8);
@@ -465,7 +466,7 @@ pub(super) fn complete(
                         entries.sort_by_key(|x| x.sub);
                         let highest = entries.iter().map(|x| x.sub).max().unwrap_or(0);
                         if let Some(z) = entries.first_mut().filter(|z| z.sub == 0) {
-                            z.default = DefaultValue::Int(i64::from(highest));
+                            z.default = DefaultValue::int(i64::from(highest));
                         }
                         objects[pos] = Object {
                             entries: Box::leak(entries.into_boxed_slice()),

@@ -127,17 +127,15 @@ pub(super) fn leak_list(v: Vec<u16>) -> &'static [u16] {
 /// values of subindices 1 to subindex 0's default (-1 for one that is no
 /// number).
 pub(super) fn list_defaults(o: &Object) -> Vec<i64> {
-    let count = match o.entries.first().map(|e| e.default) {
-        Some(DefaultValue::Int(n)) => n,
-        _ => 0,
-    };
+    let count = o
+        .entries
+        .first()
+        .and_then(|e| e.default.as_int())
+        .unwrap_or(0);
     o.entries
         .iter()
         .filter(|e| e.sub >= 1 && i64::from(e.sub) <= count)
-        .map(|e| match e.default {
-            DefaultValue::Int(v) => v,
-            _ => -1,
-        })
+        .map(|e| e.default.as_int().unwrap_or(-1))
         .collect()
 }
 
@@ -266,7 +264,7 @@ pub(super) fn build_description(dev: &EsiDevice) -> Result<Described, Descriptio
                 .iter()
                 .map(|e| match e.sub {
                     s @ 1..=3 => Entry {
-                        default: DefaultValue::Int(i64::from(
+                        default: DefaultValue::int(i64::from(
                             id.get(usize::from(s) - 1).copied().unwrap_or(0),
                         )),
                         ..copy(e)
@@ -659,13 +657,13 @@ mod tests {
         assert_eq!(idx, [0xF050, 0xF000, 0xF030], "the ESI's own 0xF050 kept");
         assert_eq!(objects[0].name, "Detected (the ESI's own)");
         let f000 = &objects[1];
-        assert_eq!(f000.entries[1].default, DefaultValue::Int(0x800));
-        assert_eq!(f000.entries[2].default, DefaultValue::Int(2));
+        assert_eq!(f000.entries[1].default, DefaultValue::int(0x800));
+        assert_eq!(f000.entries[2].default, DefaultValue::int(2));
         let f030 = &objects[2];
         assert_eq!(f030.entries.len(), 3, "subindex 0 and one per slot");
         assert_eq!(
             f030.entries[0].default,
-            DefaultValue::Int(0),
+            DefaultValue::int(0),
             "nothing configured"
         );
         assert_eq!(f030.entries[1].access, ecat_slave::od::Access::RwPreOp);

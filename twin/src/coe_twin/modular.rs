@@ -136,14 +136,15 @@ pub(super) fn modular(
                         DefaultValue::Int(v)
                             if (0x1600..=0x1BFF).contains(&o.index) && e.sub != 0 =>
                         {
+                            let v = v.get();
                             let target = ((v >> 16) & 0xFFFF) as u16;
                             match slot_of_object(target).filter(|s| *s == 0) {
                                 Some(_) => {
                                     let moved = shifted(target, slot, distance, pdo_increment)
                                         .unwrap_or(target);
-                                    DefaultValue::Int((v & 0xFFFF) | i64::from(moved) << 16)
+                                    DefaultValue::int((v & 0xFFFF) | i64::from(moved) << 16)
                                 }
-                                None => DefaultValue::Int(v),
+                                None => DefaultValue::int(v),
                             }
                         }
                         d => d,
@@ -196,7 +197,7 @@ pub(super) fn modular_objects(
             ..sub0(slots)
         }];
         if access == Access::RwPreOp {
-            l[0].default = DefaultValue::Int(0);
+            l[0].default = DefaultValue::int(0);
         }
         for k in 1..=slots {
             l.push(Entry {

@@ -8,15 +8,16 @@ pub(super) fn assigned(objects: &[Object], index: u16) -> Vec<u16> {
     let Some(o) = objects.iter().find(|o| o.index == index) else {
         return Vec::new();
     };
-    let n = match o.entries.first().map(|e| e.default) {
-        Some(DefaultValue::Int(n)) => n,
-        _ => 0,
-    };
+    let n = o
+        .entries
+        .first()
+        .and_then(|e| e.default.as_int())
+        .unwrap_or(0);
     o.entries
         .iter()
         .filter(|e| e.sub >= 1 && i64::from(e.sub) <= n)
         .filter_map(|e| match e.default {
-            DefaultValue::Int(v) => u16::try_from(v).ok().filter(|v| *v != 0),
+            DefaultValue::Int(v) => u16::try_from(v.get()).ok().filter(|v| *v != 0),
             DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
         })
         .collect()

@@ -161,7 +161,7 @@ const fn ident_list(access: Access) -> [Entry; 6] {
 
 const CONFIGURED: [Entry; 6] = {
     let mut l = ident_list(Access::RwPreOp);
-    l[0].default = ecat_slave::od::DefaultValue::Int(0);
+    l[0].default = ecat_slave::od::DefaultValue::int(0);
     l
 };
 const DETECTED: [Entry; 6] = ident_list(Access::Ro);

@@ -215,10 +215,7 @@ impl<P: PowerStage, N: NvStorage> Pam<P, N> {
             let next = if sub == 3 {
                 od.dictionary()
                     .find_entry(0xF800, 2)
-                    .and_then(|(_, e)| match e.default {
-                        ecat_slave::od::types::DefaultValue::Int(v) => Some(v),
-                        _ => None,
-                    })
+                    .and_then(|(_, e)| e.default.as_int())
             } else {
                 params::stored_value(&self.nv, od.dictionary(), 0xF800, 2)
             };

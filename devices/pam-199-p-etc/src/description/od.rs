@@ -669,7 +669,7 @@ mod tests {
 
     fn int(e: &Entry) -> i64 {
         match e.default {
-            DefaultValue::Int(v) => v,
+            DefaultValue::Int(v) => v.get(),
             DefaultValue::Str(_) | DefaultValue::Bytes(_) => panic!("{} is not a number", e.name),
         }
     }
@@ -762,7 +762,7 @@ mod tests {
     fn defaults_lie_within_ranges_and_enums() {
         for o in OBJECTS {
             for e in o.entries {
-                let DefaultValue::Int(v) = e.default else {
+                let Some(v) = e.default.as_int() else {
                     continue;
                 };
                 if let Some(min) = e.min() {
@@ -839,7 +839,7 @@ mod tests {
         }
         for idx in [0x800D, 0x801D, 0x802D] {
             let (_, e) = find_entry(idx, 0x05).unwrap();
-            assert_eq!(e.default, DefaultValue::Int(0x09)); // 2500 Hz
+            assert_eq!(e.default, DefaultValue::int(0x09)); // 2500 Hz
             assert_eq!(e.bit_len, 5);
         }
     }
@@ -918,7 +918,7 @@ mod tests {
                     assert_eq!(e.data_type, DataType::Bits(e.bit_len as u8));
                     assert_eq!(
                         (e.access, e.pdo, e.default),
-                        (Access::Ro, PdoMapping::None, DefaultValue::Int(0))
+                        (Access::Ro, PdoMapping::None, DefaultValue::int(0))
                     );
                     assert_eq!(e.name, sub_name(e.sub));
                     assert!(!e.backup && !e.setting);

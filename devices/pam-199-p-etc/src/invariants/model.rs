@@ -606,7 +606,7 @@ pub fn mapping(pdo: u16) -> Vec<u32> {
         .iter()
         .filter(|e| e.sub != 0)
         .filter_map(|e| match e.default {
-            ecat_slave::od::types::DefaultValue::Int(v) => Some(v as u32),
+            ecat_slave::od::types::DefaultValue::Int(v) => Some(v.get() as u32),
             ecat_slave::od::types::DefaultValue::Str(_)
             | ecat_slave::od::types::DefaultValue::Bytes(_) => None,
         })

@@ -631,7 +631,7 @@ fn default_len(assign: u16) -> u16 {
         return 0;
     };
     let count = obj.entry(0).map_or(0, |e| match e.default {
-        DefaultValue::Int(v) => v,
+        DefaultValue::Int(v) => v.get(),
         DefaultValue::Str(_) | DefaultValue::Bytes(_) => 0,
     });
     let bits: u32 = obj
@@ -639,7 +639,7 @@ fn default_len(assign: u16) -> u16 {
         .iter()
         .filter(|e| e.sub != 0 && i64::from(e.sub) <= count)
         .filter_map(|e| match e.default {
-            DefaultValue::Int(v) => Some(v as u16),
+            DefaultValue::Int(v) => Some(v.get() as u16),
             DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
         })
         .map(pdo_bits)
@@ -674,7 +674,7 @@ fn encode_value(value: Value, entry: Option<&ecat_slave::od::Entry>) -> Vec<u8> 
         _ => usize::from(e.bit_len).div_ceil(8).max(1),
     });
     let default = entry.and_then(|e| match e.default {
-        DefaultValue::Int(v) => Some(v),
+        DefaultValue::Int(v) => Some(v.get()),
         DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
     });
     let v: i64 = match value {

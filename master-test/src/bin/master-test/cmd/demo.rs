@@ -38,7 +38,7 @@ fn io_base() -> i64 {
         .dictionary
         .find_entry(0xF800, 1)
         .map_or(10_000, |(_, e)| match e.default {
-            ecat_slave::od::types::DefaultValue::Int(v) => v,
+            ecat_slave::od::types::DefaultValue::Int(v) => v.get(),
             _ => 10_000,
         })
 }
