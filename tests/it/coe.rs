@@ -192,9 +192,7 @@ fn malformed_mailboxes_get_error_replies_and_repeated_counters_run_once() {
 /// A valid value other than the default for an RW entry, as bytes.
 fn other_value(e: &ecat_slave::od::types::Entry) -> Option<Vec<u8>> {
     use ecat_slave::od::types::DataType;
-    let Some(d) = e.default.as_int() else {
-        return None;
-    };
+    let d = e.default.as_int()?;
     let v = match e.data_type {
         DataType::Bool => 1 - d,
         DataType::Enum(en) => en.values.iter().map(|(v, _)| *v).find(|v| *v != d)?,
