@@ -25,8 +25,11 @@
 # with arm-none-eabi-gcc against examples/firmware/cortex_m4.c, the board
 # functions as stubs that cancel out with the baseline): text, rodata,
 # data, bss and a static estimate of the stack of one fw_poll (call graph
-# of the Thumb-2 disassembly). Skipped with a note when the target or the
-# arm-none-eabi binutils are missing (.ci/run installs both).
+# of the Thumb-2 disassembly), and where the IO8's and the PAM's code
+# goes by source module (the same builds with debug info, attributed with
+# arm-none-eabi-addr2line -i by examples/firmware/tools/code_by_module.rs).
+# Skipped with a note when the target or the arm-none-eabi binutils are
+# missing (.ci/run installs both).
 #
 # Needs the Rust toolchain, gcc and binutils (nm, size, objdump). Figures
 # are printed, not asserted: the script fails only when a build fails.
@@ -326,6 +329,29 @@ for dev in io8 pam io8-min; do
     run "$STACK_TOOL" --thumb "$OUT/fw-$dev-m4.elf" fw_poll fw_init | tee "$OUT/stack-$dev-m4.txt"
     MSTACK[$dev]=$(awk '/^  fw_poll: [0-9]+ bytes on the worst path/ { print $2 }' "$OUT/stack-$dev-m4.txt")
 done
+echo
+echo "== Cortex-M4 code by source module (the same builds with debug info; each instruction"
+echo "   counted for the innermost inlined frame in this repository's sources, addr2line -i)"
+if command -v arm-none-eabi-addr2line >/dev/null; then
+    CODE_TOOL=$OUT/code_by_module
+    if [ ! -x "$CODE_TOOL" ] || [ "$FW/tools/code_by_module.rs" -nt "$CODE_TOOL" ]; then
+        run rustc --edition 2024 -O -o "$CODE_TOOL" "$FW/tools/code_by_module.rs" ||
+            fail "building the code attribution tool failed"
+    fi
+    for dev in io8 pam; do
+        echo "  $dev:"
+        CARGO_PROFILE_RELEASE_DEBUG=true CARGO_TARGET_DIR=$OUT/debuginfo \
+            run cargo build --quiet --release --target "$ARM_TARGET" --manifest-path "$MANIFEST" \
+            --features "${FEATURES[$dev]}" ||
+            fail "cargo build of the $dev firmware with debug info failed"
+        run arm-none-eabi-gcc "${ARM_CFLAGS[@]}" -o "$OUT/fw-$dev-m4-debuginfo.elf" "$FW/cortex_m4.c" \
+            "$OUT/debuginfo/$ARM_TARGET/release/libecat_firmware.a" ||
+            fail "linking the $dev firmware with debug info failed"
+        run "$CODE_TOOL" "$OUT/fw-$dev-m4-debuginfo.elf" 25
+    done
+else
+    echo "  skipped (arm-none-eabi-addr2line not found)"
+fi
 echo
 echo "== Summary (bytes; firmware minus baseline; Cortex-M4, thumbv7em-none-eabihf)"
 for dev in io8 pam io8-min; do
