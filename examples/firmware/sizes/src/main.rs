@@ -116,7 +116,7 @@ fn od_tables(device: &str, desc: &DeviceDescription) {
     let total: usize = strings.iter().map(|s| s.len()).sum();
     let distinct: BTreeSet<&str> = strings.iter().copied().collect();
     let distinct_bytes: usize = distinct.iter().map(|s| s.len()).sum();
-    let object_bytes = objects.len() * size_of::<Object>();
+    let object_bytes = std::mem::size_of_val(objects);
     let entry_bytes = entries * size_of::<Entry>();
     let limits_bytes = (limits.len() + 1) * size_of::<Limits>();
     let enum_bytes = enums.len() * (size_of::<EnumDesc>() + size_of::<&EnumDesc>())
