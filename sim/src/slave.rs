@@ -233,3 +233,31 @@ impl<A: Application, P: SoftPdi> SoftSlave<A, P> {
         &mut self.inner
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ecat_slave::testing::TestApp;
+    use std::mem::MaybeUninit;
+
+    /// `Slave::init_in` (what a firmware uses to build its object in its
+    /// static) gives the firmware `Slave::new` gives: the dictionary at
+    /// its defaults, INIT, the same layout.
+    #[test]
+    fn init_in_builds_in_its_slot_the_slave_new_builds() {
+        let app = TestApp::default();
+        let sii = app.description().sii_image();
+        let by_value = Slave::new(SoftEsc::new(&sii), TestApp::default());
+        let mut slot: Box<MaybeUninit<Slave<SoftEsc, TestApp>>> = Box::new(MaybeUninit::uninit());
+        let at = slot.as_mut_ptr();
+        let in_place = Slave::init_in(&mut slot, SoftEsc::new(&sii), app);
+        assert!(std::ptr::eq(in_place, at), "built in the slot");
+        assert_eq!(in_place.al_status(), by_value.al_status());
+        let (a, b) = (in_place.od(), by_value.od());
+        let flats = a.dictionary().entries().count();
+        assert!((0..flats).any(|f| b.value(f) != 0), "some default is not 0");
+        for flat in 0..flats {
+            assert_eq!(a.value(flat), b.value(flat), "entry {flat}");
+        }
+    }
+}

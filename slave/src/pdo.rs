@@ -240,7 +240,7 @@ impl<const N: usize> ProcessImage<N> {
     }
 
     /// Empty, as [`ProcessImage::default`], in place.
-    fn clear(&mut self) {
+    pub fn clear(&mut self) {
         self.entries.clear();
         self.bits = 0;
         self.sets = u32::MAX;

@@ -47,9 +47,14 @@ impl<T> FwCell<T> {
         }
     }
 
-    /// Stores `make()` (dropping a value stored before); `false` if the
-    /// value is in use (re-entry).
-    pub fn init(&self, make: impl FnOnce() -> T) -> bool {
+    /// Builds the value in place with `make`, which must initialise the
+    /// slot it is given and return it (`MaybeUninit::write`, or a
+    /// constructor such as `Slave::init_in` that writes there): the value
+    /// is never built on the stack and copied. A value stored before is
+    /// dropped first. `false` if the value is in use (re-entry), or if
+    /// `make` returned a reference to anything but its slot (the cell then
+    /// stays empty).
+    pub fn init(&self, make: impl FnOnce(&mut MaybeUninit<T>) -> &mut T) -> bool {
         let Ok(before) = self.take(&[EMPTY, READY]) else {
             return false;
         };
@@ -63,9 +68,14 @@ impl<T> FwCell<T> {
             // value written by an earlier `init`.
             unsafe { slot.assume_init_drop() };
         }
-        slot.write(make());
-        self.state.store(READY, Ordering::Release);
-        true
+        let at = slot.as_mut_ptr();
+        // A `&mut T` into the slot exists only once the slot is
+        // initialised (safe code gets one only from `MaybeUninit::write`),
+        // so a returned reference to the slot proves it holds a value.
+        let built = core::ptr::eq(make(slot), at);
+        self.state
+            .store(if built { READY } else { EMPTY }, Ordering::Release);
+        built
     }
 
     /// Runs `f` on the value: `None` before `init` or while the value is

@@ -144,8 +144,9 @@ mod device {
         pd_in: LAYOUT.pd_in,
     };
 
-    pub fn new() -> Firmware {
-        Slave::with_buffers(pdi(), crate::board::new_app())
+    /// The firmware object built and powered on in `slot` (its static).
+    pub fn init(slot: &mut core::mem::MaybeUninit<Firmware>) -> &mut Firmware {
+        Slave::init_in(slot, pdi(), crate::board::new_app())
     }
 }
 
@@ -164,7 +165,7 @@ static FIRMWARE: FwCell<device::Firmware> = FwCell::new();
 pub extern "C" fn fw_init() -> i32 {
     #[cfg(any(feature = "io8", feature = "pam"))]
     {
-        if FIRMWARE.init(device::new) { 0 } else { -3 }
+        if FIRMWARE.init(device::init) { 0 } else { -3 }
     }
     #[cfg(not(any(feature = "io8", feature = "pam")))]
     {

@@ -71,13 +71,20 @@ impl<V: ValueStorage> ObjectStore<V> {
     /// writes ([`DeviceDescription::validate`](crate::device::DeviceDescription)
     /// and the device's `Values` type keep them equal).
     pub fn new(dict: &'static Dictionary) -> Self {
-        let mut s = ObjectStore {
+        let mut s = Self::zeroed(dict);
+        s.od_mut().load_defaults();
+        s
+    }
+
+    /// A store of `dict` with every value 0, not its defaults (fill them
+    /// in with [`ObjectStore::load_defaults`] where the store lives: no
+    /// store-sized copy on the stack).
+    pub fn zeroed(dict: &'static Dictionary) -> Self {
+        ObjectStore {
             dict,
             strings: heapless::Vec::new(),
             values: V::zeroed(),
-        };
-        s.od_mut().load_defaults();
-        s
+        }
     }
 
     /// The store as [`Od`].

@@ -195,38 +195,37 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
     /// When `Values` or a buffer is too small for the description: a
     /// programming error, stopped in every build (for a static description
     /// the comparisons are constants and cost nothing in the firmware).
-    pub fn with_buffers(esc: E, mut app: A) -> Self {
+    pub fn with_buffers(esc: E, app: A) -> Self {
+        let mut s = Self::unpowered(esc, app);
+        s.power_on();
+        s
+    }
+
+    /// [`Slave::with_buffers`] written into `slot` (a `static`'s
+    /// `MaybeUninit`, say) and powered on there: the firmware object is
+    /// never built on the stack and copied, so a firmware's start-up needs
+    /// little more stack than one poll (a `Slave` is kilobytes).
+    ///
+    /// # Panics
+    ///
+    /// As [`Slave::with_buffers`].
+    pub fn init_in(slot: &mut core::mem::MaybeUninit<Self>, esc: E, app: A) -> &mut Self {
+        let s = slot.write(Self::unpowered(esc, app));
+        s.power_on();
+        s
+    }
+
+    /// Every field at its power-on value but the dictionary, whose values
+    /// are 0 until [`Slave::power_on`]. Mostly zeros and no address taken,
+    /// so the compiler can build it where it is written.
+    #[inline(always)]
+    fn unpowered(esc: E, app: A) -> Self {
         let desc = app.description();
-        assert!(
-            <A::Values as ValueStorage>::LEN >= desc.dictionary.entry_count(),
-            "Application::Values must hold the dictionary's entry count"
-        );
-        let mbx = desc.mailbox;
-        assert!(
-            usize::from(mbx.size) <= MBX && mbx.boot_size.is_none_or(|b| usize::from(b) <= MBX),
-            "Slave's MBX must hold the device's standard and bootstrap mailboxes"
-        );
-        let mut store = ObjectStore::<A::Values>::new(desc.dictionary);
-        for dir in [Direction::Outputs, Direction::Inputs] {
-            let fits = match ProcessImage::<PDO>::build(
-                A::Values::view(&store),
-                dir,
-                &desc.process_data,
-            ) {
-                Ok(image) => image.byte_len() <= IMG,
-                Err(e) => e != crate::pdo::PdoError::TooLarge,
-            };
-            assert!(
-                fits,
-                "Slave's PDO and IMG must hold the device's default process image"
-            );
-        }
-        app.power_on(A::Values::view_mut(&mut store));
         Slave {
             esc,
             app,
             layout: desc.layout(),
-            store,
+            store: ObjectStore::zeroed(desc.dictionary),
             al: AlStatus::INIT,
             outputs: ProcessImage::default(),
             inputs: ProcessImage::default(),
@@ -252,6 +251,38 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             outputs_applied: false,
             sm_watchdog_armed: false,
         }
+    }
+
+    /// Checks the buffers against the description, sets the dictionary to
+    /// its defaults and powers the application on, in place.
+    fn power_on(&mut self) {
+        let desc = self.app.description();
+        assert!(
+            <A::Values as ValueStorage>::LEN >= desc.dictionary.entry_count(),
+            "Application::Values must hold the dictionary's entry count"
+        );
+        let mbx = desc.mailbox;
+        assert!(
+            usize::from(mbx.size) <= MBX && mbx.boot_size.is_none_or(|b| usize::from(b) <= MBX),
+            "Slave's MBX must hold the device's standard and bootstrap mailboxes"
+        );
+        self.store.od_mut().load_defaults();
+        for dir in [Direction::Outputs, Direction::Inputs] {
+            // Built in the Slave's own image, cleared again below.
+            let fits = match self
+                .outputs
+                .rebuild(self.store.od(), dir, &desc.process_data)
+            {
+                Ok(()) => self.outputs.byte_len() <= IMG,
+                Err(e) => e != crate::pdo::PdoError::TooLarge,
+            };
+            assert!(
+                fits,
+                "Slave's PDO and IMG must hold the device's default process image"
+            );
+        }
+        self.outputs.clear();
+        self.app.power_on(self.store.od_mut());
     }
 
     /// The firmware restarts (a power cycle, seen from the firmware): every
