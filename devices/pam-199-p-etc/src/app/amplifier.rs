@@ -135,6 +135,9 @@ impl Default for Amplifier {
     }
 }
 
+// Out of line on a microcontroller: inlined at its many call sites, its
+// 64-bit arithmetic costs hundreds of bytes of flash (issue 30).
+#[cfg_attr(target_os = "none", inline(never))]
 fn u16_of(v: i64) -> u16 {
     v.clamp(0, i64::from(u16::MAX)) as u16
 }

@@ -67,6 +67,9 @@ pub use crate::description::FULL_SCALE;
 /// Returns 0 for `d <= 0` instead of panicking; callers only pass positive
 /// divisors. Inputs are bounded by the callers so the intermediate
 /// `n ± d / 2` cannot overflow; saturating arithmetic guards it anyway.
+// Out of line on a microcontroller: inlined at its many call sites, its
+// 64-bit arithmetic costs hundreds of bytes of flash (issue 30).
+#[cfg_attr(target_os = "none", inline(never))]
 pub(crate) fn div_round(n: i64, d: i64) -> i64 {
     if d <= 0 {
         return 0;
@@ -80,6 +83,9 @@ pub(crate) fn div_round(n: i64, d: i64) -> i64 {
 }
 
 /// Clamps an `i64` into the `i32` range.
+// Out of line on a microcontroller: inlined at its many call sites, its
+// 64-bit arithmetic costs hundreds of bytes of flash (issue 30).
+#[cfg_attr(target_os = "none", inline(never))]
 pub(crate) fn sat_i32(v: i64) -> i32 {
     // After the clamp the value fits, so the fallback is never taken.
     i32::try_from(v.clamp(i64::from(i32::MIN), i64::from(i32::MAX))).unwrap_or(0)
