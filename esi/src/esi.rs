@@ -127,8 +127,14 @@ fn flag(b: bool) -> &'static str {
 }
 
 /// The ESI type name of an entry: `UINT`, `BIT7`, `DT0800EN03`, `STRING(13)`.
-pub fn type_name(e: &Entry) -> String {
+pub fn type_name(e: &Entry, dict: &Dictionary) -> String {
     match e.data_type {
+        // An enumeration's name is its EnumDesc's (`DT0800EN03`, or what a
+        // vendor's ESI calls it).
+        DataType::Enum(t) => dict.find_enum(t.index()).map_or_else(
+            || format!("DT{:04X}EN{:02}", t.index(), t.bit_len()),
+            |d| d.name.to_string(),
+        ),
         DataType::VisibleString => format!("STRING({})", e.bit_len / 8),
         DataType::OctetString => format!("ARRAY [0..{}] OF BYTE", i32::from(e.bit_len / 8) - 1),
         t @ DataType::Array(_) => {
@@ -259,9 +265,9 @@ fn array_shape(o: &Object) -> Option<(u32, &'static Entry)> {
 }
 
 /// The ESI data type name of an object.
-pub fn object_type_name(o: &Object) -> String {
+pub fn object_type_name(o: &Object, dict: &Dictionary) -> String {
     match (o.code, o.entries.first()) {
-        (ObjectCode::Var, Some(e)) => type_name(e),
+        (ObjectCode::Var, Some(e)) => type_name(e, dict),
         _ => format!("DT{:04X}", o.index),
     }
 }
@@ -288,7 +294,10 @@ fn write_base_types(w: &mut W, dict: &Dictionary, objects: Objects<'_>) -> io::R
             if matches!(e.data_type, DataType::Enum(_)) {
                 continue;
             }
-            base.insert((e.data_type.code(), type_name(e)), u32::from(e.bit_len));
+            base.insert(
+                (e.data_type.code(), type_name(e, dict)),
+                u32::from(e.bit_len),
+            );
         }
     }
     for ((_, name), bits) in &base {
@@ -342,7 +351,7 @@ fn write_sub_item(
     end(w, "SubItem")
 }
 
-fn write_complex_types(w: &mut W, objects: Objects<'_>) -> io::Result<()> {
+fn write_complex_types(w: &mut W, dict: &Dictionary, objects: Objects<'_>) -> io::Result<()> {
     for o in objects.iter().copied() {
         match o.code {
             ObjectCode::Var => {}
@@ -352,7 +361,7 @@ fn write_complex_types(w: &mut W, objects: Objects<'_>) -> io::Result<()> {
                 text(w, "Name", &format!("DT{:04X}", o.index))?;
                 text(w, "BitSize", &size.to_string())?;
                 for (e, off) in layout {
-                    let t = type_name(e);
+                    let t = type_name(e, dict);
                     write_sub_item(w, Some(e.sub), e.name, &t, u32::from(e.bit_len), off, e)?;
                 }
                 end(w, "DataType")?;
@@ -365,7 +374,7 @@ fn write_complex_types(w: &mut W, objects: Objects<'_>) -> io::Result<()> {
                 let bits = n * u32::from(elem.bit_len);
                 start(w, "DataType", &[])?;
                 text(w, "Name", &arr)?;
-                text(w, "BaseType", &type_name(elem))?;
+                text(w, "BaseType", &type_name(elem, dict))?;
                 text(w, "BitSize", &bits.to_string())?;
                 start(w, "ArrayInfo", &[])?;
                 text(w, "LBound", "1")?;
@@ -376,7 +385,7 @@ fn write_complex_types(w: &mut W, objects: Objects<'_>) -> io::Result<()> {
                 text(w, "Name", &format!("DT{:04X}", o.index))?;
                 text(w, "BitSize", &(16 + bits).to_string())?;
                 if let Some(sub0) = o.entry(0) {
-                    write_sub_item(w, Some(0), sub0.name, &type_name(sub0), 8, 0, sub0)?;
+                    write_sub_item(w, Some(0), sub0.name, &type_name(sub0, dict), 8, 0, sub0)?;
                 }
                 write_sub_item(w, None, "Elements", &arr, bits, 16, elem)?;
                 end(w, "DataType")?;
@@ -430,12 +439,12 @@ fn object_access(o: &Object) -> Access {
     }
 }
 
-fn write_objects(w: &mut W, objects: Objects<'_>) -> io::Result<()> {
+fn write_objects(w: &mut W, dict: &Dictionary, objects: Objects<'_>) -> io::Result<()> {
     for o in objects.iter().copied() {
         start(w, "Object", &[])?;
         text(w, "Index", &hex(u32::from(o.index), 4))?;
         text(w, "Name", o.name)?;
-        text(w, "Type", &object_type_name(o))?;
+        text(w, "Type", &object_type_name(o, dict))?;
         text(w, "BitSize", &object_bit_size(o).to_string())?;
         start(w, "Info", &[])?;
         match (o.code, o.entries.first()) {
@@ -494,10 +503,10 @@ fn write_dictionary(w: &mut W, dict: &Dictionary, objects: Objects<'_>) -> io::R
     write_unit_types(w, objects)?;
     start(w, "DataTypes", &[])?;
     write_base_types(w, dict, objects)?;
-    write_complex_types(w, objects)?;
+    write_complex_types(w, dict, objects)?;
     end(w, "DataTypes")?;
     start(w, "Objects", &[])?;
-    write_objects(w, objects)?;
+    write_objects(w, dict, objects)?;
     end(w, "Objects")?;
     end(w, "Dictionary")
 }
@@ -591,7 +600,7 @@ fn write_pdo(
             text(w, "SubIndex", &sub.to_string())?;
             text(w, "BitLen", &bits.to_string())?;
             text(w, "Name", e.name)?;
-            text(w, "DataType", &type_name(e))?;
+            text(w, "DataType", &type_name(e, dict))?;
         }
         end(w, "Entry")?;
     }
@@ -1121,7 +1130,7 @@ mod tests {
                 let want: Vec<(i64, &str, String)> = o
                     .entries
                     .iter()
-                    .map(|e| (i64::from(e.sub), e.name, type_name(e)))
+                    .map(|e| (i64::from(e.sub), e.name, type_name(e, &model::DICT)))
                     .collect();
                 assert_eq!(items, want, "{what}");
                 for (_, _, t) in &items {

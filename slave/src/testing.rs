@@ -108,7 +108,7 @@ pub const OBJECTS: &[Object] = &[
     Object { index: 0x8000, name: "Settings", code: ObjectCode::Record, entries: &[
         sub0(3),
         ranged(1, "Gain", DataType::UInt16, 100, &Limits::range(0, 1000, "mA")),
-        setting(2, "Mode", DataType::Enum(&MODE), 1, &Limits::NONE),
+        setting(2, "Mode", MODE.data_type(), 1, &Limits::NONE),
         ranged(3, "Offset", DataType::Int16, -5, &Limits::range(-100, 100, "")),
     ] },
     Object { index: 0x8001, name: "Curve", code: ObjectCode::Array, entries: &[

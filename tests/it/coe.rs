@@ -189,13 +189,22 @@ fn malformed_mailboxes_get_error_replies_and_repeated_counters_run_once() {
     });
 }
 
-/// A valid value other than the default for an RW entry, as bytes.
-fn other_value(e: &ecat_slave::od::types::Entry) -> Option<Vec<u8>> {
+/// A valid value other than the default for an RW entry of `dict`, as
+/// bytes.
+fn other_value(
+    e: &ecat_slave::od::types::Entry,
+    dict: &ecat_slave::od::Dictionary,
+) -> Option<Vec<u8>> {
     use ecat_slave::od::types::DataType;
     let d = e.default.as_int()?;
     let v = match e.data_type {
         DataType::Bool => 1 - d,
-        DataType::Enum(en) => en.values.iter().map(|(v, _)| *v).find(|v| *v != d)?,
+        DataType::Enum(en) => dict
+            .find_enum(en.index())?
+            .values
+            .iter()
+            .map(|(v, _)| *v)
+            .find(|v| *v != d)?,
         _ => match (e.min(), e.max()) {
             (_, Some(max)) if max != d => max,
             (Some(min), _) if min != d => min,
@@ -243,7 +252,7 @@ fn every_entry_reads_its_default_and_every_rw_entry_round_trips_both_paths() {
                 if e.gap || e.access != Access::Rw || gains {
                     continue;
                 }
-                let v = other_value(e).expect("every RW entry here is numeric");
+                let v = other_value(e, &model::DICT).expect("every RW entry here is numeric");
                 for segmented in [false, true] {
                     c.sdo_download_with(obj.index, e.sub, false, &v, segmented)
                         .await

@@ -188,7 +188,7 @@ impl<'a> Types<'a> {
                 }));
                 enums.push(desc);
                 TypeDef::Scalar(Scalar {
-                    ty: DataType::Enum(desc),
+                    ty: desc.data_type(),
                     bits: u16::from(desc.bit_len),
                 })
             } else if let Some(ai) = dt.child("ArrayInfo") {
@@ -405,10 +405,7 @@ fn value_info(info: Option<&Element>, s: &Scalar) -> Result<ValueInfo, EsiError>
         // TwinCAT reads it. Decimal values are taken as written.
         // An enumeration with negative values has a signed base type
         // (Teknic's DT0802EN16 on INT).
-        let signed = match s.ty {
-            DataType::Enum(e) => e.values.iter().any(|(v, _)| *v < 0),
-            t => t.is_signed(),
-        };
+        let signed = s.ty.is_signed();
         let hex = c
             .text
             .trim()
@@ -913,7 +910,8 @@ mod tests {
             (mode.access, mode.pdo, mode.default),
             (Access::RwPreOp, PdoMapping::Rx, DefaultValue::int(1))
         );
-        assert!(matches!(mode.data_type, DataType::Enum(e) if e.text(1) == Some("on")));
+        assert!(matches!(mode.data_type, DataType::Enum(e)
+            if enums.iter().find(|d| d.index == e.index()).and_then(|d| d.text(1)) == Some("on")));
         let a = o(0x1C12);
         assert_eq!(a.code, ObjectCode::Array);
         assert_eq!(a.entries.len(), 3, "sub 0 and two elements");
@@ -1025,7 +1023,9 @@ mod tests {
         assert_eq!(key.default, DefaultValue::Bytes(&[0x0A, 0x0B]));
         let mode = &rec.entries[2];
         assert_eq!(mode.pdo, PdoMapping::RxTx);
-        assert!(matches!(mode.data_type, DataType::Enum(e) if e.index == 0x0801 && e.bit_len == 3));
+        assert!(
+            matches!(mode.data_type, DataType::Enum(e) if e.index() == 0x0801 && e.bit_len() == 3)
+        );
         assert_eq!(enums.len(), 1, "only the enumeration with an index");
         assert_eq!(rec.entries[3].data_type, DataType::Array(0x0006));
         let gain = &o(0x2001).entries[0];

@@ -65,6 +65,7 @@
 //!   short or malformed requests, unknown opcodes and unknown list types
 //!   0x05040001, a description larger than [`INFO_BUFFER`] 0x06010005.
 
+use crate::od::Dictionary;
 use crate::od::modules::ObjectView;
 use crate::od::types::{DataType, DefaultValue, Entry, Object, ObjectCode, PdoMapping};
 use crate::wire::coe::{SDO_INFO_HEADER_LEN, SdoAbortCode, SdoInfo, SdoInfoOpcode, SdoInfoRepr};
@@ -272,15 +273,16 @@ pub fn value_len(e: &Entry) -> usize {
 /// The natural range of a data type (`None` for strings, bytes and
 /// floats, whose limits are not integers). `i128` holds every bound,
 /// UNSIGNED64 included.
-fn natural_range(t: &DataType, bits: u16) -> Option<(i128, i128)> {
+fn natural_range(t: &DataType, bits: u16, dict: &Dictionary) -> Option<(i128, i128)> {
     let r = match t {
         DataType::Bool => (0, 1),
         DataType::Enum(en) => {
-            let lo = en.values.iter().map(|(v, _)| *v).min();
-            let hi = en.values.iter().map(|(v, _)| *v).max();
+            let values = dict.find_enum(en.index()).map_or(&[][..], |d| d.values);
+            let lo = values.iter().map(|(v, _)| *v).min();
+            let hi = values.iter().map(|(v, _)| *v).max();
             match (lo, hi) {
                 (Some(lo), Some(hi)) => (lo.into(), hi.into()),
-                _ => (0, (1i128 << u32::from(en.bit_len.min(64))) - 1),
+                _ => (0, (1i128 << u32::from(en.bit_len().min(64))) - 1),
             }
         }
         t if t.is_bytes() || t.is_real() => return None,
@@ -294,9 +296,10 @@ fn natural_range(t: &DataType, bits: u16) -> Option<(i128, i128)> {
 }
 
 /// The minimum and maximum an entry description reports: the model's range,
-/// else the type's natural range; `None` for strings.
-pub fn value_range(e: &Entry) -> Option<(i128, i128)> {
-    let (lo, hi) = natural_range(&e.data_type, e.bit_len)?;
+/// else the type's natural range (an enumeration's from `dict`'s
+/// [`EnumDesc`](crate::od::EnumDesc)); `None` for strings.
+pub fn value_range(e: &Entry, dict: &Dictionary) -> Option<(i128, i128)> {
+    let (lo, hi) = natural_range(&e.data_type, e.bit_len, dict)?;
     Some((
         e.min().map_or(lo, i128::from),
         e.max().map_or(hi, i128::from),
@@ -450,7 +453,7 @@ impl SdoInfoServer {
                 let (_, o) = view.find(index).ok_or(SdoAbortCode::ObjectNotFound)?;
                 let e = o.entry(sub).ok_or(SdoAbortCode::SubindexNotFound)?;
                 self.buffer(SdoInfoOpcode::GetEntryDescResp, |w| {
-                    write_entry_description(w, index, e, asked);
+                    write_entry_description(w, index, e, asked, view.dict);
                 })
             }
             _ => Err(SdoAbortCode::UnknownCommand),
@@ -561,8 +564,14 @@ impl SdoInfoServer {
 }
 
 /// Writes the service data of an entry description (see the module docs).
-fn write_entry_description(w: &mut Writer<'_>, index: u16, e: &Entry, asked: u8) {
-    let range = value_range(e);
+fn write_entry_description(
+    w: &mut Writer<'_>,
+    index: u16,
+    e: &Entry,
+    asked: u8,
+    dict: &Dictionary,
+) {
+    let range = value_range(e, dict);
     let mut info = asked & value_info::ALL;
     if range.is_none() {
         info &= !(value_info::MIN | value_info::MAX);

@@ -230,7 +230,7 @@ pub fn check_download<'a>(
         let bytes = raw.to_le_bytes();
         // The value the walk of `CompleteChanges` decodes again (the same
         // `from_raw` of the same bits).
-        Od::check(e, bytes.get(..n).unwrap_or(&[]), state)?;
+        store.check(e, bytes.get(..n).unwrap_or(&[]), state)?;
     }
     Ok(CompleteChanges {
         obj,

@@ -31,7 +31,7 @@
 //! description that contradicts itself.
 
 use super::types::{
-    Access, DataType, DefaultValue, Entry, EnumDesc, Object, ObjectCode, PdoMapping,
+    Access, DataType, DefaultValue, Entry, EnumDesc, EnumType, Object, ObjectCode, PdoMapping,
 };
 
 /// One device's objects, enumerations and flat positions.
@@ -311,7 +311,7 @@ pub const fn natural_bits(t: &DataType) -> u16 {
         DataType::Int64 | DataType::UInt64 | DataType::Real64 => 64,
         DataType::Guid => 128,
         DataType::Bits(n) => *n as u16,
-        DataType::Enum(e) => e.bit_len as u16,
+        DataType::Enum(e) => e.bit_len() as u16,
         DataType::VisibleString
         | DataType::OctetString
         | DataType::UnicodeString
@@ -395,15 +395,22 @@ const MAX_STRINGS: usize = super::types::STRING_SLOTS;
 /// Longest string value (see [`STRING_CAPACITY`](super::types::STRING_CAPACITY)).
 const MAX_STRING: usize = super::types::STRING_CAPACITY;
 
-const fn enum_listed(enums: &[&EnumDesc], e: &EnumDesc) -> bool {
+/// The enumeration of `enums` with the data type index of `e`, whose
+/// bit size and signedness agree with it (`None`: not listed).
+const fn enum_listed(enums: &[&'static EnumDesc], e: EnumType) -> Option<&'static EnumDesc> {
     let mut rest = enums;
     while let Some((x, tail)) = rest.split_first() {
-        if x.index == e.index {
-            return true;
+        if x.index == e.index() {
+            let t = EnumType::of(x);
+            return if t.bit_len() == e.bit_len() && t.is_signed() == e.is_signed() {
+                Some(*x)
+            } else {
+                None
+            };
         }
         rest = tail;
     }
-    false
+    None
 }
 
 const fn enum_contains(e: &EnumDesc, v: i64) -> bool {
@@ -422,14 +429,16 @@ const fn check_entry(
     code: ObjectCode,
     highest: u8,
     e: &Entry,
-    enums: &[&EnumDesc],
+    enums: &[&'static EnumDesc],
 ) -> Result<(), DescriptionError> {
     let sub = e.sub;
-    if let DataType::Enum(en) = e.data_type
-        && !enum_listed(enums, en)
-    {
-        return Err(DescriptionError::UnknownEnum { index, sub });
-    }
+    let desc = match e.data_type {
+        DataType::Enum(en) => match enum_listed(enums, en) {
+            Some(d) => Some(d),
+            None => return Err(DescriptionError::UnknownEnum { index, sub }),
+        },
+        _ => None,
+    };
     if e.gap {
         let ok = matches!(e.data_type, DataType::Bits(_))
             && matches!(e.access, Access::Ro)
@@ -494,9 +503,9 @@ const fn check_entry(
                 Some(m) if m < hi => m,
                 _ => hi,
             };
-            let in_enum = match e.data_type {
-                DataType::Enum(en) => enum_contains(en, v),
-                _ => true,
+            let in_enum = match desc {
+                Some(en) => enum_contains(en, v),
+                None => true,
             };
             if v < lo || v > hi || !in_enum {
                 return Err(DescriptionError::DefaultOutOfRange { index, sub });

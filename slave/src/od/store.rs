@@ -303,7 +303,7 @@ impl Od {
 
     /// Decodes and checks a value for `entry` from `data` as an SDO download
     /// would, without storing it. Returns the value.
-    pub fn check(entry: &Entry, data: &[u8], state: AlState) -> Result<i64, SdoAbortCode> {
+    pub fn check(&self, entry: &Entry, data: &[u8], state: AlState) -> Result<i64, SdoAbortCode> {
         match entry.access {
             Access::Ro => return Err(SdoAbortCode::ReadOnly),
             Access::RwPreOp if state != AlState::PreOp => return Err(SdoAbortCode::InvalidState),
@@ -335,7 +335,11 @@ impl Od {
             // A 64-bit enumeration has no bits above its size (a shift by
             // 64 would overflow).
             DataType::Enum(e)
-                if !e.contains(value) || unsigned.checked_shr(bits).unwrap_or(0) != 0 =>
+                if !self
+                    .dict
+                    .find_enum(e.index())
+                    .is_some_and(|d| d.contains(value))
+                    || unsigned.checked_shr(bits).unwrap_or(0) != 0 =>
             {
                 return Err(SdoAbortCode::ValueRange);
             }
@@ -386,7 +390,7 @@ impl Od {
             self.set_area_bytes(flat, data);
             return Ok(0);
         }
-        let value = Self::check(entry, data, state)?;
+        let value = self.check(entry, data, state)?;
         self.set_value(flat, value);
         Ok(value)
     }
@@ -482,11 +486,28 @@ mod tests {
         values: &[(1, "ONE"), (0x1_0000_0000, "HIGH")],
     };
 
+    /// A store whose dictionary lists `enums`: one VAR 0x2000 of `entry`.
+    fn store_of(
+        entry: &'static Entry,
+        enums: &'static [&'static crate::od::EnumDesc],
+    ) -> ObjectStore<[i64; 2]> {
+        let objects: &'static [crate::od::Object] = Box::leak(Box::new([crate::od::Object {
+            index: 0x2000,
+            name: "Test",
+            code: crate::od::ObjectCode::Var,
+            entries: core::slice::from_ref(entry),
+        }]));
+        let dict = Box::leak(Box::new(crate::od::Dictionary::new(objects, enums, &[0])));
+        ObjectStore::new(dict)
+    }
+
     #[test]
     fn a_64_bit_enumeration_accepts_its_members_and_refuses_others_with_0609_0030() {
-        let e = crate::od::build::setting(1, "Wide", DataType::Enum(&WIDE), 1, &Limits::NONE);
+        static E: Entry = crate::od::build::setting(1, "Wide", WIDE.data_type(), 1, &Limits::NONE);
+        let e = &E;
         assert_eq!(e.bit_len, 64);
-        let w = |v: u64| Od::check(&e, &v.to_le_bytes(), AlState::PreOp);
+        let s = store_of(e, &[&WIDE]);
+        let w = |v: u64| s.check(e, &v.to_le_bytes(), AlState::PreOp);
         assert_eq!(w(1), Ok(1));
         assert_eq!(w(0x1_0000_0000), Ok(0x1_0000_0000));
         assert_eq!(w(2), Err(SdoAbortCode::ValueRange));
@@ -509,17 +530,19 @@ mod tests {
 
     #[test]
     fn an_enumeration_with_negative_members_takes_their_bit_patterns() {
-        let e =
-            crate::od::build::setting(1, "Quick stop", DataType::Enum(&SIGNED), -1, &Limits::NONE);
+        static E: Entry =
+            crate::od::build::setting(1, "Quick stop", SIGNED.data_type(), -1, &Limits::NONE);
+        let e = &E;
         assert_eq!(e.bit_len, 16);
         assert!(e.data_type.is_signed());
-        let w = |v: i16| Od::check(&e, &v.to_le_bytes(), AlState::PreOp);
+        let s = store_of(e, &[&SIGNED]);
+        let w = |v: i16| s.check(e, &v.to_le_bytes(), AlState::PreOp);
         assert_eq!(w(-1), Ok(-1), "0xFFFF is -1");
         assert_eq!(w(-2), Ok(-2));
         assert_eq!(w(2), Ok(2));
         assert_eq!(w(-3), Err(SdoAbortCode::ValueRange));
         assert_eq!(w(1), Err(SdoAbortCode::ValueRange));
-        assert!(!DataType::Enum(&WIDE).is_signed());
+        assert!(!WIDE.data_type().is_signed());
     }
 
     #[test]

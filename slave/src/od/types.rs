@@ -89,7 +89,7 @@ pub enum DataType {
     /// the entry's length. Reported with the element's code.
     Array(u16),
     /// A device-specific enumeration (data type index 0x0800.., see [`EnumDesc`]).
-    Enum(&'static EnumDesc),
+    Enum(EnumType),
 }
 
 impl DataType {
@@ -129,7 +129,7 @@ impl DataType {
             DataType::BitArr32 => 0x002F,
             DataType::Bits(n) => 0x002F + *n as u16,
             DataType::Array(code) => *code,
-            DataType::Enum(e) => e.index,
+            DataType::Enum(e) => e.index(),
         }
     }
 
@@ -179,14 +179,7 @@ impl DataType {
     /// among its values), so its bits are sign-extended on the wire.
     pub const fn is_signed(&self) -> bool {
         if let DataType::Enum(e) = self {
-            let mut rest = e.values;
-            while let [(v, _), tail @ ..] = rest {
-                if *v < 0 {
-                    return true;
-                }
-                rest = tail;
-            }
-            return false;
+            return e.is_signed();
         }
         matches!(
             self,
@@ -221,7 +214,8 @@ impl DataType {
     }
 
     /// The ETG/IEC 61131 type name used in the ESI (`BOOL`, `UINT`, `BIT7`, ...).
-    /// Enumerations return their own name (`DT0800EN03`); strings return
+    /// Enumerations return "": their name (`DT0800EN03`) is their
+    /// [`EnumDesc`]'s, in the dictionary ([`crate::od::Dictionary::find_enum`]); strings return
     /// `STRING` (the ESI appends the length: `STRING(13)`); an array its
     /// element's name (the ESI writes `ARRAY [0..n] OF T`).
     pub const fn etg_name(&self) -> &'static str {
@@ -269,7 +263,7 @@ impl DataType {
                 Some(b) => b.name,
                 None => "BYTE",
             },
-            DataType::Enum(e) => e.name,
+            DataType::Enum(_) => "",
         }
     }
 }
@@ -394,6 +388,64 @@ pub fn base_type_named(name: &str) -> Option<&'static BaseType> {
     BASE_TYPES.iter().find(|t| t.name == n)
 }
 
+/// An enumeration as an entry's [`DataType`] names it: its data type
+/// index, the bit size of its values and whether one of them is negative.
+/// Its values and texts are its [`EnumDesc`]'s, which the dictionary
+/// lists ([`crate::od::Dictionary::find_enum`]). Three bytes instead of a
+/// pointer: a `DataType` takes 4 bytes on a 32-bit microcontroller instead
+/// of 8, and an [`Entry`] 36 instead of 40.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+pub struct EnumType {
+    /// The index, little-endian, then the bit size (bits 0..=6) and
+    /// whether signed (bit 7). Bytes, not a `u16`: aligned to 1, the three
+    /// fit behind a `DataType`'s tag.
+    bytes: [u8; 3],
+}
+
+impl core::fmt::Debug for EnumType {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("EnumType")
+            .field("index", &format_args!("{:#06x}", self.index()))
+            .field("bit_len", &self.bit_len())
+            .field("signed", &self.is_signed())
+            .finish()
+    }
+}
+
+impl EnumType {
+    /// The type of `e`'s values.
+    pub const fn of(e: &EnumDesc) -> Self {
+        let mut signed = false;
+        let mut rest = e.values;
+        while let [(v, _), tail @ ..] = rest {
+            if *v < 0 {
+                signed = true;
+            }
+            rest = tail;
+        }
+        let [lo, hi] = e.index.to_le_bytes();
+        EnumType {
+            bytes: [lo, hi, (e.bit_len & 0x7F) | if signed { 0x80 } else { 0 }],
+        }
+    }
+
+    /// The data type index (0x0800..0x0FFF).
+    pub const fn index(self) -> u16 {
+        u16::from_le_bytes([self.bytes[0], self.bytes[1]])
+    }
+
+    /// The bit size of a value.
+    pub const fn bit_len(self) -> u8 {
+        self.bytes[2] & 0x7F
+    }
+
+    /// Whether a value of the enumeration is negative (its values are then
+    /// sign-extended on the wire).
+    pub const fn is_signed(self) -> bool {
+        self.bytes[2] & 0x80 != 0
+    }
+}
+
 /// An enumeration data type (manual 6.1.7, objects 0x0800..0x0805).
 #[derive(Debug, PartialEq, Eq)]
 pub struct EnumDesc {
@@ -408,6 +460,11 @@ pub struct EnumDesc {
 }
 
 impl EnumDesc {
+    /// The data type of entries holding values of this enumeration.
+    pub const fn data_type(&self) -> DataType {
+        DataType::Enum(EnumType::of(self))
+    }
+
     /// Whether `value` is one of the enumeration's values.
     pub fn contains(&self, value: i64) -> bool {
         self.values.iter().any(|(v, _)| *v == value)
@@ -546,7 +603,7 @@ impl From<Int64> for i64 {
 // (checked whenever the core is built for one, as the footprint and board
 // firmware builds of `.ci/run` do).
 #[cfg(target_pointer_width = "32")]
-const _: () = assert!(core::mem::size_of::<Entry>() == 40 && core::mem::align_of::<Entry>() == 4);
+const _: () = assert!(core::mem::size_of::<Entry>() == 36 && core::mem::align_of::<Entry>() == 4);
 
 /// The default value of an entry.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

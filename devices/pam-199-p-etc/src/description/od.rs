@@ -134,7 +134,7 @@ const fn current(sub: u8, name: &'static str) -> Entry {
 
 /// An enumerated setting: the enumeration's values are its range.
 const fn choice(sub: u8, name: &'static str, e: &'static EnumDesc, default: i64) -> Entry {
-    setting(sub, name, DataType::Enum(e), default, &Limits::NONE)
+    setting(sub, name, e.data_type(), default, &Limits::NONE)
 }
 
 /// The PWM frequency setting (DT0803EN05, unit Hz, default 2500 Hz).
@@ -771,7 +771,8 @@ mod tests {
                 if let Some(max) = e.max() {
                     assert!(v <= max, "{:#06x}:{} {}", o.index, e.sub, e.name);
                 }
-                if let DataType::Enum(en) = e.data_type {
+                if let DataType::Enum(t) = e.data_type {
+                    let en = DICT.find_enum(t.index()).expect("listed");
                     assert!(en.contains(v), "{} default {v} not in {}", e.name, en.name);
                     assert_eq!(e.min(), None);
                     assert_eq!(e.max(), None);

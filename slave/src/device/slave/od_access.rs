@@ -252,7 +252,7 @@ impl<A: Application> ObjectAccess for OdAccess<'_, A> {
             return self.hand_over(index, sub, true, Changes::complete(changes));
         }
         let (_, entry) = self.od.lookup(index, sub)?;
-        let value = Od::check(entry, data, self.state)?;
+        let value = self.od.check(entry, data, self.state)?;
         self.hand_over(index, sub, false, Changes::list(&[(sub, value)]))
     }
 }
