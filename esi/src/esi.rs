@@ -217,17 +217,17 @@ fn pdo_flag(p: PdoMapping) -> Option<&'static str> {
 /// Backup, Setting, in schema order.
 fn write_entry_flags(w: &mut W, e: &Entry, category: Option<&str>) -> io::Result<()> {
     start(w, "Flags", &[])?;
-    write_access(w, e.access)?;
+    write_access(w, e.access())?;
     if let Some(c) = category {
         text(w, "Category", c)?;
     }
-    if let Some(p) = pdo_flag(e.pdo) {
+    if let Some(p) = pdo_flag(e.pdo()) {
         text(w, "PdoMapping", p)?;
     }
-    if e.backup {
+    if e.backup() {
         text(w, "Backup", "1")?;
     }
-    if e.setting {
+    if e.setting() {
         text(w, "Setting", "1")?;
     }
     end(w, "Flags")
@@ -345,7 +345,7 @@ fn write_sub_item(
     // A padding gap keeps its place in the layout but states no access
     // rights: the slave describes it as NULL with access 0 (MANUAL-NOTES
     // note 20), which the ESI's ro/rw/wo cannot express.
-    if !e.gap {
+    if !e.gap() {
         write_entry_flags(w, e, None)?;
     }
     end(w, "SubItem")
@@ -425,14 +425,14 @@ fn write_value_info(w: &mut W, e: &Entry) -> io::Result<()> {
 /// Object-level access of a record or array: the common access of its
 /// entries, else rw if any entry is writable.
 fn object_access(o: &Object) -> Access {
-    let mut it = o.entries.iter().filter(|e| !e.gap).map(|e| e.access);
+    let mut it = o.entries.iter().filter(|e| !e.gap()).map(|e| e.access());
     let Some(first) = it.next() else {
         return Access::Ro;
     };
     if it.clone().all(|a| a == first) {
         return first;
     }
-    if o.entries.iter().any(|e| e.access.writable()) {
+    if o.entries.iter().any(|e| e.access().writable()) {
         Access::Rw
     } else {
         Access::Ro
@@ -451,7 +451,7 @@ fn write_objects(w: &mut W, dict: &Dictionary, objects: Objects<'_>) -> io::Resu
             (ObjectCode::Var, Some(e)) => write_value_info(w, e)?,
             _ => {
                 // Gaps have no value, hence no default to state.
-                for e in o.entries.iter().filter(|e| !e.gap) {
+                for e in o.entries.iter().filter(|e| !e.gap()) {
                     start(w, "SubItem", &[])?;
                     text(w, "Name", e.name)?;
                     start(w, "Info", &[])?;
@@ -1106,7 +1106,7 @@ mod tests {
                 continue;
             }
             let subs: Vec<&Element> = info.children_named("SubItem").collect();
-            let valued: Vec<&Entry> = o.entries.iter().filter(|e| !e.gap).collect();
+            let valued: Vec<&Entry> = o.entries.iter().filter(|e| !e.gap()).collect();
             assert_eq!(subs.len(), valued.len(), "{what}");
             for (e, s) in valued.into_iter().zip(subs) {
                 assert_eq!(s.text_at("Name"), Some(e.name), "{what}");

@@ -65,7 +65,7 @@ pub enum Stored {
 
 fn stored_entries(dict: &Dictionary) -> impl Iterator<Item = (usize, &'static Entry)> {
     dict.entries()
-        .filter(|(_, _, e)| e.backup && !e.gap && !e.data_type.is_bytes())
+        .filter(|(_, _, e)| e.backup() && !e.gap() && !e.data_type.is_bytes())
         .map(|(flat, _, e)| (flat, e))
 }
 

@@ -132,7 +132,7 @@ pub fn sii_flags(dict: &Dictionary, pdo: u16) -> u16 {
     let Some((_, o)) = dict.find(pdo) else {
         return 0;
     };
-    if o.entries.iter().any(|e| e.access.writable()) {
+    if o.entries.iter().any(|e| e.access().writable()) {
         0
     } else {
         crate::sii::pdo_flags::FIXED_CONTENT
@@ -155,7 +155,7 @@ pub fn check_mapping_value(
         (1..=64).contains(&bits)
     } else {
         dict.find_entry(index, sub).is_some_and(|(_, e)| {
-            e.pdo.allows(dir.mapping()) && !e.gap && e.bit_len == u16::from(bits) && bits != 0
+            e.pdo().allows(dir.mapping()) && !e.gap() && e.bit_len == u16::from(bits) && bits != 0
         })
     };
     if ok {
@@ -289,7 +289,7 @@ impl<const N: usize> ProcessImage<N> {
             None
         } else {
             let (flat, e) = dict.find_entry(index, sub).ok_or(invalid)?;
-            if !e.pdo.allows(dir.mapping()) || e.bit_len != u16::from(bits) || e.gap {
+            if !e.pdo().allows(dir.mapping()) || e.bit_len != u16::from(bits) || e.gap() {
                 return Err(invalid);
             }
             Some(u16::try_from(flat).map_err(|_| PdoError::TooLarge)?)

@@ -100,10 +100,7 @@ pub const OBJECTS: &[Object] = &[
         output(3, "Value", DataType::Int16),
     ] },
     Object { index: 0x7010, name: "Output word", code: ObjectCode::Var, entries: &[
-        crate::od::Entry {
-            access: crate::od::Access::Rw,
-            ..var("Output word", DataType::UInt32, PdoMapping::Rx, 0)
-        },
+        var("Output word", DataType::UInt32, PdoMapping::Rx, 0).with_access(crate::od::Access::Rw),
     ] },
     Object { index: 0x8000, name: "Settings", code: ObjectCode::Record, entries: &[
         sub0(3),

@@ -229,7 +229,7 @@ fn every_entry_reads_its_default_and_every_rw_entry_round_trips_both_paths() {
         let (mut read, mut written) = (0, 0);
         for obj in model::OBJECTS {
             for e in obj.entries {
-                if e.gap || !e.access.readable() || obj.index == 0x10F8 {
+                if e.gap() || !e.access().readable() || obj.index == 0x10F8 {
                     continue;
                 }
                 let (flat, _) = model::find_entry(obj.index, e.sub).unwrap();
@@ -249,7 +249,7 @@ fn every_entry_reads_its_default_and_every_rw_entry_round_trips_both_paths() {
             for e in obj.entries {
                 let gains =
                     matches!(obj.index, 0x800D | 0x801D | 0x802D) && matches!(e.sub, 9 | 10);
-                if e.gap || e.access != Access::Rw || gains {
+                if e.gap() || e.access() != Access::Rw || gains {
                     continue;
                 }
                 let v = other_value(e, &model::DICT).expect("every RW entry here is numeric");
@@ -280,7 +280,7 @@ fn every_entry_reads_its_default_and_every_rw_entry_round_trips_both_paths() {
             .iter()
             .filter(|o| o.index != 0x10F8)
             .flat_map(|o| o.entries.iter())
-            .filter(|e| !e.gap && e.access.readable())
+            .filter(|e| !e.gap() && e.access().readable())
             .count();
         assert_eq!(read, readable, "every readable entry was read");
         assert!(written > 100, "{written} RW entries written on both paths");

@@ -402,7 +402,7 @@ fn every_catalog_device_reports_over_sdo_information_what_its_esi_says() {
             "{}: every entry compared",
             d.key
         );
-        let want_gaps = shown().filter(|(_, _, e)| e.gap).count();
+        let want_gaps = shown().filter(|(_, _, e)| e.gap()).count();
         assert_eq!(c.gaps, want_gaps, "{}", d.key);
         let want_ranges = shown()
             .filter(|(_, _, e)| e.min().is_some() && e.max().is_some())

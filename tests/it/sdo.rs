@@ -146,7 +146,7 @@ fn sdo_download_then_upload_gives_the_value_or_an_abort_never_half_of_it() {
             };
             let skip = if e.sub == 0 {
                 8..16
-            } else if e.gap {
+            } else if e.gap() {
                 0..size
             } else {
                 0..0

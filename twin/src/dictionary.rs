@@ -29,7 +29,8 @@ use ecat_slave::coe::sdo_info::unit_text;
 use ecat_slave::od::build::sub_name;
 use ecat_slave::od::dictionary::natural_bits;
 use ecat_slave::od::{
-    Access, DataType, DefaultValue, Dictionary, Entry, EnumDesc, Object, ObjectCode, PdoMapping,
+    Access, DataType, DefaultValue, Dictionary, Entry, EntryFlags, EnumDesc, Object, ObjectCode,
+    PdoMapping,
 };
 
 use crate::esi::{At, EsiError, Warning, array_bounds, array_element, base_type_code};
@@ -510,13 +511,12 @@ fn entry(spec: &EntrySpec, info: Option<&Element>) -> Result<Entry, EsiError> {
         name: leak(&spec.name),
         data_type: spec.scalar.ty,
         bit_len: spec.scalar.bits,
-        access: spec.access,
-        pdo: spec.pdo,
         default,
         limits: crate::leak_limits(min, max, unit),
-        backup: spec.backup,
-        setting: spec.setting,
-        gap: spec.gap,
+        flags: EntryFlags::new(spec.access, spec.pdo)
+            .with_backup(spec.backup)
+            .with_setting(spec.setting)
+            .with_gap(spec.gap),
     })
 }
 
@@ -761,7 +761,7 @@ fn parse_object(
                     // assignment or module list: at most that).
                     // (A writable subindex 0: the number of entries in
                     // use, as the core reads it.)
-                    let list = matches!(index, 0x1C12 | 0x1C13 | 0xF030) || e.access.writable();
+                    let list = matches!(index, 0x1C12 | 0x1C13 | 0xF030) || e.access().writable();
                     let want = i64::from(highest);
                     let ok = matches!(e.default.as_int(), Some(v) if v == want || (list && (0..=want).contains(&v)));
                     if !ok {
@@ -897,17 +897,17 @@ mod tests {
             (DefaultValue::int(-10), Some(-1000), Some(1000))
         );
         assert_eq!(
-            (off.unit(), off.access, off.pdo, off.backup),
+            (off.unit(), off.access(), off.pdo(), off.backup()),
             ("ms", Access::Rw, PdoMapping::Tx, true)
         );
         let id = o(0x1018);
         assert_eq!(id.code, ObjectCode::Record);
         assert_eq!(id.entries.len(), 4);
         assert_eq!(id.entries[1].default, DefaultValue::int(0xABC));
-        assert!(id.entries[2].gap, "BIT7 without flags is a gap");
+        assert!(id.entries[2].gap(), "BIT7 without flags is a gap");
         let mode = &id.entries[3];
         assert_eq!(
-            (mode.access, mode.pdo, mode.default),
+            (mode.access(), mode.pdo(), mode.default),
             (Access::RwPreOp, PdoMapping::Rx, DefaultValue::int(1))
         );
         assert!(matches!(mode.data_type, DataType::Enum(e)
@@ -1022,7 +1022,7 @@ mod tests {
         assert_eq!((key.data_type, key.bit_len), (DataType::OctetString, 32));
         assert_eq!(key.default, DefaultValue::Bytes(&[0x0A, 0x0B]));
         let mode = &rec.entries[2];
-        assert_eq!(mode.pdo, PdoMapping::RxTx);
+        assert_eq!(mode.pdo(), PdoMapping::RxTx);
         assert!(
             matches!(mode.data_type, DataType::Enum(e) if e.index() == 0x0801 && e.bit_len() == 3)
         );

@@ -10,7 +10,7 @@ use ecat_slave::od::build::{
     SYNC_PARAMETER_ENTRIES, assign, assign_count, constant, input, map, output, ranged, string,
     sub_name, sub0, var,
 };
-use ecat_slave::od::{Access, DataType, Entry, Limits, Object, ObjectCode, PdoMapping};
+use ecat_slave::od::{Access, DataType, Limits, Object, ObjectCode, PdoMapping};
 
 /// Vendor ID of the IO8.
 ///
@@ -58,7 +58,7 @@ pub const OBJECTS: &[Object] = &[
     // Reads 1: "the device saves parameters on command".
     Object { index: STORE_PARAMETERS, name: "Store parameters", code: ObjectCode::Record, entries: &[
         sub0(1),
-        Entry { access: Access::Rw, ..constant(1, "Save all parameters", DataType::UInt32, 1) },
+        constant(1, "Save all parameters", DataType::UInt32, 1).with_access(Access::Rw),
     ] },
     Object { index: 0x1018, name: "Identity", code: ObjectCode::Record, entries: &[
         sub0(4),

@@ -17,7 +17,7 @@ use ecat_slave::device::{
 use ecat_slave::od::build::{
     SYNC_PARAMETER_ENTRIES, assign, assign_count, constant, string, sub_name, sub0, var,
 };
-use ecat_slave::od::{Access, DataType, Entry, Object, ObjectCode, PdoMapping};
+use ecat_slave::od::{Access, DataType, Object, ObjectCode, PdoMapping};
 
 /// Vendor ID of the servo402.
 ///
@@ -59,7 +59,7 @@ const HEAD: &[Object] = &[
     Object { index: STORE_PARAMETERS, name: "Store parameters", code: ObjectCode::Record, entries: &[
         sub0(1),
         // Reads 1: "the device saves parameters on command".
-        Entry { access: Access::Rw, ..constant(1, "Save all parameters", DataType::UInt32, 1) },
+        constant(1, "Save all parameters", DataType::UInt32, 1).with_access(Access::Rw),
     ] },
     Object { index: 0x1018, name: "Identity", code: ObjectCode::Record, entries: &[
         sub0(4),

@@ -400,14 +400,14 @@ mod tests {
         };
         for o in OBJECTS {
             let e = &o.entries[0];
-            match e.pdo {
+            match e.pdo() {
                 // C2 zeroes every RxPDO-mappable entry when OP is left:
                 // only set points may be RxPDO-mappable.
                 PdoMapping::Rx => assert!(mapped(&RX_PDO, o.index), "{:#06x}", o.index),
-                PdoMapping::Tx => assert_eq!(e.access, ecat_slave::od::Access::Ro),
+                PdoMapping::Tx => assert_eq!(e.access(), ecat_slave::od::Access::Ro),
                 // Every other writable entry is a stored parameter.
                 _ => assert!(
-                    e.access == ecat_slave::od::Access::Ro || (e.setting && e.backup),
+                    e.access() == ecat_slave::od::Access::Ro || (e.setting() && e.backup()),
                     "{:#06x}",
                     o.index
                 ),
@@ -420,7 +420,7 @@ mod tests {
         for i in SAFETY_PARAMETERS {
             let (_, e) = PROFILE.find_entry(i, 0).expect("object");
             assert!(
-                e.setting && e.backup && e.pdo == PdoMapping::None,
+                e.setting() && e.backup() && e.pdo() == PdoMapping::None,
                 "{i:#06x}"
             );
         }

@@ -2,7 +2,7 @@
 //! descriptions, fragmented responses.
 //!
 //! Layer 3 (`coe`). The server reads only the static description
-//! the device's [`Dictionary`](crate::od::Dictionary); it holds no object values, knows nothing of the ESC
+//! the device's [`Dictionary`]; it holds no object values, knows nothing of the ESC
 //! or the mailbox, and allocates nothing. Frames are read and written with
 //! the views of [`crate::wire::coe`].
 //!
@@ -167,10 +167,10 @@ impl ListType {
         let any = |f: fn(&Entry) -> bool| o.entries.iter().any(f);
         match self {
             ListType::All => true,
-            ListType::RxPdo => any(|e| e.pdo.allows(PdoMapping::Rx)),
-            ListType::TxPdo => any(|e| e.pdo.allows(PdoMapping::Tx)),
-            ListType::Backup => any(|e| e.backup),
-            ListType::Settings => any(|e| e.setting),
+            ListType::RxPdo => any(|e| e.pdo().allows(PdoMapping::Rx)),
+            ListType::TxPdo => any(|e| e.pdo().allows(PdoMapping::Tx)),
+            ListType::Backup => any(|e| e.backup()),
+            ListType::Settings => any(|e| e.setting()),
         }
     }
 
@@ -204,25 +204,29 @@ pub fn object_data_type(o: &Object) -> u16 {
 /// The object access word of an entry description: [`Access::bits`](crate::od::types::Access::bits) plus
 /// the PDO, backup and setting flags of [`access_flag`].
 pub fn entry_access(e: &Entry) -> u16 {
-    if e.gap {
+    if e.gap() {
         // Padding: no read or write right in any state (SSC: access 0).
         return 0;
     }
-    let pdo = match e.pdo {
+    let pdo = match e.pdo() {
         PdoMapping::None => 0,
         PdoMapping::Rx => access_flag::RX_PDO,
         PdoMapping::Tx => access_flag::TX_PDO,
         PdoMapping::RxTx => access_flag::RX_PDO | access_flag::TX_PDO,
     };
-    let backup = if e.backup { access_flag::BACKUP } else { 0 };
-    let setting = if e.setting { access_flag::SETTING } else { 0 };
-    e.access.bits() | pdo | backup | setting
+    let backup = if e.backup() { access_flag::BACKUP } else { 0 };
+    let setting = if e.setting() { access_flag::SETTING } else { 0 };
+    e.access().bits() | pdo | backup | setting
 }
 
 /// The data type an entry description reports: the entry's type, or
 /// [`NULL_TYPE`] for a padding gap.
 pub fn entry_data_type(e: &Entry) -> u16 {
-    if e.gap { NULL_TYPE } else { e.data_type.code() }
+    if e.gap() {
+        NULL_TYPE
+    } else {
+        e.data_type.code()
+    }
 }
 
 /// Data type index 0x0000 (`DEFTYPE_NULL`): what the SSC reports for a
@@ -576,7 +580,7 @@ fn write_entry_description(
     if range.is_none() {
         info &= !(value_info::MIN | value_info::MAX);
     }
-    if e.gap {
+    if e.gap() {
         // A padding gap has no value to describe.
         info = 0;
     }

@@ -466,7 +466,7 @@ impl DeviceDescription {
                         if !is_mapped(e, count) {
                             continue;
                         }
-                        bounds.writable |= e.access.writable();
+                        bounds.writable |= e.access().writable();
                         let DefaultValue::Int(mapping) = e.default else {
                             return Err(DescriptionError::BadMapping { pdo, sub: e.sub });
                         };
@@ -486,7 +486,7 @@ impl DeviceDescription {
                             while let Some((t, tt)) = ts.split_first() {
                                 if t.sub == msub {
                                     found = true;
-                                    let ok = !t.gap && t.bit_len == mbits && t.pdo.allows(want);
+                                    let ok = !t.gap() && t.bit_len == mbits && t.pdo().allows(want);
                                     if !ok {
                                         return Err(DescriptionError::BadMapping {
                                             pdo,

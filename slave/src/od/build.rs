@@ -18,7 +18,7 @@
 
 use super::dictionary::natural_bits;
 use super::sub_names::SUB_NAMES;
-use super::types::{Access, DataType, DefaultValue, Entry, Limits, PdoMapping};
+use super::types::{Access, DataType, DefaultValue, Entry, EntryFlags, Limits, PdoMapping};
 
 /// `"SubIndex nnn"`, the ETG name of an unnamed subindex.
 #[allow(
@@ -43,13 +43,9 @@ pub const fn base(
         name,
         data_type,
         bit_len: natural_bits(&data_type),
-        access,
-        pdo,
         default: DefaultValue::int(default),
         limits: &Limits::NONE,
-        backup: false,
-        setting: false,
-        gap: false,
+        flags: EntryFlags::new(access, pdo),
     }
 }
 
@@ -69,9 +65,8 @@ pub const fn sub0(highest: u8) -> Entry {
 /// writable in PRE-OP, at most `capacity`.
 pub const fn assign_count(count: u8, capacity: u8) -> Entry {
     Entry {
-        access: Access::RwPreOp,
         limits: capacity_limits(capacity),
-        ..sub0(count)
+        ..sub0(count).with_access(Access::RwPreOp)
     }
 }
 
@@ -176,10 +171,7 @@ pub const fn mapping_count(count: u8, capacity: u8) -> Entry {
 /// A writable PDO mapping entry (UINT32, RW in PRE-OP) holding `mapping`
 /// (`index << 16 | sub << 8 | bits`; 0 for a free place of the object).
 pub const fn map_rw(sub: u8, name: &'static str, mapping: u32) -> Entry {
-    Entry {
-        access: Access::RwPreOp,
-        ..map(sub, name, mapping)
-    }
+    map(sub, name, mapping).with_access(Access::RwPreOp)
 }
 
 /// A PDO mapping entry that maps `index:subindex` of `bits` bits (the
@@ -200,17 +192,15 @@ pub const fn pad(sub: u8, bits: u8) -> Entry {
 /// A padding gap of a record: `bits` zero bits up to a byte boundary, no
 /// access (SDO Information: NULL, access 0; upload 0x06010000).
 pub const fn gap(sub: u8, bits: u8) -> Entry {
-    Entry {
-        gap: true,
-        ..base(
-            sub,
-            sub_name(sub),
-            DataType::Bits(bits),
-            Access::Ro,
-            PdoMapping::None,
-            0,
-        )
-    }
+    base(
+        sub,
+        sub_name(sub),
+        DataType::Bits(bits),
+        Access::Ro,
+        PdoMapping::None,
+        0,
+    )
+    .with_gap(true)
 }
 
 /// A TxPDO-mappable input (read-only).
@@ -234,9 +224,9 @@ pub const fn setting(
 ) -> Entry {
     Entry {
         limits,
-        backup: true,
-        setting: true,
         ..base(sub, name, t, Access::Rw, PdoMapping::None, default)
+            .with_backup(true)
+            .with_setting(true)
     }
 }
 

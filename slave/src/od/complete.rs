@@ -62,8 +62,8 @@ pub fn upload(store: &Od, index: u16, sub: u8, out: &mut [u8]) -> Result<usize, 
     let mut bit = 0u16;
     let mut buf = [0u8; MAX_COMPLETE];
     for (flat, e) in members(store, pos, obj, sub == 0, elements) {
-        if !e.gap {
-            if !e.access.readable() {
+        if !e.gap() {
+            if !e.access().readable() {
                 return Err(SdoAbortCode::WriteOnly);
             }
             if e.data_type == DataType::VisibleString {
@@ -147,7 +147,7 @@ impl Iterator for CompleteIter<'_> {
             }
             let at = self.bit;
             self.bit = self.bit.saturating_add(bit_size(e));
-            if e.gap || e.access == Access::Ro || e.data_type.is_bytes() {
+            if e.gap() || e.access() == Access::Ro || e.data_type.is_bytes() {
                 continue;
             }
             let raw = read_bits(self.data, at, value_bits(e));
@@ -211,14 +211,14 @@ pub fn check_download<'a>(
         }
         let raw = read_bits(data, bit, value_bits(e));
         bit += size;
-        if e.gap {
+        if e.gap() {
             continue;
         }
         if e.data_type.is_bytes() {
             return Err(SdoAbortCode::CompleteAccessNotSupported);
         }
         let current = store.value(flat);
-        if e.access == Access::Ro {
+        if e.access() == Access::Ro {
             // The store holds signed values sign-extended; the raw bits
             // are zero-extended.
             if from_raw(e, raw) != current {
@@ -329,7 +329,7 @@ mod tests {
         const fn elements() -> [Entry; 101] {
             const FIRST: Entry = sub0(100);
             let mut all = [FIRST; 101];
-            all[0].access = crate::od::Access::Rw;
+            all[0].flags = all[0].flags.with_access(crate::od::Access::Rw);
             let mut i = 1;
             while i < 101 {
                 all[i] = setting(

@@ -439,10 +439,10 @@ const fn check_entry(
         },
         _ => None,
     };
-    if e.gap {
+    if e.gap() {
         let ok = matches!(e.data_type, DataType::Bits(_))
-            && matches!(e.access, Access::Ro)
-            && matches!(e.pdo, PdoMapping::None);
+            && matches!(e.access(), Access::Ro)
+            && matches!(e.pdo(), PdoMapping::None);
         if !ok {
             return Err(DescriptionError::GapShape { index, sub });
         }
@@ -519,7 +519,7 @@ const fn check_entry(
                 // use, not the capacity.
                 let ok = matches!(e.data_type, DataType::UInt8)
                     && (v == highest as i64
-                        || ((list || e.access.writable()) && v >= 0 && v <= highest as i64));
+                        || ((list || e.access().writable()) && v >= 0 && v <= highest as i64));
                 if !ok {
                     return Err(DescriptionError::SubIndexZero { index });
                 }
@@ -575,7 +575,7 @@ impl Dictionary {
         let mut slot = self.entry_count;
         for (f, _, e) in self.entries() {
             if f == flat {
-                let area = !e.gap
+                let area = !e.gap()
                     && e.data_type.is_bytes()
                     && !matches!(e.data_type, DataType::VisibleString);
                 return area.then_some((slot, e.area_len()));
@@ -644,12 +644,12 @@ impl Dictionary {
                 {
                     // Strings take the store's slots in order; a writable
                     // one needs a slot.
-                    if e.access.writable() && strings >= MAX_STRINGS {
+                    if e.access().writable() && strings >= MAX_STRINGS {
                         return Err(DescriptionError::StringEntry { index, sub: e.sub });
                     }
                     strings += 1;
                 } else if let DefaultValue::Str(_) = e.default
-                    && e.access.writable()
+                    && e.access().writable()
                 {
                     return Err(DescriptionError::StringEntry { index, sub: e.sub });
                 }

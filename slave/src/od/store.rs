@@ -295,7 +295,7 @@ impl Od {
     /// access, returns the number of bytes written.
     pub fn upload(&self, index: u16, sub: u8, out: &mut [u8]) -> Result<usize, SdoAbortCode> {
         let (flat, entry) = self.lookup(index, sub)?;
-        if !entry.access.readable() {
+        if !entry.access().readable() {
             return Err(SdoAbortCode::WriteOnly);
         }
         self.encode(flat, entry, out)
@@ -304,7 +304,7 @@ impl Od {
     /// Decodes and checks a value for `entry` from `data` as an SDO download
     /// would, without storing it. Returns the value.
     pub fn check(&self, entry: &Entry, data: &[u8], state: AlState) -> Result<i64, SdoAbortCode> {
-        match entry.access {
+        match entry.access() {
             Access::Ro => return Err(SdoAbortCode::ReadOnly),
             Access::RwPreOp if state != AlState::PreOp => return Err(SdoAbortCode::InvalidState),
             _ => {}
@@ -373,7 +373,7 @@ impl Od {
     ) -> Result<i64, SdoAbortCode> {
         let (flat, entry) = self.lookup(index, sub)?;
         if self.dict.area_of(flat).is_some() {
-            match entry.access {
+            match entry.access() {
                 Access::Ro => return Err(SdoAbortCode::ReadOnly),
                 Access::RwPreOp if state != AlState::PreOp => {
                     return Err(SdoAbortCode::InvalidState);
@@ -405,7 +405,7 @@ impl Od {
             return Err(SdoAbortCode::ObjectNotFound);
         };
         match self.dict.find_entry(obj.index, sub) {
-            Some((_, e)) if e.gap => Err(SdoAbortCode::UnsupportedAccess),
+            Some((_, e)) if e.gap() => Err(SdoAbortCode::UnsupportedAccess),
             Some((flat, e)) => Ok((flat, e)),
             None => Err(SdoAbortCode::SubindexNotFound),
         }

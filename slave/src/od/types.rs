@@ -603,7 +603,7 @@ impl From<Int64> for i64 {
 // (checked whenever the core is built for one, as the footprint and board
 // firmware builds of `.ci/run` do).
 #[cfg(target_pointer_width = "32")]
-const _: () = assert!(core::mem::size_of::<Entry>() == 36 && core::mem::align_of::<Entry>() == 4);
+const _: () = assert!(core::mem::size_of::<Entry>() == 32 && core::mem::align_of::<Entry>() == 4);
 
 /// The default value of an entry.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -644,22 +644,122 @@ pub struct Entry {
     pub data_type: DataType,
     /// Size in bits (strings: 8 x maximum length).
     pub bit_len: u16,
-    /// Access rights.
-    pub access: Access,
-    /// PDO mappability.
-    pub pdo: PdoMapping,
+    /// Access rights, PDO mappability, backup, setting and gap, in one
+    /// byte; read them with [`Entry::access`], [`Entry::pdo`],
+    /// [`Entry::backup`], [`Entry::setting`], [`Entry::gap`].
+    pub flags: EntryFlags,
     /// Default value (process data: the power-on value).
     pub default: DefaultValue,
     /// Range and unit, where the device gives them ([`Limits::NONE`] for
     /// none); read them with [`Entry::min`], [`Entry::max`], [`Entry::unit`].
     pub limits: &'static Limits,
+}
+
+/// An entry's access rights, PDO mappability and flags in one byte (five
+/// separate fields took five bytes and made every [`Entry`] 4 bytes
+/// longer on a 32-bit microcontroller). Build with [`EntryFlags::new`] and
+/// the `with_*` methods, all `const`.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+pub struct EntryFlags(u8);
+
+impl EntryFlags {
+    const BACKUP: u8 = 0x10;
+    const SETTING: u8 = 0x20;
+    const GAP: u8 = 0x40;
+
+    /// `access` and `pdo`; not backup, not a setting, not a gap.
+    pub const fn new(access: Access, pdo: PdoMapping) -> Self {
+        EntryFlags(0).with_access(access).with_pdo(pdo)
+    }
+
+    /// Access rights.
+    pub const fn access(self) -> Access {
+        match self.0 & 0x03 {
+            0 => Access::Ro,
+            1 => Access::Rw,
+            2 => Access::RwPreOp,
+            _ => Access::Wo,
+        }
+    }
+
+    /// PDO mappability.
+    pub const fn pdo(self) -> PdoMapping {
+        match (self.0 >> 2) & 0x03 {
+            0 => PdoMapping::None,
+            1 => PdoMapping::Rx,
+            2 => PdoMapping::Tx,
+            _ => PdoMapping::RxTx,
+        }
+    }
+
     /// Stored by SAVE and part of the backup (ETG.1000.6 access bit 8).
-    pub backup: bool,
+    pub const fn backup(self) -> bool {
+        self.0 & Self::BACKUP != 0
+    }
+
     /// A device setting (ETG.1000.6 access bit 9).
-    pub setting: bool,
-    /// A padding gap (blank subindex in the manual): not accessible by SDO,
-    /// packed as zero bits in complete access and PDOs.
-    pub gap: bool,
+    pub const fn setting(self) -> bool {
+        self.0 & Self::SETTING != 0
+    }
+
+    /// A padding gap (blank subindex in the manual): not accessible by
+    /// SDO, packed as zero bits in complete access and PDOs.
+    pub const fn gap(self) -> bool {
+        self.0 & Self::GAP != 0
+    }
+
+    /// With access rights `a`.
+    pub const fn with_access(self, a: Access) -> Self {
+        let bits = match a {
+            Access::Ro => 0,
+            Access::Rw => 1,
+            Access::RwPreOp => 2,
+            Access::Wo => 3,
+        };
+        EntryFlags(self.0 & !0x03 | bits)
+    }
+
+    /// With PDO mappability `p`.
+    pub const fn with_pdo(self, p: PdoMapping) -> Self {
+        let bits = match p {
+            PdoMapping::None => 0,
+            PdoMapping::Rx => 1,
+            PdoMapping::Tx => 2,
+            PdoMapping::RxTx => 3,
+        };
+        EntryFlags(self.0 & !0x0C | bits << 2)
+    }
+
+    const fn with(self, bit: u8, on: bool) -> Self {
+        EntryFlags(if on { self.0 | bit } else { self.0 & !bit })
+    }
+
+    /// Stored by SAVE (or not).
+    pub const fn with_backup(self, on: bool) -> Self {
+        self.with(Self::BACKUP, on)
+    }
+
+    /// A device setting (or not).
+    pub const fn with_setting(self, on: bool) -> Self {
+        self.with(Self::SETTING, on)
+    }
+
+    /// A padding gap (or not).
+    pub const fn with_gap(self, on: bool) -> Self {
+        self.with(Self::GAP, on)
+    }
+}
+
+impl core::fmt::Debug for EntryFlags {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("EntryFlags")
+            .field("access", &self.access())
+            .field("pdo", &self.pdo())
+            .field("backup", &self.backup())
+            .field("setting", &self.setting())
+            .field("gap", &self.gap())
+            .finish()
+    }
 }
 
 /// The range and unit of an entry. Most entries have neither and share
@@ -720,6 +820,72 @@ pub struct Object {
 }
 
 impl Entry {
+    /// The entry with access rights `a` (`constant(..).with_access(Access::Rw)`).
+    pub const fn with_access(self, a: Access) -> Self {
+        Entry {
+            flags: self.flags.with_access(a),
+            ..self
+        }
+    }
+
+    /// The entry with PDO mappability `p`.
+    pub const fn with_pdo(self, p: PdoMapping) -> Self {
+        Entry {
+            flags: self.flags.with_pdo(p),
+            ..self
+        }
+    }
+
+    /// The entry stored by SAVE (or not).
+    pub const fn with_backup(self, on: bool) -> Self {
+        Entry {
+            flags: self.flags.with_backup(on),
+            ..self
+        }
+    }
+
+    /// The entry as a device setting (or not).
+    pub const fn with_setting(self, on: bool) -> Self {
+        Entry {
+            flags: self.flags.with_setting(on),
+            ..self
+        }
+    }
+
+    /// The entry as a padding gap (or not).
+    pub const fn with_gap(self, on: bool) -> Self {
+        Entry {
+            flags: self.flags.with_gap(on),
+            ..self
+        }
+    }
+
+    /// Access rights.
+    pub const fn access(&self) -> Access {
+        self.flags.access()
+    }
+
+    /// PDO mappability.
+    pub const fn pdo(&self) -> PdoMapping {
+        self.flags.pdo()
+    }
+
+    /// Stored by SAVE and part of the backup (ETG.1000.6 access bit 8).
+    pub const fn backup(&self) -> bool {
+        self.flags.backup()
+    }
+
+    /// A device setting (ETG.1000.6 access bit 9).
+    pub const fn setting(&self) -> bool {
+        self.flags.setting()
+    }
+
+    /// A padding gap (blank subindex in the manual): not accessible by
+    /// SDO, packed as zero bits in complete access and PDOs.
+    pub const fn gap(&self) -> bool {
+        self.flags.gap()
+    }
+
     /// Smallest allowed value, where the device gives a range.
     pub const fn min(&self) -> Option<i64> {
         self.limits.min
@@ -740,7 +906,7 @@ impl Entry {
     /// as one value; 0 for numbers (their `i64` slot) and for visible
     /// strings (string slots, see `super::store`).
     pub const fn area_len(&self) -> usize {
-        if self.gap
+        if self.gap()
             || !self.data_type.is_bytes()
             || matches!(self.data_type, DataType::VisibleString)
         {
@@ -765,6 +931,38 @@ impl Object {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn entry_flags_keep_every_combination() {
+        for access in [Access::Ro, Access::Rw, Access::RwPreOp, Access::Wo] {
+            for pdo in [
+                PdoMapping::None,
+                PdoMapping::Rx,
+                PdoMapping::Tx,
+                PdoMapping::RxTx,
+            ] {
+                for bits in 0..8u8 {
+                    let (backup, setting, gap) = (bits & 1 != 0, bits & 2 != 0, bits & 4 != 0);
+                    let f = EntryFlags::new(access, pdo)
+                        .with_backup(backup)
+                        .with_setting(setting)
+                        .with_gap(gap);
+                    assert_eq!((f.access(), f.pdo()), (access, pdo));
+                    assert_eq!((f.backup(), f.setting(), f.gap()), (backup, setting, gap));
+                    // Changing one part leaves the others.
+                    let g = f
+                        .with_access(Access::Wo)
+                        .with_pdo(PdoMapping::Tx)
+                        .with_gap(!gap);
+                    assert_eq!(
+                        (g.access(), g.pdo(), g.gap()),
+                        (Access::Wo, PdoMapping::Tx, !gap)
+                    );
+                    assert_eq!((g.backup(), g.setting()), (backup, setting));
+                }
+            }
+        }
+    }
 
     #[test]
     fn int64_keeps_every_value() {

@@ -30,8 +30,8 @@ impl EsiApp {
         let mut outs: Vec<(usize, DataType)> = Vec::new();
         for o in desc.dictionary.objects() {
             for e in o.entries {
-                let numeric = !e.data_type.is_bytes() && !e.gap;
-                match e.pdo {
+                let numeric = !e.data_type.is_bytes() && !e.gap();
+                match e.pdo() {
                     PdoMapping::Tx if numeric => ins.push((flat, e.data_type, e.bit_len)),
                     PdoMapping::Rx if numeric => outs.push((flat, e.data_type)),
                     _ => {}

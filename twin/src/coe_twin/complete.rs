@@ -321,13 +321,13 @@ pub(super) fn complete(
                 }
             }
             entries.sort_by_key(|e| e.sub);
-            if entries.first().is_some_and(|z| !z.access.writable()) {
+            if entries.first().is_some_and(|z| !z.access().writable()) {
                 entries.retain(|e| e.sub <= n);
             }
             let highest = entries.iter().map(|e| e.sub).max().unwrap_or(0);
             if let Some(z) = entries.first_mut().filter(|z| z.sub == 0) {
                 z.default =
-                    DefaultValue::int(i64::from(if z.access.writable() { n } else { highest }));
+                    DefaultValue::int(i64::from(if z.access().writable() { n } else { highest }));
             }
             objects[pos] = Object {
                 entries: Box::leak(entries.into_boxed_slice()),
@@ -412,7 +412,7 @@ pub(super) fn complete(
                 let o = &objects[pos];
                 match o.entries.iter().position(|x| x.sub == e.sub) {
                     Some(k)
-                        if o.entries[k].bit_len != u16::from(e.bit_len) && !o.entries[k].gap =>
+                        if o.entries[k].bit_len != u16::from(e.bit_len) && !o.entries[k].gap() =>
                     {
                         // One object, one size: a PDO that maps it with
                         // another length (Beckhoff's alternative PDOs of a
@@ -430,8 +430,8 @@ pub(super) fn complete(
                     }
                     Some(k) => {
                         let x = &o.entries[k];
-                        if !x.pdo.allows(dir) && !x.gap {
-                            let pdo = if x.pdo == PdoMapping::None {
+                        if !x.pdo().allows(dir) && !x.gap() {
+                            let pdo = if x.pdo() == PdoMapping::None {
                                 dir
                             } else {
                                 PdoMapping::RxTx
@@ -445,7 +445,7 @@ pub(super) fn complete(
                             );
                             let mut entries: Vec<Entry> = o.entries.iter().map(copy).collect();
                             if let Some(y) = entries.get_mut(k) {
-                                y.pdo = pdo;
+                                y.flags = y.flags.with_pdo(pdo);
                             }
                             objects[pos] = Object {
                                 entries: Box::leak(entries.into_boxed_slice()),
@@ -549,11 +549,8 @@ pub(super) fn complete(
         let make = |(sub, name, ty, bits, out): &(u8, String, DataType, u8, bool)| {
             let e = mapped_entry(*sub, name, *ty, *bits, *out);
             if both.contains(&(index, *sub)) {
-                Entry {
-                    pdo: PdoMapping::RxTx,
-                    access: ecat_slave::od::Access::Rw,
-                    ..e
-                }
+                e.with_access(ecat_slave::od::Access::Rw)
+                    .with_pdo(PdoMapping::RxTx)
             } else {
                 e
             }
@@ -582,7 +579,7 @@ pub(super) fn complete(
             continue;
         };
         let o = &objects[pos];
-        if o.code == ObjectCode::Var || !o.entries.iter().any(|e| e.access.writable()) {
+        if o.code == ObjectCode::Var || !o.entries.iter().any(|e| e.access().writable()) {
             continue;
         }
         note(
@@ -594,10 +591,7 @@ pub(super) fn complete(
         let entries: Vec<Entry> = o
             .entries
             .iter()
-            .map(|e| Entry {
-                access: ecat_slave::od::Access::Ro,
-                ..copy(e)
-            })
+            .map(|e| copy(e).with_access(ecat_slave::od::Access::Ro))
             .collect();
         objects[pos] = Object {
             entries: Box::leak(entries.into_boxed_slice()),

@@ -227,7 +227,7 @@ pub(super) fn build_description(dev: &EsiDevice) -> Result<Described, Descriptio
         for (k, e) in o.entries.iter().enumerate() {
             if let DefaultValue::Str(t) = e.default {
                 let slot = t.len() <= ecat_slave::od::STRING_CAPACITY;
-                if e.access.writable() && (!slot || strings >= ecat_slave::od::STRING_SLOTS) {
+                if e.access().writable() && (!slot || strings >= ecat_slave::od::STRING_SLOTS) {
                     changed.get_or_insert_with(Vec::new).push(k);
                 }
                 if slot {
@@ -248,7 +248,7 @@ pub(super) fn build_description(dev: &EsiDevice) -> Result<Described, Descriptio
             let mut entries: Vec<Entry> = o.entries.iter().map(copy).collect();
             for k in ks {
                 if let Some(e) = entries.get_mut(k) {
-                    e.access = ecat_slave::od::Access::Ro;
+                    e.flags = e.flags.with_access(ecat_slave::od::Access::Ro);
                 }
             }
             o.entries = Box::leak(entries.into_boxed_slice());
@@ -556,7 +556,7 @@ mod tests {
         let (desc, _) = describe(&real).unwrap();
         let (_, e) = desc.dictionary.find_entry(0x7000, 1).unwrap();
         assert_eq!(
-            (e.data_type, e.bit_len, e.pdo),
+            (e.data_type, e.bit_len, e.pdo()),
             (DataType::Real32, 32, PdoMapping::Rx)
         );
         // No GroupType (ETG.2000 requires one).
@@ -666,7 +666,7 @@ mod tests {
             DefaultValue::int(0),
             "nothing configured"
         );
-        assert_eq!(f030.entries[1].access, ecat_slave::od::Access::RwPreOp);
+        assert_eq!(f030.entries[1].access(), ecat_slave::od::Access::RwPreOp);
         assert_eq!(warnings.len(), 2);
         assert!(
             warnings[1].to_string().contains("0xf030"),

@@ -192,18 +192,17 @@ pub(super) fn modular_objects(
     use ecat_slave::od::modules::{CONFIGURED_MODULES, DETECTED_MODULES, MODULAR_DEVICE_PROFILE};
     let ident_list = |access: Access| -> &'static [Entry] {
         let mut l = vec![Entry {
-            access,
             limits: crate::leak_limits(Some(0), Some(i64::from(slots)), ""),
-            ..sub0(slots)
+            ..sub0(slots).with_access(access)
         }];
         if access == Access::RwPreOp {
             l[0].default = DefaultValue::int(0);
         }
         for k in 1..=slots {
-            l.push(Entry {
-                access,
-                ..constant(k, leak(&format!("SubIndex {k:03}")), DataType::UInt32, 0)
-            });
+            l.push(
+                constant(k, leak(&format!("SubIndex {k:03}")), DataType::UInt32, 0)
+                    .with_access(access),
+            );
         }
         Box::leak(l.into_boxed_slice())
     };

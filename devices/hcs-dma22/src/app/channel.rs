@@ -231,7 +231,7 @@ fn write(od: &mut Od, slot: u8, id: u16, word: u16) -> Result<i64, WriteExceptio
         .dictionary()
         .find_entry(index, sub)
         .ok_or(WriteException::WrongId)?;
-    if !e.access.writable() {
+    if !e.access().writable() {
         return Err(WriteException::WriteFailed);
     }
     let v = if e.data_type.is_signed() {

@@ -31,12 +31,10 @@ pub const fn ro(
     default: i64,
     limits: &'static Limits,
 ) -> Entry {
-    Entry {
-        access: Access::Ro,
-        backup: false,
-        setting: false,
-        ..rw(sub, name, t, default, limits)
-    }
+    rw(sub, name, t, default, limits)
+        .with_access(Access::Ro)
+        .with_backup(false)
+        .with_setting(false)
 }
 
 /// A read/write parameter, writable in every state as over the HCS

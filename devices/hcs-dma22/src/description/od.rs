@@ -148,7 +148,7 @@ const fn ident_list(access: Access) -> [Entry; 6] {
     ];
     let mut k = 0;
     while k < l.len() {
-        l[k].access = access;
+        l[k].flags = l[k].flags.with_access(access);
         k += 1;
     }
     l[0].limits = &Limits {

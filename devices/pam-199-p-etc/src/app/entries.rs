@@ -458,7 +458,7 @@ mod tests {
             assert_eq!(object_at(flat), e.index, "{name}");
             assert_eq!(at.sub, e.sub, "{name}");
             assert_eq!(at.name, name.as_str(), "{:#06x}:{:02x}", e.index, e.sub);
-            assert!(!entry.gap, "{name} is a padding gap");
+            assert!(!entry.gap(), "{name} is a padding gap");
         }
         // No two names share a position.
         let mut flats: Vec<u16> = all.iter().map(|(e, _)| e.flat).collect();

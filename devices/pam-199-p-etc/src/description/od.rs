@@ -724,7 +724,7 @@ mod tests {
             } else {
                 Access::Ro
             };
-            assert_eq!(s0.access, want, "{:#06x}", o.index);
+            assert_eq!(s0.access(), want, "{:#06x}", o.index);
         }
     }
 
@@ -855,7 +855,7 @@ mod tests {
             };
             for e in o.entries.iter().filter(|e| e.sub >= 1) {
                 assert_eq!(e.data_type, DataType::UInt32);
-                assert_eq!(e.access, Access::Ro);
+                assert_eq!(e.access(), Access::Ro);
                 let m = int(e) as u32;
                 let (index, sub, bits) = ((m >> 16) as u16, (m >> 8) as u8, m as u8);
                 if index == 0 {
@@ -865,9 +865,9 @@ mod tests {
                     continue;
                 }
                 let (_, target) = find_entry(index, sub).unwrap_or_else(|| panic!("{m:#010x}"));
-                assert!(!target.gap, "{m:#010x}");
+                assert!(!target.gap(), "{m:#010x}");
                 assert_eq!(u16::from(bits), target.bit_len, "{m:#010x}");
-                assert_eq!(target.pdo, dir, "{m:#010x}");
+                assert_eq!(target.pdo(), dir, "{m:#010x}");
             }
         }
     }
@@ -902,7 +902,7 @@ mod tests {
     fn gaps_pad_exactly_to_the_next_byte_boundary() {
         for o in records().filter(|o| !is_mapping(o)) {
             for (e, off) in layout(o).0 {
-                if e.gap {
+                if e.gap() {
                     assert!(
                         off % 8 != 0,
                         "{:#06x}:{} at a byte boundary",
@@ -918,11 +918,11 @@ mod tests {
                     );
                     assert_eq!(e.data_type, DataType::Bits(e.bit_len as u8));
                     assert_eq!(
-                        (e.access, e.pdo, e.default),
+                        (e.access(), e.pdo(), e.default),
                         (Access::Ro, PdoMapping::None, DefaultValue::int(0))
                     );
                     assert_eq!(e.name, sub_name(e.sub));
-                    assert!(!e.backup && !e.setting);
+                    assert!(!e.backup() && !e.setting());
                 } else if e.bit_len % 8 == 0 {
                     assert_eq!(off % 8, 0, "{:#06x}:{} starts unaligned", o.index, e.sub);
                 }
@@ -1061,7 +1061,7 @@ mod tests {
         );
         for i in [0x1C12, 0x1C13] {
             let (_, o) = find(i).unwrap();
-            assert!(o.entries.iter().all(|e| e.access == Access::RwPreOp));
+            assert!(o.entries.iter().all(|e| e.access() == Access::RwPreOp));
             assert_eq!(o.entries[0].max(), Some(i64::from(o.max_sub())));
         }
     }
@@ -1069,22 +1069,34 @@ mod tests {
     #[test]
     fn access_pdo_and_storage_flags_follow_the_index_ranges() {
         for o in OBJECTS {
-            for e in o.entries.iter().filter(|e| e.sub >= 1 && !e.gap) {
+            for e in o.entries.iter().filter(|e| e.sub >= 1 && !e.gap()) {
                 let what = format!("{:#06x}:{} {}", o.index, e.sub, e.name);
                 let stored =
                     (0x8000..=0x8FFF).contains(&o.index) || matches!(o.index, 0xF800 | 0xF80F);
-                assert_eq!((e.backup, e.setting), (stored, stored), "{what}");
+                assert_eq!((e.backup(), e.setting()), (stored, stored), "{what}");
                 match o.index {
                     0x6000..=0x6FFF | 0xA000..=0xAFFF => {
-                        assert_eq!((e.access, e.pdo), (Access::Ro, PdoMapping::Tx), "{what}")
+                        assert_eq!(
+                            (e.access(), e.pdo()),
+                            (Access::Ro, PdoMapping::Tx),
+                            "{what}"
+                        )
                     }
                     0x7000..=0x7FFF => {
-                        assert_eq!((e.access, e.pdo), (Access::Rw, PdoMapping::Rx), "{what}")
+                        assert_eq!(
+                            (e.access(), e.pdo()),
+                            (Access::Rw, PdoMapping::Rx),
+                            "{what}"
+                        )
                     }
                     0x8000..=0x8FFF | 0xF800 | 0xF80F => {
-                        assert_eq!((e.access, e.pdo), (Access::Rw, PdoMapping::None), "{what}")
+                        assert_eq!(
+                            (e.access(), e.pdo()),
+                            (Access::Rw, PdoMapping::None),
+                            "{what}"
+                        )
                     }
-                    _ => assert_eq!(e.pdo, PdoMapping::None, "{what}"),
+                    _ => assert_eq!(e.pdo(), PdoMapping::None, "{what}"),
                 }
                 if matches!(o.index, 0x6000..=0x7FFF | 0xA000..=0xAFFF) {
                     assert_eq!(int(e), 0, "{what}");
@@ -1092,8 +1104,8 @@ mod tests {
             }
         }
         let (_, ts) = find_entry(0x10F8, 0).unwrap();
-        assert_eq!((ts.data_type, ts.pdo), (DataType::UInt64, PdoMapping::Tx));
-        let acc = |s| find_entry(0xF801, s).unwrap().1.access;
+        assert_eq!((ts.data_type, ts.pdo()), (DataType::UInt64, PdoMapping::Tx));
+        let acc = |s| find_entry(0xF801, s).unwrap().1.access();
         assert_eq!(
             [acc(1), acc(2), acc(3), acc(4)],
             [Access::Wo, Access::Rw, Access::Rw, Access::Rw]
@@ -1126,7 +1138,7 @@ mod tests {
         assert!(entry_at(ENTRY_COUNT).is_none());
         assert!(find(0x1002).is_none());
         assert!(find_entry(0x8002, 0x01).is_none()); // blank at a byte boundary: absent
-        assert!(find_entry(0x6000, 0x02).unwrap().1.gap);
+        assert!(find_entry(0x6000, 0x02).unwrap().1.gap());
     }
 
     #[test]
@@ -1142,7 +1154,7 @@ mod tests {
                 );
                 assert!(e.name.is_ascii(), "{}", e.name);
                 let dup = o.entries[..i].iter().any(|d| d.name == e.name);
-                assert!(!dup || e.gap, "{:#06x}: {} twice", o.index, e.name);
+                assert!(!dup || e.gap(), "{:#06x}: {} twice", o.index, e.name);
             }
         }
     }

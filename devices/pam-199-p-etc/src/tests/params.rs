@@ -9,7 +9,7 @@ use ecat_slave::params::*;
 fn stored_entries() -> Vec<(usize, &'static ecat_slave::od::Entry)> {
     DICT.entries()
         .filter(|(_, _, e)| {
-            e.backup && !e.gap && e.data_type != ecat_slave::od::DataType::VisibleString
+            e.backup() && !e.gap() && e.data_type != ecat_slave::od::DataType::VisibleString
         })
         .map(|(f, _, e)| (f, e))
         .collect()

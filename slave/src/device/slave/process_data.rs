@@ -15,7 +15,7 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         let od = A::Values::view_mut(&mut self.store);
         let dict = od.dictionary();
         for (flat, _, e) in dict.entries() {
-            if e.pdo == PdoMapping::Rx {
+            if e.pdo() == PdoMapping::Rx {
                 od.set_value(flat, 0);
             }
         }

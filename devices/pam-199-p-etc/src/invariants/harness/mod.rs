@@ -583,7 +583,7 @@ fn flats() -> &'static Flats {
             tx_assign: list(0x1C13),
             rx: DICT
                 .entries()
-                .filter(|(_, _, e)| e.pdo == PdoMapping::Rx)
+                .filter(|(_, _, e)| e.pdo() == PdoMapping::Rx)
                 .map(|(flat, _, _)| flat)
                 .collect(),
         }
