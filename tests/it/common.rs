@@ -202,3 +202,17 @@ pub fn wait_for_line(host_if: &str, slaves: Option<u16>) {
     }
     panic!("no line of {slaves:?} slaves answered on {host_if} within 60 s (last: {last:?})");
 }
+
+/// The IO8's generated ESI with `SdoInfo` and `CompleteAccess` cleared: a
+/// device description that offers neither service (twin and SOEM tests).
+pub fn io8_esi_without_sdo_info_nor_complete_access() -> String {
+    let xml =
+        String::from_utf8(ecat_esi::generate(&io8_example::DEVICE).expect("ESI")).expect("utf-8");
+    let edited = xml.replacen("SdoInfo=\"1\"", "SdoInfo=\"0\"", 1).replacen(
+        "CompleteAccess=\"1\"",
+        "CompleteAccess=\"0\"",
+        1,
+    );
+    assert_ne!(edited, xml, "the ESI offered both");
+    edited
+}

@@ -525,14 +525,21 @@ fn soem_runs_an_eni_line_of_esi_twins_and_a_pam_with_the_real_devices_identities
 /// the ESI, the image sizes, OP and the loopback.
 #[test]
 fn soem_drives_a_coe_twin_built_from_an_esi_file() {
-    let dir = std::env::temp_dir().join(format!("pam-soem-esi-twin-{}", std::process::id()));
+    let esi = ecat_esi::generate(&io8_example::DEVICE).expect("ESI");
+    soem_esi_twin_phase("e", "esi-twin", &esi);
+}
+
+/// SOEM's `esi_twin` phase on a twin the runner builds from `esi`
+/// (written to a temporary file, removed after).
+fn soem_esi_twin_phase(netns_tag: &str, name: &str, esi: &[u8]) {
+    let dir = std::env::temp_dir().join(format!("pam-soem-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
-    let esi = dir.join("IO8.xml");
-    std::fs::write(&esi, ecat_esi::generate(&io8_example::DEVICE).expect("ESI")).expect("write");
-    let path = esi.to_str().expect("utf-8 path").to_string();
+    let file = dir.join(format!("{name}.xml"));
+    std::fs::write(&file, esi).expect("write");
+    let path = file.to_str().expect("utf-8 path").to_string();
     soem_phase(
-        "e",
-        "esi-twin",
+        netns_tag,
+        name,
         "",
         &["--esi", &path, "--inputs", "loopback"],
         &["esi_twin", &path],
@@ -546,25 +553,6 @@ fn soem_drives_a_coe_twin_built_from_an_esi_file() {
 /// 0x06010000, while the rest runs as before.
 #[test]
 fn soem_finds_the_coe_services_a_twins_esi_does_not_offer_refused() {
-    let dir = std::env::temp_dir().join(format!("pam-soem-esi-coe-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("dir");
-    let xml =
-        String::from_utf8(ecat_esi::generate(&io8_example::DEVICE).expect("ESI")).expect("utf-8");
-    let edited = xml.replacen("SdoInfo=\"1\"", "SdoInfo=\"0\"", 1).replacen(
-        "CompleteAccess=\"1\"",
-        "CompleteAccess=\"0\"",
-        1,
-    );
-    assert_ne!(edited, xml, "the ESI offered both");
-    let esi = dir.join("IO8-no-info.xml");
-    std::fs::write(&esi, edited).expect("write");
-    let path = esi.to_str().expect("utf-8 path").to_string();
-    soem_phase(
-        "f",
-        "esi-twin-no-info",
-        "",
-        &["--esi", &path, "--inputs", "loopback"],
-        &["esi_twin", &path],
-    );
-    let _ = std::fs::remove_dir_all(&dir);
+    let esi = crate::common::io8_esi_without_sdo_info_nor_complete_access();
+    soem_esi_twin_phase("f", "esi-twin-no-info", esi.as_bytes());
 }

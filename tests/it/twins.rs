@@ -593,14 +593,7 @@ fn a_twin_whose_esi_offers_no_sdo_information_nor_complete_access_refuses_both()
     // The IO8's ESI with `SdoInfo` and `CompleteAccess` cleared: the twin's
     // SII says so, and the core refuses what the description does not
     // offer instead of serving it anyway.
-    let xml =
-        String::from_utf8(ecat_esi::generate(&io8_example::DEVICE).expect("ESI")).expect("utf-8");
-    let edited = xml.replacen("SdoInfo=\"1\"", "SdoInfo=\"0\"", 1).replacen(
-        "CompleteAccess=\"1\"",
-        "CompleteAccess=\"0\"",
-        1,
-    );
-    assert_ne!(edited, xml, "the ESI offered both");
+    let edited = crate::common::io8_esi_without_sdo_info_nor_complete_access();
     let file = EsiFile::parse(&edited).expect("parses");
     let dev = file.device(None, None).expect("device");
     let twin = ecat_twin::twin(dev, None, InputRule::Hold).expect("twin");
