@@ -5,17 +5,20 @@
 //! ethercrab's `tx_rx` sends it) sent from the host end and timed until
 //! its answer arrives, 20 000 times each:
 //!
-//! * `floor`: `pam-slave --reflect` on the namespace end, the same socket
-//!   path and loop with no slave (what the kernel and the socket cost);
+//! * `floor/N`: `pam-slave --reflect` on the namespace end, the same socket
+//!   path with no slave (what the kernel and the socket cost), answering
+//!   the frame of `runner/N` (the same size: a 64-slave frame carries
+//!   1.2 KB);
 //! * `runner/1`, `runner/8`, `runner/64`: `pam-slave --count N`, its ESCs
 //!   configured like a master does (station address, SM2/SM3, FMMUs), so
 //!   every LRW is really processed (the bench checks the working counter).
 //!
 //! It prints p50, p99, p99.9 and max per case and the ratio runner/floor
-//! at p50 and p99. `--pace-us N` sends one frame every N us (1000: a
-//! 1 kHz cyclic master), back to back by default. Needs root and iproute2
-//! (the namespace is removed at the end); builds `pam-slave` in release
-//! mode first.
+//! at p50 and p99, each runner against the floor measured just before it
+//! with the same frame. `--pace-us N` sends one frame every N us (1000: a
+//! 1 kHz cyclic master), back to back by default; `--no-busy-poll` passes
+//! that flag to the runners. Needs root and iproute2 (the namespace is
+//! removed at the end); builds `pam-slave` in release mode first.
 //!
 //! Run: `cargo bench -p master-test --bench latency` (`-- --frames N` for
 //! another count).
@@ -224,7 +227,10 @@ fn main() {
         .status()
         .is_ok_and(|s| s.success());
     assert!(ok, "cargo build of pam-slave");
-    let bin = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/release/pam-slave").to_string();
+    // Where that build put it (CARGO_TARGET_DIR, else the workspace's).
+    let target = std::env::var("CARGO_TARGET_DIR")
+        .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../target").to_string());
+    let bin = format!("{target}/release/pam-slave");
 
     let pid = std::process::id();
     let mut ns = Namespace {
@@ -263,17 +269,26 @@ fn main() {
     );
     println!("| case | p50 | p99 | p99.9 | max | p50 / floor | p99 / floor |");
     println!("|---|---|---|---|---|---|---|");
+    let no_busy_poll = args.iter().any(|a| a == "--no-busy-poll");
     let mut floor: Option<(Duration, Duration)> = None;
-    for (name, n) in [
-        ("floor", 1usize),
-        ("runner/1", 1),
-        ("runner/8", 8),
-        ("runner/64", 64),
+    for (is_floor, n) in [
+        (true, 1usize),
+        (false, 1),
+        (true, 8),
+        (false, 8),
+        (true, 64),
+        (false, 64),
     ] {
-        if name == "floor" {
+        let name = format!("{}/{n}", if is_floor { "floor" } else { "runner" });
+        if is_floor {
             ns.start(&bin, &["--iface", &slave, "--reflect"]);
         } else {
-            ns.start(&bin, &["--iface", &slave, "--count", &n.to_string()]);
+            let count = n.to_string();
+            let mut a = vec!["--iface", &slave, "--count", &count];
+            if no_busy_poll {
+                a.push("--no-busy-poll");
+            }
+            ns.start(&bin, &a);
             for i in 0..n as u16 {
                 let (f, ends) = config_frame(i);
                 let (r, _) = m.exchange(&f);
@@ -299,7 +314,7 @@ fn main() {
                 }
             }
             let (r, t) = m.exchange(&f);
-            if name != "floor" {
+            if !is_floor {
                 assert_eq!(
                     usize::from(wkc(&r, ends[0])),
                     3 * n,
@@ -316,12 +331,12 @@ fn main() {
         let (p50, p99) = (percentile(&times, 0.5), percentile(&times, 0.99));
         let p999 = percentile(&times, 0.999);
         let max = *times.last().expect("samples");
-        let (r50, r99) = match floor {
-            Some((f50, f99)) => (
+        let (r50, r99) = match floor.take() {
+            Some((f50, f99)) if !is_floor => (
                 format!("{:.2}", us(p50) / us(f50)),
                 format!("{:.2}", us(p99) / us(f99)),
             ),
-            None => {
+            _ => {
                 floor = Some((p50, p99));
                 ("1".into(), "1".into())
             }

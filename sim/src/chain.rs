@@ -443,29 +443,60 @@ impl Chain {
     /// times the frame count. Returns the first PDI failure like
     /// [`Chain::poll`].
     pub fn service(&mut self, now_ns: u64) -> Result<(), (usize, EscError)> {
+        self.service_until(now_ns, &mut || false).map(|_| ())
+    }
+
+    /// [`Chain::service`] that stops between two firmware runs as soon as
+    /// `frame_waiting` says a frame waits, so a frame is never held up by
+    /// more than one firmware step: the runner answers it and calls again,
+    /// and the rest of the work (the touched slaves not run yet, the
+    /// sweep's remaining turns) is done then. Returns whether all the work
+    /// was done (`false`: stopped for a frame), or the first PDI failure
+    /// like [`Chain::poll`].
+    pub fn service_until(
+        &mut self,
+        now_ns: u64,
+        frame_waiting: &mut dyn FnMut() -> bool,
+    ) -> Result<bool, (usize, EscError)> {
         let mut first = None;
         let mut moved = false;
+        let mut stopped = false;
         if core::mem::take(&mut self.touched_all) {
             for i in 0..self.slaves.len() {
+                if frame_waiting() {
+                    // The rest stays to do, in order, before later events.
+                    self.touched.splice(0..0, i..self.slaves.len());
+                    stopped = true;
+                    break;
+                }
                 if self.has_event(i, now_ns) {
                     moved |= self.poll_one(i, now_ns, &mut first);
                 }
             }
         } else {
-            let touched = core::mem::take(&mut self.touched);
-            for &i in &touched {
+            let mut touched = core::mem::take(&mut self.touched);
+            let mut done = touched.len();
+            for (k, &i) in touched.iter().enumerate() {
+                if frame_waiting() {
+                    done = k;
+                    stopped = true;
+                    break;
+                }
                 if self.has_event(i, now_ns) {
                     moved |= self.poll_one(i, now_ns, &mut first);
                 }
             }
+            touched.drain(..done);
             self.touched = touched;
         }
-        self.touched.clear();
-        moved |= self.sweep(now_ns, &mut first);
+        if !stopped {
+            self.touched.clear();
+            moved |= self.sweep(now_ns, &mut first, frame_waiting, &mut stopped);
+        }
         if moved {
             self.reindex();
         }
-        first.map_or(Ok(()), Err)
+        first.map_or(Ok(!stopped), Err)
     }
 
     /// [`Chain::service`] when the link is idle (no frame waiting): also
@@ -512,7 +543,13 @@ impl Chain {
     /// Runs the firmware of the slaves whose turn in the sweep has come
     /// by `now_ns`; returns whether the firmware of one of them changed
     /// its station alias.
-    fn sweep(&mut self, now_ns: u64, first: &mut Option<(usize, EscError)>) -> bool {
+    fn sweep(
+        &mut self,
+        now_ns: u64,
+        first: &mut Option<(usize, EscError)>,
+        frame_waiting: &mut dyn FnMut() -> bool,
+        stopped: &mut bool,
+    ) -> bool {
         let n = self.slaves.len();
         if n == 0 {
             return false;
@@ -520,21 +557,25 @@ impl Chain {
         let period = self.sweep_period_ns();
         let elapsed = now_ns.saturating_sub(self.swept_until);
         let due = u128::from(elapsed) * n as u128 / u128::from(period);
-        let due = usize::try_from(due).unwrap_or(usize::MAX);
-        if due == 0 {
-            return false;
-        }
-        if due >= n {
-            self.swept_until = now_ns;
-        } else {
-            let step = u128::from(period) * due as u128 / n as u128;
-            self.swept_until += u64::try_from(step).unwrap_or(elapsed);
-        }
+        let due = usize::try_from(due).unwrap_or(usize::MAX).min(n);
         let mut moved = false;
-        for _ in 0..due.min(n) {
+        let mut ran = 0;
+        while ran < due {
+            if frame_waiting() {
+                *stopped = true;
+                break;
+            }
             let i = self.sweep_next % n;
             self.sweep_next = (i + 1) % n;
             moved |= self.poll_one(i, now_ns, first);
+            ran += 1;
+        }
+        // The turns not run (a frame came first) stay due.
+        if ran == n {
+            self.swept_until = now_ns;
+        } else if ran > 0 {
+            let step = u128::from(period) * ran as u128 / n as u128;
+            self.swept_until += u64::try_from(step).unwrap_or(elapsed);
         }
         moved
     }
@@ -1052,6 +1093,70 @@ mod tests {
         line.set_idle_passes(true);
         line.idle(0).unwrap();
         assert_eq!(line.firmware_runs(), 8);
+    }
+
+    #[test]
+    fn service_stopped_by_a_waiting_frame_finishes_the_events_on_the_next_call() {
+        let mut line = crate::testing::line(8);
+        // A broadcast PRE-OP request without mailbox SMs: every slave's
+        // firmware has an AL control event to answer (INIT + error).
+        let mut f = one_datagram(Command::Bwr, 0x0120 << 16, &[0x02, 0]);
+        line.process_frame_at(&mut f, 0);
+        // A frame waits after three firmware runs.
+        let mut looks = 0;
+        let mut after_three = || {
+            looks += 1;
+            looks > 3
+        };
+        assert_eq!(line.service_until(0, &mut after_three), Ok(false));
+        assert_eq!(line.firmware_runs(), 3);
+        assert!(
+            (0..3).all(|i| al_status(&line, i) == 0x0011),
+            "PRE-OP refused: INIT + error"
+        );
+        assert!((3..8).all(|i| al_status(&line, i) == 0x0001), "not run yet");
+        // Next call (no frame waits): the other five, once each.
+        assert_eq!(line.service_until(0, &mut || false), Ok(true));
+        assert_eq!(line.firmware_runs(), 8);
+        assert!((0..8).all(|i| al_status(&line, i) == 0x0011));
+        assert_eq!(line.service_until(0, &mut || false), Ok(true));
+        assert_eq!(line.firmware_runs(), 8, "nothing left to do");
+    }
+
+    #[test]
+    fn service_stopped_in_the_sweep_keeps_the_remaining_turns_due() {
+        let mut line = crate::testing::line(4);
+        let period = line.sweep_period_ns();
+        // A whole sweep period later every slave is due; a frame waits
+        // after the first run.
+        let mut looks = 0;
+        let mut after_one = || {
+            looks += 1;
+            looks > 1
+        };
+        assert_eq!(line.service_until(period, &mut after_one), Ok(false));
+        assert_eq!(line.firmware_runs(), 1);
+        // The three not run stay due at the same time, and no more.
+        assert_eq!(line.service_until(period, &mut || false), Ok(true));
+        assert_eq!(line.firmware_runs(), 4);
+        assert_eq!(line.service_until(period, &mut || false), Ok(true));
+        assert_eq!(line.firmware_runs(), 4);
+    }
+
+    #[test]
+    fn service_without_a_waiting_frame_is_what_service_does() {
+        let mut a = crate::testing::line(8);
+        let mut b = crate::testing::line(8);
+        let mut f = one_datagram(Command::Bwr, 0x0120 << 16, &[0x02, 0]);
+        let mut g = f.clone();
+        a.process_frame_at(&mut f, 0);
+        b.process_frame_at(&mut g, 0);
+        for t in [0, 300_000, 1_000_000, 2_500_000] {
+            a.service(t).unwrap();
+            assert_eq!(b.service_until(t, &mut || false), Ok(true));
+            assert_eq!(a.firmware_runs(), b.firmware_runs(), "at {t}");
+        }
+        assert!((0..8).all(|i| al_status(&a, i) == al_status(&b, i)));
     }
 
     #[test]

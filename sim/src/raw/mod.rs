@@ -6,6 +6,9 @@
 //! processed (source MAC with the locally administered bit set: our own
 //! replies seen again), is ignored.
 
+pub mod cycle;
+mod socket;
+
 use crate::chain::{
     Chain, IMAGE_SLOT_CAPACITY, LineSlave, factory_image_store_of, provision_factory,
 };
@@ -13,12 +16,15 @@ use crate::faults::{Fate, FaultConfig, FaultInjector};
 use crate::file_store::FileStore;
 use crate::pcap::PcapWriter;
 use crate::state_dir::{Loaded, SlaveState};
+use cycle::CycleWatch;
 use ecat_slave::firmware::ImageStore;
-use pnet_datalink::{Channel, Config, NetworkInterface};
+use pnet_datalink::NetworkInterface;
+use socket::{PacketSocket, is_queue_full};
 use std::fs::File;
 use std::io::{self, BufWriter};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// What to run (the slaves themselves are handed to [`run`]).
@@ -40,11 +46,17 @@ pub struct RunnerConfig {
     /// accepts ([`IMAGE_SLOT_CAPACITY`] by default); a slave's store takes
     /// up to two slots of it, in memory (or on disk with `state_dir`).
     pub image_slot_capacity: usize,
+    /// Poll the socket without sleeping in a short window around the
+    /// time a cyclic master's next frame is due ([`cycle`]): its arrival
+    /// then costs no thread wake-up. On by default; it costs the runner's
+    /// thread at most a fifth of a core, and nothing for masters that are
+    /// not cyclic. Off, the runner sleeps until each frame arrives.
+    pub busy_poll: bool,
 }
 
 impl RunnerConfig {
     /// Serves `iface` with the defaults: no capture, no state directory,
-    /// no faults, no forwarding, [`IMAGE_SLOT_CAPACITY`].
+    /// no faults, no forwarding, [`IMAGE_SLOT_CAPACITY`], busy polling.
     pub fn new(iface: impl Into<String>) -> Self {
         Self {
             iface: iface.into(),
@@ -53,6 +65,7 @@ impl RunnerConfig {
             faults: None,
             forward: None,
             image_slot_capacity: IMAGE_SLOT_CAPACITY,
+            busy_poll: true,
         }
     }
 }
@@ -123,6 +136,29 @@ pub const MAX_LINE: usize = 4096;
 /// How long a reordered reply is held (it then follows later replies).
 const REORDER_HOLD: Duration = Duration::from_millis(2);
 
+/// Longest time the runner waits for a frame before the firmware runs on
+/// its own (the sweep's turns, SM watchdog supervision).
+const IDLE_TICK: Duration = Duration::from_millis(1);
+
+/// Longest sleep of the threads that only wait for frames (the relay of
+/// returning frames, [`reflect`]) before they look at their stop flags.
+const STOP_CHECK: Duration = Duration::from_millis(100);
+
+/// How often a firmware run looks whether a frame waits: a frame waits at
+/// most this long plus one slave's firmware step.
+const CHECK_EVERY: Duration = Duration::from_micros(5);
+
+/// Receive buffer: a jumbo frame fits.
+const RECV_BUFFER: usize = 16 * 1024;
+
+/// Waits up to `d` for a frame on `sock`.
+fn sock_wait(sock: &PacketSocket, d: Duration) -> Result<(), RunnerError> {
+    sock.wait(d).map(|_| ()).map_err(|source| RunnerError::Io {
+        context: "waiting for a frame".into(),
+        source,
+    })
+}
+
 /// Opens the interface and serves frames for the line `slaves` (first to
 /// last) until `stop` is set.
 pub fn run(
@@ -157,7 +193,7 @@ pub fn run(
         })?),
         None => None,
     };
-    let (tx, mut rx) = open(&iface)?;
+    let sock = Arc::new(PacketSocket::open(&iface)?);
     let (mut chain, mut states) = match &config.state_dir {
         Some(dir) => persistent_chain_with(dir, slaves, config.image_slot_capacity)?,
         None => {
@@ -173,36 +209,37 @@ pub fn run(
     // for a simulated clock that stands still) would only run into the
     // next frame of a cyclic master.
     chain.set_idle_passes(false);
-    let out = out_iface.as_ref().map(open).transpose()?;
-    // The master-side sender, shared with the thread that relays frames
-    // coming back from the next runner.
-    let tx = std::sync::Mutex::new(tx);
-    let (mut out_tx, out_rx) = match out {
-        Some((t, r)) => (Some(t), Some(r)),
-        None => (None, None),
-    };
+    let out = out_iface
+        .as_ref()
+        .map(PacketSocket::open)
+        .transpose()?
+        .map(Arc::new);
+    // The master-side socket, shared with the thread that relays frames
+    // coming back from the next runner (replaced when it is reopened).
+    let shared = Mutex::new(Arc::clone(&sock));
+    let mut sock = sock;
     let mut port1 = PortWatch::new(out_iface.as_ref().map(|i| i.name.clone()));
     if let Some(up) = port1.poll() {
         set_last_port1(&mut chain, up);
     }
     let start = Instant::now();
+    let clock = || u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX);
     let mut stats = RunStats::default();
-    let mut buf = Vec::with_capacity(1600);
+    let mut rbuf = vec![0u8; RECV_BUFFER];
     let mut faults = config.faults.clone().map(FaultInjector::new);
     // Replies held back by the faulty wire: (release time, frame).
     let mut held: Vec<(Instant, Vec<u8>)> = Vec::new();
     let mut was_down = false;
-    let send = |tx: &std::sync::Mutex<Tx>, frame: &[u8]| -> Result<(), RunnerError> {
-        let mut tx = tx.lock().unwrap_or_else(|e| e.into_inner());
-        match tx.send_to(frame, None) {
+    let send = |sock: &PacketSocket, frame: &[u8]| -> Result<(), RunnerError> {
+        match sock.send(frame) {
             // A full transmit queue loses the frame, as a wire would; the
             // master's retry decides.
-            Some(Err(e)) if is_queue_full(&e) => Ok(()),
-            Some(Err(source)) => Err(RunnerError::Io {
+            Err(e) if is_queue_full(&e) => Ok(()),
+            Err(source) => Err(RunnerError::Io {
                 context: format!("sending on {}", iface.name),
                 source,
             }),
-            _ => Ok(()),
+            Ok(()) => Ok(()),
         }
     };
     // A processed frame goes on down the line when port 1 has a link
@@ -219,36 +256,43 @@ pub fn run(
     // link watch has seen it go. With the link gone the ESC closes the
     // loop and the frame turns around to the master; with the link still
     // up the frame is lost as on a wire, and the master's retry decides.
-    let reply = |out_tx: &mut Option<Tx>,
-                 port1: &mut PortWatch,
-                 frame: &mut [u8]|
-     -> Result<(), RunnerError> {
-        match out_tx.as_mut().filter(|_| port1.up) {
-            Some(o) => {
-                if let Some(b) = frame.get_mut(6) {
-                    *b &= !0x02;
-                }
-                let r = o.send_to(frame, None);
-                if let Some(b) = frame.get_mut(6) {
-                    *b |= 0x02;
-                }
-                match r {
-                    Some(Err(_)) if link_is_down(&out_name) => {
-                        port1.lost();
-                        send(&tx, frame)
+    let reply =
+        |sock: &PacketSocket, port1: &mut PortWatch, frame: &mut [u8]| -> Result<(), RunnerError> {
+            match out.as_ref().filter(|_| port1.up) {
+                Some(o) => {
+                    if let Some(b) = frame.get_mut(6) {
+                        *b &= !0x02;
                     }
-                    _ => Ok(()),
+                    let r = o.send(frame);
+                    if let Some(b) = frame.get_mut(6) {
+                        *b |= 0x02;
+                    }
+                    match r {
+                        Err(_) if link_is_down(&out_name) => {
+                            port1.lost();
+                            send(sock, frame)
+                        }
+                        _ => Ok(()),
+                    }
                 }
+                None => send(sock, frame),
             }
-            None => send(&tx, frame),
-        }
-    };
+        };
     let done = AtomicBool::new(false);
     let mut reopened: Option<Instant> = None;
+    // The master's cycle, for the polling window (`busy_poll`).
+    let mut cycle = CycleWatch::new();
+    // Firmware work left to do (a frame came first) and when the firmware
+    // runs next without a frame.
+    let mut work_left = false;
+    let mut next_idle = Instant::now() + IDLE_TICK;
+    // How long the last idle run took: an idle run starts no later than
+    // that before the polling window.
+    let mut idle_took = Duration::ZERO;
     std::thread::scope(|scope| {
-        let relay = out_rx.zip(out_iface.as_ref()).map(|(r, out)| {
-            let (tx, done) = (&tx, &done);
-            scope.spawn(move || relay_back(r, out, tx, stop, done))
+        let relay = out.as_ref().zip(out_iface.as_ref()).map(|(o, out_nic)| {
+            let (o, shared, done) = (Arc::clone(o), &shared, &done);
+            scope.spawn(move || relay_back(o, out_nic, shared, stop, done))
         });
         let result = (|| -> Result<RunStats, RunnerError> {
             while !stop.load(Ordering::Acquire) {
@@ -260,35 +304,37 @@ pub fn run(
                         reason: String::new(),
                     });
                 }
-                let now = u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX);
-                let t = Instant::now();
                 if let Some(up) = port1.poll() {
                     set_last_port1(&mut chain, up);
                 }
                 if port1.take_lost() {
                     set_last_port1(&mut chain, false);
                 }
-                let mut due = Vec::new();
-                held.retain(|(at, f)| {
-                    let ready = *at <= t;
-                    if ready {
-                        due.push(f.clone());
+                if !held.is_empty() {
+                    let t = Instant::now();
+                    let mut due = Vec::new();
+                    held.retain(|(at, f)| {
+                        let ready = *at <= t;
+                        if ready {
+                            due.push(f.clone());
+                        }
+                        !ready
+                    });
+                    for mut f in due {
+                        reply(&sock, &mut port1, &mut f)?;
                     }
-                    !ready
-                });
-                for mut f in due {
-                    reply(&mut out_tx, &mut port1, &mut f)?;
                 }
-                match rx.next() {
-                    Ok(frame) => {
-                        if !is_request(frame) {
+                match sock.try_recv(&mut rbuf) {
+                    Ok(Some(len)) => {
+                        let buf = &mut rbuf[..len];
+                        if !is_request(buf) {
                             stats.ignored += 1;
                             continue;
                         }
-                        buf.clear();
-                        buf.extend_from_slice(frame);
+                        let arrived = clock();
+                        cycle.arrival(arrived);
                         if let Some(p) = pcap.as_mut() {
-                            let _ = p.write_frame(&buf);
+                            let _ = p.write_frame(buf);
                         }
                         let fate = faults
                             .as_mut()
@@ -298,57 +344,96 @@ pub fn run(
                             chain.link_lost();
                         }
                         was_down = down;
+                        work_left = true;
                         if matches!(fate, Fate::DropBefore | Fate::LinkDown | Fate::Corrupt) {
                             if fate == Fate::Corrupt {
                                 chain.corrupted_frame();
                             }
-                            let _ = chain.service(now);
-                            persist_parameters(&chain, &mut states)?;
                             continue;
                         }
-                        let request = (fate == Fate::Duplicate).then(|| buf.clone());
+                        let request = (fate == Fate::Duplicate).then(|| buf.to_vec());
                         // As on silicon, the ESCs answer the frame at once;
-                        // the firmware runs afterwards. A slow firmware step
-                        // (a flash write with fsync in FoE) delays the
-                        // mailbox answer, never the frame: masters with
-                        // short frame timeouts (SOEM: 2 ms) keep working.
-                        let arrived = u64::try_from(start.elapsed().as_nanos()).unwrap_or(now);
-                        chain.process_frame_at(&mut buf, arrived);
+                        // the firmware runs afterwards, once no frame
+                        // waits. A slow firmware step (a flash write with
+                        // fsync in FoE) delays the mailbox answer, never
+                        // the frame: masters with short frame timeouts
+                        // (SOEM: 2 ms) keep working.
+                        chain.process_frame_at(buf, arrived);
                         if let Some(p) = pcap.as_mut() {
-                            let _ = p.write_frame(&buf);
+                            let _ = p.write_frame(buf);
                         }
                         match fate {
                             Fate::DropAfter => {}
-                            Fate::Delay(d) => held.push((Instant::now() + d, buf.clone())),
+                            Fate::Delay(d) => held.push((Instant::now() + d, buf.to_vec())),
                             Fate::Reorder => {
-                                held.push((Instant::now() + REORDER_HOLD, buf.clone()))
+                                held.push((Instant::now() + REORDER_HOLD, buf.to_vec()))
                             }
                             _ => {
-                                reply(&mut out_tx, &mut port1, &mut buf)?;
+                                reply(&sock, &mut port1, buf)?;
                                 if let Some(mut again) = request {
                                     chain.process_frame_at(&mut again, arrived);
-                                    reply(&mut out_tx, &mut port1, &mut again)?;
+                                    reply(&sock, &mut port1, &mut again)?;
                                 }
                             }
                         }
                         stats.answered += 1;
-                        let _ = chain.service(arrived);
-                        // Before the next frame: whatever the firmware step
-                        // just acknowledged (SAVE) is on stable storage
-                        // before the master can read the acknowledgement.
-                        persist_parameters(&chain, &mut states)?;
                     }
-                    Err(e)
-                        if matches!(
-                            e.kind(),
-                            io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock
-                        ) =>
-                    {
-                        // The soft ESC's PDI cannot fail unless a fault is
-                        // injected; the slave handles it (fail-safe) and
-                        // `Chain::pdi_failures` counts it.
-                        let _ = chain.idle(now);
+                    Ok(None) if work_left || Instant::now() >= next_idle => {
+                        // No frame waits: the firmware runs (what the
+                        // frames raised, the sweep's turns), stopping for
+                        // a frame. Whatever a firmware step acknowledged
+                        // (SAVE) is on stable storage before the master
+                        // can read the acknowledgement.
+                        let t = Instant::now();
+                        let mut checked = t;
+                        let mut frame_waiting = || {
+                            let now = Instant::now();
+                            if now.duration_since(checked) < CHECK_EVERY {
+                                return false;
+                            }
+                            checked = now;
+                            sock.wait(Duration::ZERO).unwrap_or(true)
+                        };
+                        // A PDI failure is counted and handled by the
+                        // slave (fail-safe).
+                        work_left = chain.service_until(clock(), &mut frame_waiting) == Ok(false);
                         persist_parameters(&chain, &mut states)?;
+                        if !work_left {
+                            if t >= next_idle {
+                                idle_took = t.elapsed();
+                            }
+                            next_idle = Instant::now() + IDLE_TICK;
+                        }
+                    }
+                    Ok(None) => {
+                        let now = Instant::now();
+                        let now_ns = clock();
+                        let at = |ns: u64| now + Duration::from_nanos(ns.saturating_sub(now_ns));
+                        let window = cycle.window().filter(|w| w.until > now_ns);
+                        if let Some(w) = window {
+                            // The idle run keeps out of the window of a
+                            // cyclic master's next frame (the frame's own
+                            // firmware run comes right after it), and no
+                            // timer wakes the runner there.
+                            let keep_out = at(w.from).checked_sub(idle_took + CHECK_EVERY);
+                            if keep_out.is_none_or(|k| next_idle >= k) && next_idle < at(w.until) {
+                                next_idle = at(w.until);
+                            }
+                        }
+                        let mut until = next_idle;
+                        if let Some((at, _)) = held.iter().min_by_key(|(at, _)| *at) {
+                            until = until.min(*at);
+                        }
+                        match window.filter(|_| config.busy_poll) {
+                            // Before the window: sleep until it opens.
+                            Some(w) if now_ns < w.from => sock_wait(
+                                &sock,
+                                until.min(at(w.from)).saturating_duration_since(now),
+                            )?,
+                            // In the window: poll without sleeping.
+                            Some(_) => {}
+                            None => sock_wait(&sock, until.saturating_duration_since(now))?,
+                        }
                     }
                     Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
                     Err(_) if link_is_down(&iface.name) => {
@@ -358,7 +443,7 @@ pub fn run(
                             chain.link_lost();
                         }
                         was_down = true;
-                        let _ = chain.idle(now);
+                        let _ = chain.idle(clock());
                         persist_parameters(&chain, &mut states)?;
                         std::thread::sleep(Duration::from_millis(5));
                     }
@@ -366,9 +451,8 @@ pub fn run(
                     // its going down: a fresh socket (once; an error right
                     // after that is real).
                     Err(_) if reopened.is_none_or(|t| t.elapsed() > Duration::from_millis(50)) => {
-                        let (t, r) = open(&iface)?;
-                        *tx.lock().unwrap_or_else(|e| e.into_inner()) = t;
-                        rx = r;
+                        sock = Arc::new(PacketSocket::open(&iface)?);
+                        *shared.lock().unwrap_or_else(|e| e.into_inner()) = Arc::clone(&sock);
                         reopened = Some(Instant::now());
                         was_down = false;
                     }
@@ -419,39 +503,38 @@ pub fn run(
 /// kernel and the socket cost without EtherCAT work. Runs until `stop`.
 pub fn reflect(iface: &str, stop: &AtomicBool) -> Result<RunStats, RunnerError> {
     let nic = find_interface(iface)?;
-    let (mut tx, mut rx) = open(&nic)?;
+    let sock = PacketSocket::open(&nic)?;
     let mut stats = RunStats::default();
-    let mut buf = Vec::with_capacity(1600);
+    let mut buf = vec![0u8; RECV_BUFFER];
+    let io = |context: &str, source| RunnerError::Io {
+        context: format!("{context} on {iface}"),
+        source,
+    };
     while !stop.load(Ordering::Acquire) {
-        match rx.next() {
-            Ok(frame) if is_request(frame) => {
-                buf.clear();
-                buf.extend_from_slice(frame);
-                if let Some(b) = buf.get_mut(6) {
+        match sock.try_recv(&mut buf) {
+            Ok(Some(len)) => {
+                let frame = &mut buf[..len];
+                if !is_request(frame) {
+                    stats.ignored += 1;
+                    continue;
+                }
+                if let Some(b) = frame.get_mut(6) {
                     *b |= 0x02;
                 }
-                if let Some(Err(source)) = tx.send_to(&buf, None) {
-                    return Err(RunnerError::Io {
-                        context: format!("sending on {iface}"),
-                        source,
-                    });
+                match sock.send(frame) {
+                    Err(e) if !is_queue_full(&e) => return Err(io("sending", e)),
+                    _ => stats.answered += 1,
                 }
-                stats.answered += 1;
             }
-            Ok(_) => stats.ignored += 1,
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    io::ErrorKind::TimedOut
-                        | io::ErrorKind::WouldBlock
-                        | io::ErrorKind::Interrupted
-                ) => {}
-            Err(source) => {
-                return Err(RunnerError::Io {
-                    context: format!("receiving on {iface}"),
-                    source,
-                });
+            // Sleeps until a frame comes, like the kernel floor's
+            // reflector (`../shared/bench/veth-floor`): no polling window,
+            // and no timer near the frames (`stop` is seen within
+            // STOP_CHECK).
+            Ok(None) => {
+                sock.wait(STOP_CHECK).map_err(|e| io("waiting", e))?;
             }
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(io("receiving", e)),
         }
     }
     Ok(stats)
@@ -461,20 +544,22 @@ pub fn reflect(iface: &str, stop: &AtomicBool) -> Result<RunStats, RunnerError> 
 /// marked) go out of port 0 to the master unchanged, as the return path
 /// of an ESC passes them through. Runs until `stop` or `done`.
 fn relay_back(
-    mut rx: Rx,
+    mut rx: Arc<PacketSocket>,
     out: &NetworkInterface,
-    tx: &std::sync::Mutex<Tx>,
+    to_master: &Mutex<Arc<PacketSocket>>,
     stop: &AtomicBool,
     done: &AtomicBool,
 ) -> Result<(), RunnerError> {
     let out_name = out.name.as_str();
     let mut reopened: Option<Instant> = None;
+    let mut buf = vec![0u8; RECV_BUFFER];
     while !stop.load(Ordering::Acquire) && !done.load(Ordering::Acquire) {
-        match rx.next() {
-            Ok(frame) => {
+        match rx.try_recv(&mut buf) {
+            Ok(Some(len)) => {
+                let frame = &buf[..len];
                 if is_processed(frame) {
-                    let mut tx = tx.lock().unwrap_or_else(|e| e.into_inner());
-                    if let Some(Err(source)) = tx.send_to(frame, None)
+                    let tx = Arc::clone(&to_master.lock().unwrap_or_else(|e| e.into_inner()));
+                    if let Err(source) = tx.send(frame)
                         && !is_queue_full(&source)
                     {
                         return Err(RunnerError::Io {
@@ -484,18 +569,18 @@ fn relay_back(
                     }
                 }
             }
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    io::ErrorKind::TimedOut
-                        | io::ErrorKind::WouldBlock
-                        | io::ErrorKind::Interrupted
-                ) => {}
+            Ok(None) => {
+                rx.wait(STOP_CHECK).map_err(|source| RunnerError::Io {
+                    context: format!("waiting for frames back on {out_name}"),
+                    source,
+                })?;
+            }
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
             // The next runner's cable pulled: wait for it.
             Err(_) if link_is_down(out_name) => std::thread::sleep(Duration::from_millis(5)),
             // Back: a fresh socket (see `run`).
             Err(_) if reopened.is_none_or(|t| t.elapsed() > Duration::from_millis(50)) => {
-                rx = open(out)?.1;
+                rx = Arc::new(PacketSocket::open(out)?);
                 reopened = Some(Instant::now());
             }
             Err(source) => {
@@ -563,12 +648,6 @@ impl PortWatch {
         self.up = up;
         changed.then_some(up)
     }
-}
-
-/// Whether a send failed only because the interface's queue was full
-/// (ENOBUFS): the frame is lost, the socket still works.
-fn is_queue_full(e: &io::Error) -> bool {
-    e.raw_os_error() == Some(105)
 }
 
 /// Whether interface `name` is down or has no carrier (or is gone).
@@ -681,33 +760,6 @@ fn persist_parameters(chain: &Chain, states: &mut [SlaveState]) -> Result<(), Ru
         }
     }
     Ok(())
-}
-
-type Tx = Box<dyn pnet_datalink::DataLinkSender>;
-type Rx = Box<dyn pnet_datalink::DataLinkReceiver>;
-
-fn open(iface: &NetworkInterface) -> Result<(Tx, Rx), RunnerError> {
-    let cfg = Config {
-        read_timeout: Some(Duration::from_millis(1)),
-        write_buffer_size: 16384,
-        read_buffer_size: 16384,
-        promiscuous: true,
-        ..Config::default()
-    };
-    match pnet_datalink::channel(iface, cfg) {
-        Ok(Channel::Ethernet(tx, rx)) => Ok((tx, rx)),
-        Ok(_) => Err(RunnerError::Io {
-            context: format!("opening {}", iface.name),
-            source: io::Error::other("not an Ethernet channel"),
-        }),
-        Err(e) if e.kind() == io::ErrorKind::PermissionDenied => {
-            Err(RunnerError::Permission(iface.name.clone()))
-        }
-        Err(source) => Err(RunnerError::Io {
-            context: format!("opening raw socket on {}", iface.name),
-            source,
-        }),
-    }
 }
 
 /// Whether `frame` is an EtherCAT frame from a master (not yet processed
