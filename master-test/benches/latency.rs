@@ -16,7 +16,7 @@
 //! It prints p50, p99, p99.9 and max per case and the ratio runner/floor
 //! at p50 and p99, each runner against the floor measured just before it
 //! with the same frame. `--pace-us N` sends one frame every N us (1000: a
-//! 1 kHz cyclic master), back to back by default; `--no-busy-poll` passes
+//! 1 kHz cyclic master), back to back by default; `--busy-poll` passes
 //! that flag to the runners. Needs root and iproute2 (the namespace is
 //! removed at the end); builds `pam-slave` in release mode first.
 //!
@@ -269,7 +269,7 @@ fn main() {
     );
     println!("| case | p50 | p99 | p99.9 | max | p50 / floor | p99 / floor |");
     println!("|---|---|---|---|---|---|---|");
-    let no_busy_poll = args.iter().any(|a| a == "--no-busy-poll");
+    let busy_poll = args.iter().any(|a| a == "--busy-poll");
     let mut floor: Option<(Duration, Duration)> = None;
     for (is_floor, n) in [
         (true, 1usize),
@@ -285,8 +285,8 @@ fn main() {
         } else {
             let count = n.to_string();
             let mut a = vec!["--iface", &slave, "--count", &count];
-            if no_busy_poll {
-                a.push("--no-busy-poll");
+            if busy_poll {
+                a.push("--busy-poll");
             }
             ns.start(&bin, &a);
             for i in 0..n as u16 {

@@ -117,13 +117,13 @@ struct Cli {
     /// G suffixes count 1024s). Default: no cap.
     #[arg(long, value_name = "BYTES", value_parser = parse_bytes)]
     memory_cap: Option<u64>,
-    /// Never poll the socket without sleeping. By default the runner
-    /// measures a cyclic master's period and polls in a short window
-    /// (at most a tenth of the period on each side) around the time its
-    /// next frame is due, so the frame costs no thread wake-up; with this
-    /// flag it sleeps until every frame arrives.
+    /// Poll the socket without sleeping in a short window (at most a
+    /// tenth of the period on each side) around the time a cyclic
+    /// master's next frame is due, so the frame costs no thread wake-up.
+    /// Off by default: where the runner shares its cores with the master
+    /// it made round trips slower; try it where it has a core of its own.
     #[arg(long)]
-    no_busy_poll: bool,
+    busy_poll: bool,
 }
 
 fn main() -> ExitCode {
@@ -200,7 +200,7 @@ fn main() -> ExitCode {
         faults: cli.faults,
         forward: cli.forward,
         image_slot_capacity: usize::try_from(cli.image_store_size).unwrap_or(usize::MAX),
-        busy_poll: !cli.no_busy_poll,
+        busy_poll: cli.busy_poll,
     };
     let onward = cfg
         .forward
