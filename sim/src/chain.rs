@@ -210,12 +210,14 @@ pub struct Chain {
     first_of: Vec<u32>,
     /// Each slave's address generation when `addresses` was built.
     addr_gens: Vec<u32>,
-    /// Slaves a datagram of the current frame reached (each once).
+    /// Slaves a datagram reached whose firmware has not been looked at
+    /// since (each once, oldest first: a [`Chain::service_until`] stopped
+    /// by a frame leaves the rest here, served first next time).
     touched: Vec<usize>,
     /// Whether a broadcast or logical datagram reached every slave.
     touched_all: bool,
-    /// Per slave: the frame number it was last added to `touched` in.
-    touched_in: Vec<u64>,
+    /// Per slave: whether it is in `touched`.
+    queued: Vec<bool>,
     /// The next slave of the round-robin sweep.
     sweep_next: usize,
     /// Whether [`Chain::idle`] runs firmware beyond what is due.
@@ -353,7 +355,7 @@ impl Chain {
             addr_gens: Vec::new(),
             touched: Vec::new(),
             touched_all: false,
-            touched_in: Vec::new(),
+            queued: Vec::new(),
             sweep_next: 0,
             idle_passes: true,
             swept_until: 0,
@@ -366,7 +368,7 @@ impl Chain {
             frame_ns: 0,
             hop_ns: DEFAULT_HOP_NS,
         };
-        chain.touched_in = vec![u64::MAX; chain.slaves.len()];
+        chain.queued = vec![false; chain.slaves.len()];
         chain.reindex();
         chain
     }
@@ -462,35 +464,32 @@ impl Chain {
         let mut moved = false;
         let mut stopped = false;
         if core::mem::take(&mut self.touched_all) {
+            // A broadcast or logical datagram reached every slave: all of
+            // them after those still waiting from before.
             for i in 0..self.slaves.len() {
-                if frame_waiting() {
-                    // The rest stays to do, in order, before later events.
-                    self.touched.splice(0..0, i..self.slaves.len());
-                    stopped = true;
-                    break;
-                }
-                if self.has_event(i, now_ns) {
-                    moved |= self.poll_one(i, now_ns, &mut first);
-                }
+                self.touch(i);
             }
-        } else {
-            let mut touched = core::mem::take(&mut self.touched);
-            let mut done = touched.len();
-            for (k, &i) in touched.iter().enumerate() {
-                if frame_waiting() {
-                    done = k;
-                    stopped = true;
-                    break;
-                }
-                if self.has_event(i, now_ns) {
-                    moved |= self.poll_one(i, now_ns, &mut first);
-                }
-            }
-            touched.drain(..done);
-            self.touched = touched;
         }
+        let mut touched = core::mem::take(&mut self.touched);
+        let mut done = touched.len();
+        for (k, &i) in touched.iter().enumerate() {
+            if frame_waiting() {
+                done = k;
+                stopped = true;
+                break;
+            }
+            if let Some(q) = self.queued.get_mut(i) {
+                *q = false;
+            }
+            if self.has_event(i, now_ns) {
+                moved |= self.poll_one(i, now_ns, &mut first);
+            }
+        }
+        touched.drain(..done);
+        // Touches during the runs (none today) come after the rest.
+        touched.append(&mut self.touched);
+        self.touched = touched;
         if !stopped {
-            self.touched.clear();
             moved |= self.sweep(now_ns, &mut first, frame_waiting, &mut stopped);
         }
         if moved {
@@ -604,12 +603,12 @@ impl Chain {
         self.moved(i)
     }
 
-    /// Records that a datagram of the current frame reached slave `i`.
+    /// Records that a datagram reached slave `i`.
     fn touch(&mut self, i: usize) {
-        if let Some(t) = self.touched_in.get_mut(i)
-            && *t != self.frames
+        if let Some(q) = self.queued.get_mut(i)
+            && !*q
         {
-            *t = self.frames;
+            *q = true;
             self.touched.push(i);
         }
     }
@@ -663,7 +662,6 @@ impl Chain {
             return FrameOutcome::Malformed;
         }
         self.frames += 1;
-        self.touched.clear();
         let payload = ecat.payload_mut();
         let mut cursor = DatagramCursor::new();
         let mut count = 0;
@@ -1121,6 +1119,30 @@ mod tests {
         assert!((0..8).all(|i| al_status(&line, i) == 0x0011));
         assert_eq!(line.service_until(0, &mut || false), Ok(true));
         assert_eq!(line.firmware_runs(), 8, "nothing left to do");
+    }
+
+    #[test]
+    fn frames_back_to_back_starve_no_slave_of_its_events() {
+        // Every frame is a broadcast PRE-OP request and the next frame
+        // always waits after two firmware runs: the slaves left over are
+        // served first next time, so all eight answer within four frames
+        // (not only the first two, again and again).
+        let mut line = crate::testing::line(8);
+        for _ in 0..4 {
+            let mut f = one_datagram(Command::Bwr, 0x0120 << 16, &[0x02, 0]);
+            line.process_frame_at(&mut f, 0);
+            let mut looks = 0;
+            let mut after_two = || {
+                looks += 1;
+                looks > 2
+            };
+            assert_eq!(line.service_until(0, &mut after_two), Ok(false));
+        }
+        assert!(
+            (0..8).all(|i| al_status(&line, i) == 0x0011),
+            "{:?}",
+            (0..8).map(|i| al_status(&line, i)).collect::<Vec<_>>()
+        );
     }
 
     #[test]
