@@ -1093,6 +1093,16 @@ mod tests {
         assert_eq!(line.firmware_runs(), 8);
     }
 
+    /// For `service_until`: a frame waits from the look after `runs`
+    /// firmware runs on (the chain looks once before each run).
+    fn waits_after(runs: usize) -> impl FnMut() -> bool {
+        let mut looks = 0;
+        move || {
+            looks += 1;
+            looks > runs
+        }
+    }
+
     #[test]
     fn service_stopped_by_a_waiting_frame_finishes_the_events_on_the_next_call() {
         let mut line = crate::testing::line(8);
@@ -1101,12 +1111,7 @@ mod tests {
         let mut f = one_datagram(Command::Bwr, 0x0120 << 16, &[0x02, 0]);
         line.process_frame_at(&mut f, 0);
         // A frame waits after three firmware runs.
-        let mut looks = 0;
-        let mut after_three = || {
-            looks += 1;
-            looks > 3
-        };
-        assert_eq!(line.service_until(0, &mut after_three), Ok(false));
+        assert_eq!(line.service_until(0, &mut waits_after(3)), Ok(false));
         assert_eq!(line.firmware_runs(), 3);
         assert!(
             (0..3).all(|i| al_status(&line, i) == 0x0011),
@@ -1131,12 +1136,7 @@ mod tests {
         for _ in 0..4 {
             let mut f = one_datagram(Command::Bwr, 0x0120 << 16, &[0x02, 0]);
             line.process_frame_at(&mut f, 0);
-            let mut looks = 0;
-            let mut after_two = || {
-                looks += 1;
-                looks > 2
-            };
-            assert_eq!(line.service_until(0, &mut after_two), Ok(false));
+            assert_eq!(line.service_until(0, &mut waits_after(2)), Ok(false));
         }
         assert!(
             (0..8).all(|i| al_status(&line, i) == 0x0011),
@@ -1151,12 +1151,7 @@ mod tests {
         let period = line.sweep_period_ns();
         // A whole sweep period later every slave is due; a frame waits
         // after the first run.
-        let mut looks = 0;
-        let mut after_one = || {
-            looks += 1;
-            looks > 1
-        };
-        assert_eq!(line.service_until(period, &mut after_one), Ok(false));
+        assert_eq!(line.service_until(period, &mut waits_after(1)), Ok(false));
         assert_eq!(line.firmware_runs(), 1);
         // The three not run stay due at the same time, and no more.
         assert_eq!(line.service_until(period, &mut || false), Ok(true));
