@@ -143,6 +143,10 @@ const REORDER_HOLD: Duration = Duration::from_millis(2);
 /// its own (the sweep's turns, SM watchdog supervision).
 const IDLE_TICK: Duration = Duration::from_millis(1);
 
+/// Longest time firmware work waits while frames keep coming without a
+/// gap: then it runs after the frame just answered.
+const STARVE_AFTER: Duration = Duration::from_millis(1);
+
 /// Longest sleep of the threads that only wait for frames (the relay of
 /// returning frames, [`reflect`]) before they look at their stop flags.
 const STOP_CHECK: Duration = Duration::from_millis(100);
@@ -288,6 +292,9 @@ pub fn run(
     // Firmware work left to do (a frame came first) and when the firmware
     // runs next without a frame.
     let mut work_left = false;
+    // Since when work has been left (the firmware runs after a frame even
+    // with more frames waiting once it has waited STARVE_AFTER).
+    let mut work_since: Option<Instant> = None;
     let mut next_idle = Instant::now() + IDLE_TICK;
     // How long the last idle run took: an idle run starts no later than
     // that before the polling window.
@@ -327,6 +334,7 @@ pub fn run(
                         reply(&sock, &mut port1, &mut f)?;
                     }
                 }
+                let mut run_firmware = false;
                 match sock.try_recv(&mut rbuf) {
                     Ok(Some(len)) => {
                         let buf = &mut rbuf[..len];
@@ -348,6 +356,7 @@ pub fn run(
                         }
                         was_down = down;
                         work_left = true;
+                        work_since.get_or_insert_with(Instant::now);
                         if matches!(fate, Fate::DropBefore | Fate::LinkDown | Fate::Corrupt) {
                             if fate == Fate::Corrupt {
                                 chain.corrupted_frame();
@@ -380,34 +389,11 @@ pub fn run(
                             }
                         }
                         stats.answered += 1;
+                        // Frames that never let the queue empty (a flood)
+                        // still leave the firmware its turn.
+                        run_firmware = work_since.is_some_and(|t| t.elapsed() >= STARVE_AFTER);
                     }
-                    Ok(None) if work_left || Instant::now() >= next_idle => {
-                        // No frame waits: the firmware runs (what the
-                        // frames raised, the sweep's turns), stopping for
-                        // a frame. Whatever a firmware step acknowledged
-                        // (SAVE) is on stable storage before the master
-                        // can read the acknowledgement.
-                        let t = Instant::now();
-                        let mut checked = t;
-                        let mut frame_waiting = || {
-                            let now = Instant::now();
-                            if now.duration_since(checked) < CHECK_EVERY {
-                                return false;
-                            }
-                            checked = now;
-                            sock.wait(Duration::ZERO).unwrap_or(true)
-                        };
-                        // A PDI failure is counted and handled by the
-                        // slave (fail-safe).
-                        work_left = chain.service_until(clock(), &mut frame_waiting) == Ok(false);
-                        persist_parameters(&chain, &mut states)?;
-                        if !work_left {
-                            if t >= next_idle {
-                                idle_took = t.elapsed();
-                            }
-                            next_idle = Instant::now() + IDLE_TICK;
-                        }
-                    }
+                    Ok(None) if work_left || Instant::now() >= next_idle => run_firmware = true,
                     Ok(None) => {
                         let now = Instant::now();
                         let now_ns = clock();
@@ -464,6 +450,34 @@ pub fn run(
                             context: format!("receiving on {}", iface.name),
                             source,
                         });
+                    }
+                }
+                if run_firmware {
+                    // The firmware runs (what the frames raised, the
+                    // sweep's turns), stopping for the next frame.
+                    // Whatever a firmware step acknowledged (SAVE) is on
+                    // stable storage before the master can read the
+                    // acknowledgement.
+                    let t = Instant::now();
+                    let mut checked = t;
+                    let mut frame_waiting = || {
+                        let now = Instant::now();
+                        if now.duration_since(checked) < CHECK_EVERY {
+                            return false;
+                        }
+                        checked = now;
+                        sock.wait(Duration::ZERO).unwrap_or(true)
+                    };
+                    // A PDI failure is counted and handled by the
+                    // slave (fail-safe).
+                    work_left = chain.service_until(clock(), &mut frame_waiting) == Ok(false);
+                    persist_parameters(&chain, &mut states)?;
+                    if !work_left {
+                        work_since = None;
+                        if t >= next_idle {
+                            idle_took = t.elapsed();
+                        }
+                        next_idle = Instant::now() + IDLE_TICK;
                     }
                 }
             }
