@@ -287,13 +287,12 @@ pub fn run(
         };
     let done = AtomicBool::new(false);
     let mut reopened: Option<Instant> = None;
-    // The master's cycle, for the polling window (`busy_poll`).
+    // The master's cycle: the window of its next frame.
     let mut cycle = CycleWatch::new();
-    // Firmware work left to do (a frame came first) and when the firmware
-    // runs next without a frame.
-    let mut work_left = false;
-    // Since when work has been left (the firmware runs after a frame even
-    // with more frames waiting once it has waited STARVE_AFTER).
+    // Since when firmware work has been left to do (a frame raised it, or
+    // came first), and when the firmware runs next without a frame. Work
+    // that has waited STARVE_AFTER runs after a frame even while more
+    // frames wait.
     let mut work_since: Option<Instant> = None;
     let mut next_idle = Instant::now() + IDLE_TICK;
     // How long the last idle run took: an idle run starts no later than
@@ -355,7 +354,6 @@ pub fn run(
                             chain.link_lost();
                         }
                         was_down = down;
-                        work_left = true;
                         work_since.get_or_insert_with(Instant::now);
                         if matches!(fate, Fate::DropBefore | Fate::LinkDown | Fate::Corrupt) {
                             if fate == Fate::Corrupt {
@@ -393,7 +391,9 @@ pub fn run(
                         // still leave the firmware its turn.
                         run_firmware = work_since.is_some_and(|t| t.elapsed() >= STARVE_AFTER);
                     }
-                    Ok(None) if work_left || Instant::now() >= next_idle => run_firmware = true,
+                    Ok(None) if work_since.is_some() || Instant::now() >= next_idle => {
+                        run_firmware = true
+                    }
                     Ok(None) => {
                         let now = Instant::now();
                         let now_ns = clock();
@@ -470,9 +470,11 @@ pub fn run(
                     };
                     // A PDI failure is counted and handled by the
                     // slave (fail-safe).
-                    work_left = chain.service_until(clock(), &mut frame_waiting) == Ok(false);
+                    let stopped = chain.service_until(clock(), &mut frame_waiting) == Ok(false);
                     persist_parameters(&chain, &mut states)?;
-                    if !work_left {
+                    if stopped {
+                        work_since.get_or_insert(t);
+                    } else {
                         work_since = None;
                         if t >= next_idle {
                             idle_took = t.elapsed();
