@@ -17,6 +17,27 @@ pub(super) struct FmmuConfig {
     pub(super) enabled: bool,
 }
 
+/// How one FMMU's whole window moves when a datagram covers all of it,
+/// worked out once per configuration of the FMMUs and SyncManagers.
+///
+/// For a byte-aligned window in process RAM whose SyncManagers are all
+/// buffered (or none), the SyncManager rules of [`SoftEsc::ecat_read`] and
+/// [`SoftEsc::ecat_write`] depend on the addresses alone: whether the
+/// access happens and which buffers it completes is the same every cycle.
+/// Only a mailbox SyncManager (full or empty) makes them depend on state;
+/// such a window, a bit-granular one, one reaching the registers or one
+/// that a datagram covers only in part takes the general path.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(super) struct FmmuRoute {
+    /// Whether this shortcut applies to the FMMU.
+    pub(super) fast: bool,
+    /// Whether the access happens (a buffered SyncManager of the other
+    /// direction refuses a write).
+    pub(super) allowed: bool,
+    /// SyncManagers whose last byte the window covers (bit n = SM n).
+    pub(super) complete: u8,
+}
+
 impl FmmuConfig {
     /// Logical range in bytes [start, end).
     pub(super) fn logical_end(&self) -> u64 {
@@ -45,6 +66,107 @@ impl SoftEsc {
             .map(|(_, f)| (u64::from(f.logical), f.logical_end()))
     }
 
+    /// Works out every enabled FMMU's [`FmmuRoute`] for the current FMMU
+    /// and SyncManager configuration.
+    pub(super) fn reroute(&mut self) {
+        self.routes_stale = false;
+        for n in 0..FMMU_COUNT {
+            let route = match self.fmmus.get(n) {
+                Some(f) if self.fmmu_active & (1 << n) != 0 => self.route_of(f),
+                _ => FmmuRoute::default(),
+            };
+            if let Some(slot) = self.routes.get_mut(n) {
+                *slot = route;
+            }
+        }
+    }
+
+    /// The route of one FMMU: what [`SoftEsc::ecat_write`] (write FMMU) or
+    /// [`SoftEsc::ecat_read`] (read FMMU) would decide for its whole
+    /// physical window, when that decision does not depend on state.
+    fn route_of(&self, f: &FmmuConfig) -> FmmuRoute {
+        let slow = FmmuRoute::default();
+        let a = u32::from(f.physical);
+        let b = a + u32::from(f.len);
+        // One direction per FMMU (a read-write FMMU takes both passes of
+        // `logical` with the same window: the general path).
+        if !f.byte_aligned()
+            || f.read == f.write
+            || a < u32::from(reg::PROCESS_RAM)
+            || b as usize > self.mem.len()
+        {
+            return slow;
+        }
+        let mut route = FmmuRoute {
+            fast: true,
+            allowed: true,
+            complete: 0,
+        };
+        let mut bits = self.sm_active;
+        while bits != 0 {
+            let n = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let Some(sm) = self.sms.get(n) else { continue };
+            if !sm.overlaps(a, b) {
+                continue;
+            }
+            if sm.is_mailbox() {
+                return slow;
+            }
+            if f.write && !sm.ecat_writes() {
+                // ecat_write refuses the whole access.
+                route.allowed = false;
+            }
+            // ecat_read lets the master read back an output buffer
+            // without completing it.
+            let completes = f.write || !sm.ecat_writes();
+            if completes && sm.covers_last(a, b) {
+                route.complete |= 1 << n;
+            }
+        }
+        if !route.allowed {
+            route.complete = 0;
+        }
+        route
+    }
+
+    /// Moves FMMU `i`'s whole window over its [`FmmuRoute`] when the
+    /// datagram `[start, start + data.len())` covers it; `None`: the
+    /// general path decides.
+    fn route_transfer(&mut self, i: usize, start: u64, data: &mut [u8]) -> Option<bool> {
+        let route = self.routes.get(i).copied()?;
+        let f = self.fmmus.get(i).copied()?;
+        if !route.fast
+            || u64::from(f.logical) < start
+            || f.logical_end() > start + data.len() as u64
+        {
+            return None;
+        }
+        if !route.allowed {
+            return Some(false);
+        }
+        let off = usize::try_from(u64::from(f.logical) - start).ok()?;
+        let (n, p) = (usize::from(f.len), usize::from(f.physical));
+        let window = data.get_mut(off..off + n)?;
+        let mem = self.mem.get_mut(p..p + n)?;
+        if f.write {
+            mem.copy_from_slice(window);
+        } else {
+            window.copy_from_slice(mem);
+        }
+        let mut complete = route.complete;
+        while complete != 0 {
+            let n = complete.trailing_zeros() as usize;
+            complete &= complete - 1;
+            if f.write {
+                self.ecat_write_complete(n);
+            } else {
+                self.ecat_read_complete(n);
+            }
+        }
+        Some(true)
+    }
+
     /// Logical addressing through the FMMUs; returns the working counter
     /// increment (+1 for any read mapping hit, +2 for any write mapping hit
     /// on LRW; +1 for LRD/LWR).
@@ -56,26 +178,35 @@ impl SoftEsc {
         let end = start + data.len() as u64;
         let want_read = matches!(cmd, Command::Lrd | Command::Lrw);
         let want_write = matches!(cmd, Command::Lwr | Command::Lrw);
+        if self.routes_stale {
+            self.reroute();
+        }
         let mut read_hit = false;
         let mut write_hit = false;
         // Writes first, with the data as it arrived; then reads overwrite.
         for pass_write in [true, false] {
-            let mut bits = self.fmmu_active;
+            let mut bits = match (pass_write, want_write, want_read) {
+                (true, true, _) => self.fmmu_writes,
+                (false, _, true) => self.fmmu_reads,
+                _ => 0,
+            };
             while bits != 0 {
                 let i = bits.trailing_zeros() as usize;
                 bits &= bits - 1;
                 let Some(f) = self.fmmus.get(i).copied() else {
                     continue;
                 };
-                let hit_possible = if pass_write {
-                    want_write && f.write
-                } else {
-                    want_read && f.read
-                };
-                if !hit_possible || f.logical_end() <= start || u64::from(f.logical) >= end {
+                if f.logical_end() <= start || u64::from(f.logical) >= end {
                     continue;
                 }
-                let ok = if f.byte_aligned() {
+                let routed = if self.fast_routes {
+                    self.route_transfer(i, start, data)
+                } else {
+                    None
+                };
+                let ok = if let Some(ok) = routed {
+                    ok
+                } else if f.byte_aligned() {
                     self.fmmu_bytes(&f, start, data, pass_write)
                 } else {
                     self.fmmu_bits(&f, start, data, pass_write)
@@ -210,6 +341,9 @@ impl SoftEsc {
 
     pub(super) fn reload_fmmus(&mut self) {
         self.fmmu_active = 0;
+        self.fmmu_reads = 0;
+        self.fmmu_writes = 0;
+        self.routes_stale = true;
         self.fmmu_gen = self.fmmu_gen.wrapping_add(1);
         for n in 0..FMMU_COUNT {
             let Some(base) = reg::fmmu(n as u8) else {
@@ -228,6 +362,12 @@ impl SoftEsc {
             };
             if f.enabled && f.len > 0 {
                 self.fmmu_active |= 1 << n;
+                if f.read {
+                    self.fmmu_reads |= 1 << n;
+                }
+                if f.write {
+                    self.fmmu_writes |= 1 << n;
+                }
             }
             if let Some(slot) = self.fmmus.get_mut(n) {
                 *slot = f;

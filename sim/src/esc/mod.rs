@@ -42,7 +42,7 @@ use ecat_slave::esc::EscError;
 use ecat_slave::esc::registers::{self as reg, sm as smr};
 use ecat_slave::wire::ecat::{Command, Datagram, DatagramCursor, EcatFrame, FrameType};
 use ecat_slave::wire::ethernet::{ETHERTYPE_ETHERCAT, EthernetFrame};
-use fmmu::FmmuConfig;
+use fmmu::{FmmuConfig, FmmuRoute};
 use physical::ReadMode;
 use sm::SmConfig;
 
@@ -100,6 +100,18 @@ pub struct SoftEsc {
     fmmus: [FmmuConfig; FMMU_COUNT],
     /// Bit n set: FMMU n enabled (fast skip in logical addressing).
     fmmu_active: u8,
+    /// Bit n set: FMMU n enabled and reads (its type's bit 0).
+    fmmu_reads: u8,
+    /// Bit n set: FMMU n enabled and writes (its type's bit 1).
+    fmmu_writes: u8,
+    /// Each FMMU's whole-window transfer for the current configuration.
+    routes: [FmmuRoute; FMMU_COUNT],
+    /// Whether `routes` must be worked out again (an FMMU or SyncManager
+    /// changed) before the next logical datagram.
+    routes_stale: bool,
+    /// Whether logical datagrams take the routes (off only in the tests
+    /// that compare them with the general path).
+    fast_routes: bool,
     /// Bumped whenever the FMMU configuration may have changed.
     fmmu_gen: u32,
     /// PDI reads and writes since power-on (what an SPI bus would carry).
@@ -173,6 +185,11 @@ impl SoftEsc {
             sms: [SmConfig::default(); SM_COUNT],
             fmmus: [FmmuConfig::default(); FMMU_COUNT],
             fmmu_active: 0,
+            fmmu_reads: 0,
+            fmmu_writes: 0,
+            routes: [FmmuRoute::default(); FMMU_COUNT],
+            routes_stale: true,
+            fast_routes: true,
             fmmu_gen: 0,
             pdi_accesses: 0,
             sm_active: 0,
@@ -232,6 +249,9 @@ impl SoftEsc {
         self.sms = [SmConfig::default(); SM_COUNT];
         self.fmmus = [FmmuConfig::default(); FMMU_COUNT];
         self.fmmu_active = 0;
+        self.fmmu_reads = 0;
+        self.fmmu_writes = 0;
+        self.routes_stale = true;
         self.fmmu_gen = self.fmmu_gen.wrapping_add(1);
         self.sm_active = 0;
         self.sm_written = 0;

@@ -52,6 +52,7 @@ impl SoftEsc {
         };
         let old = *slot;
         *slot = new;
+        self.routes_stale = true;
         if new.enabled && new.len > 0 {
             self.sm_active |= 1 << n;
         } else {

@@ -479,6 +479,109 @@ proptest! {
     }
 }
 
+/// One step of [`fmmu_routes_do_what_the_general_path_does`].
+#[derive(Debug, Clone)]
+enum RouteStep {
+    /// A logical datagram: command (0 LRD, 1 LWR, 2 LRW), address, data.
+    Logical(u8, u32, Vec<u8>),
+    /// The firmware reads (false) or writes (true) through its PDI.
+    Pdi(bool, u16, u8),
+}
+
+fn route_step() -> impl Strategy<Value = RouteStep> {
+    prop_oneof![
+        3 => (0u8..3, 0u32..0x18, prop::collection::vec(any::<u8>(), 1..32))
+            .prop_map(|(c, a, d)| RouteStep::Logical(c, a, d)),
+        1 => (any::<bool>(), 0x1000u16..0x1040, 1u8..16)
+            .prop_map(|(w, a, n)| RouteStep::Pdi(w, a, n)),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// The FMMU routes (a whole window moved with the SyncManager decision
+    /// worked out once) leave memory, SyncManager states, AL events, the
+    /// datagram and its working counter exactly as the general path does,
+    /// for any FMMUs (byte or bit granular, reaching into the registers or
+    /// not) over any SyncManagers (buffered or mailbox, either direction),
+    /// under any logical traffic and firmware accesses.
+    #[test]
+    fn fmmu_routes_do_what_the_general_path_does(
+        sms in prop::collection::vec(
+            (prop::sample::select(vec![0x1000u16, 0x1004, 0x1008, 0x1010]), 1u16..12, prop::sample::select(vec![0x00u8, 0x00, 0x04, 0x04, 0x44, 0x02, 0x06]), prop::bool::weighted(0.8)),
+            0..4,
+        ),
+        fmmus in prop::collection::vec(
+            (
+                0u32..0x18,
+                1u16..12,
+                prop::sample::select(vec![0x0FFCu16, 0x1000, 0x1000, 0x1004, 0x1008, 0x1008, 0x1010, 0x1013]),
+                prop::sample::select(vec![1u8, 1, 2, 2, 3]),
+                prop::bool::weighted(0.8),
+                0u8..8,
+            ),
+            1..4,
+        ),
+        steps in prop::collection::vec(route_step(), 1..24),
+    ) {
+        let mut config = Vec::new();
+        for (n, &(start, len, control, enabled)) in sms.iter().enumerate() {
+            let mut r = [0u8; 8];
+            r[0..2].copy_from_slice(&start.to_le_bytes());
+            r[2..4].copy_from_slice(&len.to_le_bytes());
+            r[4] = control;
+            r[6] = u8::from(enabled);
+            config.push((0x0800 + 8 * n as u16, r.to_vec()));
+        }
+        for (n, &(logical, len, physical, kind, aligned, bit)) in fmmus.iter().enumerate() {
+            let mut r = [0u8; 16];
+            r[0..4].copy_from_slice(&logical.to_le_bytes());
+            r[4..6].copy_from_slice(&len.to_le_bytes());
+            r[6] = if aligned { 0 } else { bit };
+            r[7] = 7;
+            r[8..10].copy_from_slice(&physical.to_le_bytes());
+            r[11] = kind;
+            r[12] = 1;
+            config.push((0x0600 + 16 * n as u16, r.to_vec()));
+        }
+        let mut fast = esc();
+        let mut general = esc();
+        general.fast_routes = false;
+        for e in [&mut fast, &mut general] {
+            for (addr, r) in &config {
+                let (mut f, _) = frame(&[(Command::Apwr, phys(0, *addr), r)]);
+                e.process_frame(&mut f);
+            }
+        }
+        for step in &steps {
+            match step {
+                RouteStep::Logical(c, at, data) => {
+                    let cmd = [Command::Lrd, Command::Lwr, Command::Lrw][usize::from(*c)];
+                    let (mut f1, _) = frame(&[(cmd, *at, data)]);
+                    let mut f2 = f1.clone();
+                    fast.process_frame(&mut f1);
+                    general.process_frame(&mut f2);
+                    prop_assert_eq!(f1, f2, "datagram and working counter");
+                }
+                RouteStep::Pdi(write, addr, n) => {
+                    let mut b1 = vec![0x5Au8; usize::from(*n)];
+                    let mut b2 = b1.clone();
+                    let (r1, r2) = if *write {
+                        (fast.write(*addr, &b1), general.write(*addr, &b2))
+                    } else {
+                        (fast.read(*addr, &mut b1), general.read(*addr, &mut b2))
+                    };
+                    prop_assert_eq!(r1, r2);
+                    prop_assert_eq!(b1, b2);
+                }
+            }
+            prop_assert_eq!(fast.raw_memory(), general.raw_memory(), "memory and registers");
+            prop_assert_eq!(fast.take_sm_writes(), general.take_sm_writes());
+        }
+    }
+}
+
 #[test]
 fn frames_that_are_not_ethercat_or_are_broken_are_left_untouched() {
     let mut e = esc();
