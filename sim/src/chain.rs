@@ -235,6 +235,11 @@ pub struct Chain {
     fmmu_gens: Vec<u32>,
     /// Whether `windows` must be rebuilt before the next logical datagram.
     windows_stale: bool,
+    /// Whether `windows`, sorted by logical start, is in line order too
+    /// (each slave's windows together, slaves first to last: the image as
+    /// ethercrab lays it out), so a logical datagram reaches the slaves in
+    /// the order its windows come.
+    windows_in_order: bool,
     /// Scratch list of the slaves one logical datagram reaches.
     hits: Vec<usize>,
     /// Injected time of the frame being processed (it enters slave 0).
@@ -264,23 +269,31 @@ fn port_times(i: usize, n: usize, (t, hop): (u64, u64)) -> (u64, Option<u64>) {
 /// Hands datagram `dg` to slave `i` of `n`, telling its DC unit when the
 /// frame passes its ports: port 0 at `t + i·hop` on the way down, port 1
 /// at `t + (2(n−1) − i)·hop` on the way back (the last slave turns the
-/// frame around; its port 1 is closed).
+/// frame around; its port 1 is closed). Returns the ESC's FMMU and
+/// address generations after the datagram (a write may have changed
+/// either).
 fn pass(
     s: &mut dyn LineSlave,
     i: usize,
     n: usize,
-    (t, hop): (u64, u64),
+    time: (u64, u64),
     dg: &mut Datagram<&mut [u8]>,
-) {
-    let i64_ = i as u64;
-    let p0 = t.saturating_add(i64_.saturating_mul(hop));
-    let p1 = (i + 1 < n).then(|| {
-        let hops = (2 * (n as u64 - 1)).saturating_sub(i64_);
-        t.saturating_add(hops.saturating_mul(hop))
-    });
+) -> (u32, u32) {
+    let (p0, p1) = port_times(i, n, time);
     let esc = s.esc_mut();
     esc.set_frame_times(p0, p1);
     esc.process_datagram(dg);
+    (esc.fmmu_generation(), esc.address_generation())
+}
+
+/// Queues slave `i`'s firmware for the next service, once.
+fn touch(queued: &mut [bool], touched: &mut Vec<usize>, i: usize) {
+    if let Some(q) = queued.get_mut(i)
+        && !*q
+    {
+        *q = true;
+        touched.push(i);
+    }
 }
 
 /// Shortest time in which the sweep of [`Chain::service`] reaches every
@@ -364,6 +377,7 @@ impl Chain {
             widest: 0,
             fmmu_gens: Vec::new(),
             windows_stale: true,
+            windows_in_order: false,
             hits: Vec::new(),
             frame_ns: 0,
             hop_ns: DEFAULT_HOP_NS,
@@ -411,6 +425,7 @@ impl Chain {
             }
         }
         self.windows.sort_unstable();
+        self.windows_in_order = self.windows.windows(2).all(|w| w[0].2 <= w[1].2);
         self.windows_stale = false;
     }
 
@@ -605,12 +620,7 @@ impl Chain {
 
     /// Records that a datagram reached slave `i`.
     fn touch(&mut self, i: usize) {
-        if let Some(q) = self.queued.get_mut(i)
-            && !*q
-        {
-            *q = true;
-            self.touched.push(i);
-        }
+        touch(&mut self.queued, &mut self.touched, i);
     }
 
     /// The reference path: the frame through every ESC in turn.
@@ -760,6 +770,36 @@ impl Chain {
                 let end = start + dg.data_mut().len() as u64;
                 let lo = start.saturating_sub(self.widest);
                 let first = self.windows.partition_point(|w| w.0 < lo);
+                if self.windows_in_order {
+                    // Each slave once, as its first window comes.
+                    let (mut last, mut moved, mut remapped) = (usize::MAX, false, false);
+                    for &(a, b, i) in self.windows.get(first..).unwrap_or_default() {
+                        if a >= end {
+                            break;
+                        }
+                        if b <= start || i == last {
+                            continue;
+                        }
+                        last = i;
+                        let Some(s) = self.slaves.get_mut(i) else {
+                            continue;
+                        };
+                        let (fmmu_gen, addr_gen) = pass(s.as_mut(), i, n, time, dg);
+                        touch(&mut self.queued, &mut self.touched, i);
+                        // An FMMU may map registers, even the FMMUs' own.
+                        if cmd.is_write() {
+                            remapped |= self.fmmu_gens.get(i) != Some(&fmmu_gen);
+                            moved |= self.addr_gens.get(i) != Some(&addr_gen);
+                        }
+                    }
+                    if remapped {
+                        self.windows_stale = true;
+                    }
+                    if moved {
+                        self.reindex();
+                    }
+                    return;
+                }
                 let mut hits = core::mem::take(&mut self.hits);
                 hits.clear();
                 for &(a, b, i) in self.windows.get(first..).unwrap_or_default() {
@@ -1013,8 +1053,10 @@ mod tests {
     }
 
     /// Sets station addresses 0x1000.. and a process-data configuration so
-    /// that logical and configured traffic finds targets.
-    fn configured_pair() -> (Chain, Chain) {
+    /// that logical and configured traffic finds targets: slave `i`'s
+    /// 8 logical bytes at `8·i` (the image in line order, as ethercrab lays
+    /// it out) or, `reversed`, at `8·(5 − i)` (last slave first).
+    fn configured_pair(reversed: bool) -> (Chain, Chain) {
         let mut a = crate::testing::line(6);
         let mut b = crate::testing::line(6);
         for i in 0..6u16 {
@@ -1028,7 +1070,7 @@ mod tests {
             )
             .unwrap();
             let mut f0 = [0u8; 16];
-            f0[0] = (i * 8) as u8;
+            f0[0] = if reversed { (5 - i) * 8 } else { i * 8 } as u8;
             f0[4] = 8;
             f0[7] = 7;
             f0[8..10].copy_from_slice(&0x1100u16.to_le_bytes());
@@ -1041,6 +1083,66 @@ mod tests {
             b.process_frame(&mut f2);
         }
         (a, b)
+    }
+
+    /// Two lines of 6 slaves, each slave with an output window (4 bytes
+    /// to 0x1100) and an input window (4 bytes from 0x1180) side by side
+    /// at logical `8·i`, or `8·(5 − i)` when `reversed`.
+    fn two_window_pair(reversed: bool) -> (Chain, Chain) {
+        let mut a = crate::testing::line(6);
+        let mut b = crate::testing::line(6);
+        for i in 0..6u16 {
+            let base = if reversed { (5 - i) * 8 } else { i * 8 };
+            let fmmu = |logical: u16, physical: u16, kind: u8| {
+                let mut f = [0u8; 16];
+                f[0..2].copy_from_slice(&logical.to_le_bytes());
+                f[4] = 4;
+                f[7] = 7;
+                f[8..10].copy_from_slice(&physical.to_le_bytes());
+                f[11] = kind;
+                f[12] = 1;
+                f
+            };
+            let mut buf = vec![0u8; 200];
+            let mut fb = FrameBuilder::new(&mut buf, [0x10; 6]).unwrap();
+            let adp = u32::from(0u16.wrapping_sub(i));
+            fb.push(Command::Apwr, adp | (0x0600 << 16), &fmmu(base, 0x1100, 2))
+                .unwrap();
+            fb.push(
+                Command::Apwr,
+                adp | (0x0610 << 16),
+                &fmmu(base + 4, 0x1180, 1),
+            )
+            .unwrap();
+            let len = fb.finish();
+            let mut f2 = buf[..len].to_vec();
+            a.process_serial(&mut buf[..len]);
+            b.process_frame(&mut f2);
+        }
+        (a, b)
+    }
+
+    #[test]
+    fn an_lrw_reaches_each_slave_once_whether_the_image_is_in_line_order_or_not() {
+        for reversed in [false, true] {
+            let (mut serial, mut fast) = two_window_pair(reversed);
+            let data: Vec<u8> = (0..48).collect();
+            let mut f1 = one_datagram(Command::Lrw, 0, &data);
+            let mut f2 = f1.clone();
+            serial.process_serial(&mut f1);
+            fast.process_frame(&mut f2);
+            assert_eq!(
+                fast.windows_in_order, !reversed,
+                "the layout was recognised"
+            );
+            assert_eq!(f1, f2, "the same answer as every ESC walking the frame");
+            let wkc = u16::from_le_bytes([f2[f2.len() - 2], f2[f2.len() - 1]]);
+            assert_eq!(
+                wkc,
+                6 * 3,
+                "each slave's write (2) and read (1) counted once"
+            );
+        }
     }
 
     #[test]
@@ -1347,9 +1449,10 @@ mod tests {
         /// same frames, outcomes and slave memories on random traffic.
         #[test]
         fn dispatch_equals_serial_processing(
-            frames in prop::collection::vec(random_frame(), 128)
+            frames in prop::collection::vec(random_frame(), 128),
+            reversed in any::<bool>(),
         ) {
-            let (mut serial, mut fast) = configured_pair();
+            let (mut serial, mut fast) = configured_pair(reversed);
             let mut counted = 0usize;
             for (round, frame) in frames.iter().enumerate() {
                 let mut f1 = frame.bytes();

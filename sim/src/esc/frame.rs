@@ -41,12 +41,10 @@ impl SoftEsc {
     /// Processes one datagram in place (addressing, data, working counter).
     pub fn process_datagram<T: AsRef<[u8]> + AsMut<[u8]>>(&mut self, dg: &mut Datagram<T>) {
         let cmd = dg.command();
-        let adp = dg.adp();
-        let ado = dg.ado();
-        let logical = dg.logical_address();
         let mut wkc_add: u16 = 0;
         match cmd {
             Command::Aprd | Command::Apwr | Command::Aprw | Command::Armw => {
+                let (adp, ado) = (dg.adp(), dg.ado());
                 dg.set_adp(adp.wrapping_add(1));
                 let data = dg.data_mut();
                 wkc_add = match cmd {
@@ -57,6 +55,7 @@ impl SoftEsc {
                 };
             }
             Command::Fprd | Command::Fpwr | Command::Fprw | Command::Frmw => {
+                let (adp, ado) = (dg.adp(), dg.ado());
                 let me = adp == self.station || (self.alias != 0 && adp == self.alias);
                 if !me && cmd != Command::Frmw {
                     return;
@@ -70,11 +69,13 @@ impl SoftEsc {
                 };
             }
             Command::Brd | Command::Bwr | Command::Brw => {
+                let (adp, ado) = (dg.adp(), dg.ado());
                 dg.set_adp(adp.wrapping_add(1));
                 let data = dg.data_mut();
                 wkc_add = self.phys_rw(cmd, ado, data, ReadMode::Or);
             }
             Command::Lrd | Command::Lwr | Command::Lrw => {
+                let logical = dg.logical_address();
                 let data = dg.data_mut();
                 wkc_add = self.logical(cmd, logical, data);
             }
@@ -97,19 +98,25 @@ impl SoftEsc {
         match cmd {
             Command::Aprd | Command::Fprd | Command::Brd => self.phys_read_count(addr, data, mode),
             Command::Apwr | Command::Fpwr | Command::Bwr => self.phys_write_count(addr, data),
-            Command::Aprw | Command::Fprw | Command::Brw => {
-                let n = data.len().min(MAX_DATAGRAM);
-                let mut scratch = [0u8; MAX_DATAGRAM];
-                let (Some(tmp), Some(src)) = (scratch.get_mut(..n), data.get(..n)) else {
-                    return 0;
-                };
-                tmp.copy_from_slice(src);
-                let r = self.phys_read_count(addr, data, mode);
-                let w = self.phys_write_count(addr, tmp);
-                r + 2 * w
-            }
+            Command::Aprw | Command::Fprw | Command::Brw => self.phys_read_write(addr, data, mode),
             _ => 0,
         }
+    }
+
+    /// A read-write: the old contents go out, the datagram's data in.
+    /// Out of line: its scratch buffer would otherwise enlarge the stack
+    /// frame of every datagram.
+    #[inline(never)]
+    fn phys_read_write(&mut self, addr: u16, data: &mut [u8], mode: ReadMode) -> u16 {
+        let n = data.len().min(MAX_DATAGRAM);
+        let mut scratch = [0u8; MAX_DATAGRAM];
+        let (Some(tmp), Some(src)) = (scratch.get_mut(..n), data.get(..n)) else {
+            return 0;
+        };
+        tmp.copy_from_slice(src);
+        let r = self.phys_read_count(addr, data, mode);
+        let w = self.phys_write_count(addr, tmp);
+        r + 2 * w
     }
 
     pub(super) fn phys_read_count(&mut self, addr: u16, data: &mut [u8], mode: ReadMode) -> u16 {
