@@ -242,6 +242,9 @@ pub struct Chain {
     windows_in_order: bool,
     /// Scratch list of the slaves one logical datagram reaches.
     hits: Vec<usize>,
+    /// Per slave: the number of the last frame whose port times its DC
+    /// unit got ([`pass`]).
+    stamps: Vec<u64>,
     /// Injected time of the frame being processed (it enters slave 0).
     frame_ns: u64,
     /// How long a frame takes from one slave's port 0 to the next one's
@@ -266,22 +269,37 @@ fn port_times(i: usize, n: usize, (t, hop): (u64, u64)) -> (u64, Option<u64>) {
     (p0, p1)
 }
 
-/// Hands datagram `dg` to slave `i` of `n`, telling its DC unit when the
-/// frame passes its ports: port 0 at `t + i·hop` on the way down, port 1
-/// at `t + (2(n−1) − i)·hop` on the way back (the last slave turns the
-/// frame around; its port 1 is closed). Returns the ESC's FMMU and
-/// address generations after the datagram (a write may have changed
-/// either).
+/// The frame going through the line: when it enters, how long each hop
+/// takes, how many slaves it passes, and its number (see [`pass`]).
+#[derive(Debug, Clone, Copy)]
+struct FrameClock {
+    t: u64,
+    hop: u64,
+    n: usize,
+    frame: u64,
+}
+
+/// Hands datagram `dg` to slave `i`, telling its DC unit when the frame
+/// passes its ports ([`port_times`]) once per frame: `stamps[i]` holds
+/// the number of the frame whose times slave `i` last got (a second
+/// datagram of the same frame passes it at the same times). Returns the
+/// ESC's FMMU and address generations after the datagram (a write may
+/// have changed either).
 fn pass(
     s: &mut dyn LineSlave,
     i: usize,
-    n: usize,
-    time: (u64, u64),
+    clock: &FrameClock,
+    stamps: &mut [u64],
     dg: &mut Datagram<&mut [u8]>,
 ) -> (u32, u32) {
-    let (p0, p1) = port_times(i, n, time);
     let esc = s.esc_mut();
-    esc.set_frame_times(p0, p1);
+    if let Some(stamp) = stamps.get_mut(i)
+        && *stamp != clock.frame
+    {
+        *stamp = clock.frame;
+        let (p0, p1) = port_times(i, clock.n, (clock.t, clock.hop));
+        esc.set_frame_times(p0, p1);
+    }
     esc.process_datagram(dg);
     (esc.fmmu_generation(), esc.address_generation())
 }
@@ -381,8 +399,10 @@ impl Chain {
             hits: Vec::new(),
             frame_ns: 0,
             hop_ns: DEFAULT_HOP_NS,
+            stamps: Vec::new(),
         };
         chain.queued = vec![false; chain.slaves.len()];
+        chain.stamps = vec![0; chain.slaves.len()];
         chain.reindex();
         chain
     }
@@ -714,7 +734,12 @@ impl Chain {
 
     fn dispatch(&mut self, dg: &mut Datagram<&mut [u8]>, n: usize) {
         let cmd = dg.command();
-        let time = (self.frame_ns, self.hop_ns);
+        let clock = FrameClock {
+            t: self.frame_ns,
+            hop: self.hop_ns,
+            n,
+            frame: self.frames,
+        };
         match cmd.addressing() {
             Addressing::Configured if cmd != Command::Frmw => {
                 let adp = dg.adp();
@@ -730,7 +755,7 @@ impl Chain {
                         break;
                     }
                     if let Some(s) = self.slaves.get_mut(i) {
-                        pass(s.as_mut(), i, n, time, dg);
+                        pass(s.as_mut(), i, &clock, &mut self.stamps, dg);
                     }
                     self.touch(i);
                     if cmd.is_write() {
@@ -749,7 +774,7 @@ impl Chain {
                 let pos = usize::from(0u16.wrapping_sub(adp0));
                 if let Some(s) = self.slaves.get_mut(pos) {
                     dg.set_adp(0);
-                    pass(s.as_mut(), pos, n, time, dg);
+                    pass(s.as_mut(), pos, &clock, &mut self.stamps, dg);
                     self.touch(pos);
                 }
                 dg.set_adp(adp0.wrapping_add(n as u16));
@@ -784,7 +809,7 @@ impl Chain {
                         let Some(s) = self.slaves.get_mut(i) else {
                             continue;
                         };
-                        let (fmmu_gen, addr_gen) = pass(s.as_mut(), i, n, time, dg);
+                        let (fmmu_gen, addr_gen) = pass(s.as_mut(), i, &clock, &mut self.stamps, dg);
                         touch(&mut self.queued, &mut self.touched, i);
                         // An FMMU may map registers, even the FMMUs' own.
                         if cmd.is_write() {
@@ -814,7 +839,7 @@ impl Chain {
                 hits.dedup();
                 for &i in &hits {
                     if let Some(s) = self.slaves.get_mut(i) {
-                        pass(s.as_mut(), i, n, time, dg);
+                        pass(s.as_mut(), i, &clock, &mut self.stamps, dg);
                     }
                     self.touch(i);
                 }
@@ -836,7 +861,7 @@ impl Chain {
             // Broadcast, ARMW, FRMW: every slave in line order.
             _ => {
                 for (i, s) in self.slaves.iter_mut().enumerate() {
-                    pass(s.as_mut(), i, n, time, dg);
+                    pass(s.as_mut(), i, &clock, &mut self.stamps, dg);
                 }
                 self.touched_all = true;
                 if cmd.is_write() {
