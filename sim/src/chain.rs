@@ -279,19 +279,29 @@ struct FrameClock {
     frame: u64,
 }
 
-/// Hands datagram `dg` to slave `i`, telling its DC unit when the frame
-/// passes its ports ([`port_times`]) once per frame: `stamps[i]` holds
-/// the number of the frame whose times slave `i` last got (a second
-/// datagram of the same frame passes it at the same times). Returns the
-/// ESC's FMMU and address generations after the datagram (a write may
-/// have changed either).
+/// A datagram's header, decoded once for every slave it reaches.
+#[derive(Debug, Clone, Copy)]
+struct Head {
+    cmd: Command,
+    adp: u16,
+    ado: u16,
+}
+
+/// Hands a datagram (`head`, its data in place) to slave `i`, telling its
+/// DC unit when the frame passes its ports ([`port_times`]) once per
+/// frame: `stamps[i]` holds the number of the frame whose times slave `i`
+/// last got (a second datagram of the same frame passes it at the same
+/// times). Returns the working counter increment and the ESC's FMMU and
+/// address generations after the datagram (a write may have changed
+/// either).
 fn pass(
     s: &mut dyn LineSlave,
     i: usize,
     clock: &FrameClock,
     stamps: &mut [u64],
-    dg: &mut Datagram<&mut [u8]>,
-) -> (u32, u32) {
+    head: Head,
+    data: &mut [u8],
+) -> (u16, u32, u32) {
     let esc = s.esc_mut();
     if let Some(stamp) = stamps.get_mut(i)
         && *stamp != clock.frame
@@ -300,8 +310,8 @@ fn pass(
         let (p0, p1) = port_times(i, clock.n, (clock.t, clock.hop));
         esc.set_frame_times(p0, p1);
     }
-    esc.process_datagram(dg);
-    (esc.fmmu_generation(), esc.address_generation())
+    let wkc = esc.process_data(head.cmd, head.adp, head.ado, data);
+    (wkc, esc.fmmu_generation(), esc.address_generation())
 }
 
 /// Queues slave `i`'s firmware for the next service, once.
@@ -733,29 +743,37 @@ impl Chain {
     }
 
     fn dispatch(&mut self, dg: &mut Datagram<&mut [u8]>, n: usize) {
-        let cmd = dg.command();
+        let head = Head {
+            cmd: dg.command(),
+            adp: dg.adp(),
+            ado: dg.ado(),
+        };
+        let cmd = head.cmd;
         let clock = FrameClock {
             t: self.frame_ns,
             hop: self.hop_ns,
             n,
             frame: self.frames,
         };
+        let wkc0 = dg.wkc();
+        let data = dg.data_mut();
+        let mut wkc_add = 0u16;
         match cmd.addressing() {
             Addressing::Configured if cmd != Command::Frmw => {
-                let adp = dg.adp();
                 // Every slave answering to this address, in line order.
                 let first = self
                     .first_of
-                    .get(usize::from(adp))
+                    .get(usize::from(head.adp))
                     .map_or(usize::MAX, |&k| k as usize);
                 let mut k = first;
                 let mut moved = false;
                 while let Some(&(a, i)) = self.addresses.get(k) {
-                    if a != adp {
+                    if a != head.adp {
                         break;
                     }
                     if let Some(s) = self.slaves.get_mut(i) {
-                        pass(s.as_mut(), i, &clock, &mut self.stamps, dg);
+                        let (w, _, _) = pass(s.as_mut(), i, &clock, &mut self.stamps, head, data);
+                        wkc_add = wkc_add.wrapping_add(w);
                     }
                     self.touch(i);
                     if cmd.is_write() {
@@ -769,15 +787,15 @@ impl Chain {
                 }
             }
             Addressing::Position if cmd != Command::Armw => {
-                let adp0 = dg.adp();
                 // Slave i sees ADP0 + i; the one seeing 0 is addressed.
-                let pos = usize::from(0u16.wrapping_sub(adp0));
+                let pos = usize::from(0u16.wrapping_sub(head.adp));
                 if let Some(s) = self.slaves.get_mut(pos) {
-                    dg.set_adp(0);
-                    pass(s.as_mut(), pos, &clock, &mut self.stamps, dg);
+                    let at_zero = Head { adp: 0, ..head };
+                    let (w, _, _) = pass(s.as_mut(), pos, &clock, &mut self.stamps, at_zero, data);
+                    wkc_add = w;
                     self.touch(pos);
                 }
-                dg.set_adp(adp0.wrapping_add(n as u16));
+                dg.set_adp(head.adp.wrapping_add(n as u16));
                 if cmd.is_write() {
                     self.check_fmmus(pos);
                     if self.moved(pos) {
@@ -791,10 +809,16 @@ impl Chain {
                 if self.windows_stale {
                     self.reindex_windows();
                 }
-                let start = u64::from(dg.logical_address());
-                let end = start + dg.data_mut().len() as u64;
+                let start = u64::from(head.adp) | (u64::from(head.ado) << 16);
+                let end = start + data.len() as u64;
+                // Windows starting before `lo` end before `start`. (A
+                // master's image usually starts at 0: nothing to search.)
                 let lo = start.saturating_sub(self.widest);
-                let first = self.windows.partition_point(|w| w.0 < lo);
+                let first = if lo == 0 {
+                    0
+                } else {
+                    self.windows.partition_point(|w| w.0 < lo)
+                };
                 if self.windows_in_order {
                     // Each slave once, as its first window comes.
                     let (mut last, mut moved, mut remapped) = (usize::MAX, false, false);
@@ -809,7 +833,9 @@ impl Chain {
                         let Some(s) = self.slaves.get_mut(i) else {
                             continue;
                         };
-                        let (fmmu_gen, addr_gen) = pass(s.as_mut(), i, &clock, &mut self.stamps, dg);
+                        let (w, fmmu_gen, addr_gen) =
+                            pass(s.as_mut(), i, &clock, &mut self.stamps, head, data);
+                        wkc_add = wkc_add.wrapping_add(w);
                         touch(&mut self.queued, &mut self.touched, i);
                         // An FMMU may map registers, even the FMMUs' own.
                         if cmd.is_write() {
@@ -823,45 +849,65 @@ impl Chain {
                     if moved {
                         self.reindex();
                     }
-                    return;
-                }
-                let mut hits = core::mem::take(&mut self.hits);
-                hits.clear();
-                for &(a, b, i) in self.windows.get(first..).unwrap_or_default() {
-                    if a >= end {
-                        break;
+                } else {
+                    let mut hits = core::mem::take(&mut self.hits);
+                    hits.clear();
+                    for &(a, b, i) in self.windows.get(first..).unwrap_or_default() {
+                        if a >= end {
+                            break;
+                        }
+                        if b > start {
+                            hits.push(i);
+                        }
                     }
-                    if b > start {
-                        hits.push(i);
-                    }
-                }
-                hits.sort_unstable();
-                hits.dedup();
-                for &i in &hits {
-                    if let Some(s) = self.slaves.get_mut(i) {
-                        pass(s.as_mut(), i, &clock, &mut self.stamps, dg);
-                    }
-                    self.touch(i);
-                }
-                // An FMMU may map registers, even the FMMUs' own.
-                if cmd.is_write() {
-                    let mut moved = false;
+                    hits.sort_unstable();
+                    hits.dedup();
                     for &i in &hits {
-                        self.check_fmmus(i);
-                        moved |= self.moved(i);
+                        if let Some(s) = self.slaves.get_mut(i) {
+                            let (w, _, _) =
+                                pass(s.as_mut(), i, &clock, &mut self.stamps, head, data);
+                            wkc_add = wkc_add.wrapping_add(w);
+                        }
+                        self.touch(i);
                     }
-                    if moved {
-                        self.windows_stale = true;
-                        self.reindex();
+                    // An FMMU may map registers, even the FMMUs' own.
+                    if cmd.is_write() {
+                        let mut moved = false;
+                        for &i in &hits {
+                            self.check_fmmus(i);
+                            moved |= self.moved(i);
+                        }
+                        if moved {
+                            self.windows_stale = true;
+                            self.reindex();
+                        }
                     }
+                    self.hits = hits;
                 }
-                self.hits = hits;
             }
             Addressing::None => {}
-            // Broadcast, ARMW, FRMW: every slave in line order.
+            // Broadcast, ARMW, FRMW: every slave in line order (position
+            // and broadcast commands: slave i sees ADP0 + i).
             _ => {
+                let advances = cmd.addressing() != Addressing::Configured;
                 for (i, s) in self.slaves.iter_mut().enumerate() {
-                    pass(s.as_mut(), i, &clock, &mut self.stamps, dg);
+                    let adp = if advances {
+                        head.adp.wrapping_add(i as u16)
+                    } else {
+                        head.adp
+                    };
+                    let (w, _, _) = pass(
+                        s.as_mut(),
+                        i,
+                        &clock,
+                        &mut self.stamps,
+                        Head { adp, ..head },
+                        data,
+                    );
+                    wkc_add = wkc_add.wrapping_add(w);
+                }
+                if advances {
+                    dg.set_adp(head.adp.wrapping_add(n as u16));
                 }
                 self.touched_all = true;
                 if cmd.is_write() {
@@ -871,6 +917,9 @@ impl Chain {
                     }
                 }
             }
+        }
+        if wkc_add != 0 {
+            dg.set_wkc(wkc0.wrapping_add(wkc_add));
         }
     }
 

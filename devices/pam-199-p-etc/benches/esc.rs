@@ -1,7 +1,7 @@
 //! Software ESC throughput (lines of PAM-199-P-ETC slaves): one process-data cycle as ethercrab's `tx_rx`
 //! sends it (one LRW over the group's image plus FPRD 0x0130 AL status per
 //! slave, the image split over as many frames as it needs: 1 frame for 1
-//! slave, 2 for 64, 6 for 256, 20 for 1024) through lines of 1, 64, 256
+//! slave, 2 for 64, 6 for 256, 20 for 1024) through lines of 1, 8, 64, 256
 //! and 1024 configured ESCs, two ways: `serial` (each ESC processes the whole frame
 //! in turn) and `line` (the virtual link's `Chain`, which parses the frame
 //! once and hands each datagram to the slaves it addresses).
@@ -48,7 +48,7 @@ fn configure(line: &mut [SoftEsc]) {
 fn bench(c: &mut Criterion) {
     let sii = pam_199_p_etc::DEVICE.sii_image();
     let mut g = c.benchmark_group("soft_esc_cycle");
-    for n in [1usize, 64, 256, 1024] {
+    for n in [1usize, 8, 64, 256, 1024] {
         let (templates, expected_wkc) = cycle_frames(n);
         eprintln!("{n} slaves: {} frames per cycle", templates.len());
         g.throughput(Throughput::Elements(n as u64));

@@ -41,48 +41,49 @@ impl SoftEsc {
     /// Processes one datagram in place (addressing, data, working counter).
     pub fn process_datagram<T: AsRef<[u8]> + AsMut<[u8]>>(&mut self, dg: &mut Datagram<T>) {
         let cmd = dg.command();
-        let mut wkc_add: u16 = 0;
+        let (adp, ado) = (dg.adp(), dg.ado());
+        if matches!(
+            cmd.addressing(),
+            Addressing::Position | Addressing::Broadcast
+        ) {
+            // Every ESC increments ADP as the datagram passes (ETG.1000.4).
+            dg.set_adp(adp.wrapping_add(1));
+        }
+        let wkc_add = self.process_data(cmd, adp, ado, dg.data_mut());
+        if wkc_add != 0 {
+            dg.set_wkc(dg.wkc().wrapping_add(wkc_add));
+        }
+    }
+
+    /// The work of one datagram whose header the caller decoded (a line
+    /// decodes it once for every ESC it reaches): `adp` as this ESC sees
+    /// it (after the increments of the ESCs before it on position and
+    /// broadcast commands), `ado`, and the data, changed in place. Returns
+    /// the working counter increment; adding it and advancing ADP are the
+    /// caller's.
+    pub fn process_data(&mut self, cmd: Command, adp: u16, ado: u16, data: &mut [u8]) -> u16 {
         match cmd {
-            Command::Aprd | Command::Apwr | Command::Aprw | Command::Armw => {
-                let (adp, ado) = (dg.adp(), dg.ado());
-                dg.set_adp(adp.wrapping_add(1));
-                let data = dg.data_mut();
-                wkc_add = match cmd {
-                    Command::Armw if adp == 0 => self.phys_read_count(ado, data, ReadMode::Copy),
-                    Command::Armw => self.phys_write_count(ado, data),
-                    _ if adp == 0 => self.phys_rw(cmd, ado, data, ReadMode::Copy),
-                    _ => 0,
-                };
+            Command::Armw if adp == 0 => self.phys_read_count(ado, data, ReadMode::Copy),
+            Command::Armw => self.phys_write_count(ado, data),
+            Command::Aprd | Command::Apwr | Command::Aprw if adp == 0 => {
+                self.phys_rw(cmd, ado, data, ReadMode::Copy)
             }
             Command::Fprd | Command::Fpwr | Command::Fprw | Command::Frmw => {
-                let (adp, ado) = (dg.adp(), dg.ado());
                 let me = adp == self.station || (self.alias != 0 && adp == self.alias);
-                if !me && cmd != Command::Frmw {
-                    return;
-                }
-                let data = dg.data_mut();
-                wkc_add = match cmd {
+                match cmd {
                     Command::Frmw if me => self.phys_read_count(ado, data, ReadMode::Copy),
                     Command::Frmw => self.phys_write_count(ado, data),
                     _ if me => self.phys_rw(cmd, ado, data, ReadMode::Copy),
                     _ => 0,
-                };
+                }
             }
             Command::Brd | Command::Bwr | Command::Brw => {
-                let (adp, ado) = (dg.adp(), dg.ado());
-                dg.set_adp(adp.wrapping_add(1));
-                let data = dg.data_mut();
-                wkc_add = self.phys_rw(cmd, ado, data, ReadMode::Or);
+                self.phys_rw(cmd, ado, data, ReadMode::Or)
             }
             Command::Lrd | Command::Lwr | Command::Lrw => {
-                let logical = dg.logical_address();
-                let data = dg.data_mut();
-                wkc_add = self.logical(cmd, logical, data);
+                self.logical(cmd, u32::from(adp) | (u32::from(ado) << 16), data)
             }
-            Command::Nop | Command::Unknown(_) => {}
-        }
-        if wkc_add != 0 {
-            dg.set_wkc(dg.wkc().wrapping_add(wkc_add));
+            _ => 0,
         }
     }
 

@@ -40,7 +40,7 @@ use dc::DcClock;
 use ecat_slave::esc::Esc;
 use ecat_slave::esc::EscError;
 use ecat_slave::esc::registers::{self as reg, sm as smr};
-use ecat_slave::wire::ecat::{Command, Datagram, DatagramCursor, EcatFrame, FrameType};
+use ecat_slave::wire::ecat::{Addressing, Command, Datagram, DatagramCursor, EcatFrame, FrameType};
 use ecat_slave::wire::ethernet::{ETHERTYPE_ETHERCAT, EthernetFrame};
 use fmmu::{FmmuConfig, FmmuRoute};
 use physical::ReadMode;
