@@ -8,6 +8,7 @@
 
 pub mod cycle;
 mod socket;
+mod turns;
 
 use crate::chain::{
     Chain, IMAGE_SLOT_CAPACITY, LineSlave, factory_image_store_of, provision_factory,
@@ -26,6 +27,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
+use turns::FirmwareTurns;
 
 /// What to run (the slaves themselves are handed to [`run`]).
 #[derive(Debug, Clone)]
@@ -138,14 +140,6 @@ pub const MAX_LINE: usize = 4096;
 
 /// How long a reordered reply is held (it then follows later replies).
 const REORDER_HOLD: Duration = Duration::from_millis(2);
-
-/// Longest time the runner waits for a frame before the firmware runs on
-/// its own (the sweep's turns, SM watchdog supervision).
-const IDLE_TICK: Duration = Duration::from_millis(1);
-
-/// Longest time firmware work waits while frames keep coming without a
-/// gap: then it runs after the frame just answered.
-const STARVE_AFTER: Duration = Duration::from_millis(1);
 
 /// Longest sleep of the threads that only wait for frames (the relay of
 /// returning frames, [`reflect`]) before they look at their stop flags.
@@ -289,15 +283,8 @@ pub fn run(
     let mut reopened: Option<Instant> = None;
     // The master's cycle: the window of its next frame.
     let mut cycle = CycleWatch::new();
-    // Since when firmware work has been left to do (a frame raised it, or
-    // came first), and when the firmware runs next without a frame. Work
-    // that has waited STARVE_AFTER runs after a frame even while more
-    // frames wait.
-    let mut work_since: Option<Instant> = None;
-    let mut next_idle = Instant::now() + IDLE_TICK;
-    // How long the last idle run took: an idle run starts no later than
-    // that before the polling window.
-    let mut idle_took = Duration::ZERO;
+    // When the firmware runs between frames.
+    let mut turns = FirmwareTurns::new(Instant::now());
     std::thread::scope(|scope| {
         let relay = out.as_ref().zip(out_iface.as_ref()).map(|(o, out_nic)| {
             let (o, shared, done) = (Arc::clone(o), &shared, &done);
@@ -354,7 +341,7 @@ pub fn run(
                             chain.link_lost();
                         }
                         was_down = down;
-                        work_since.get_or_insert_with(Instant::now);
+                        turns.frame_arrived(Instant::now());
                         if matches!(fate, Fate::DropBefore | Fate::LinkDown | Fate::Corrupt) {
                             if fate == Fate::Corrupt {
                                 chain.corrupted_frame();
@@ -389,11 +376,9 @@ pub fn run(
                         stats.answered += 1;
                         // Frames that never let the queue empty (a flood)
                         // still leave the firmware its turn.
-                        run_firmware = work_since.is_some_and(|t| t.elapsed() >= STARVE_AFTER);
+                        run_firmware = turns.starved(Instant::now());
                     }
-                    Ok(None) if work_since.is_some() || Instant::now() >= next_idle => {
-                        run_firmware = true
-                    }
+                    Ok(None) if turns.due(Instant::now()) => run_firmware = true,
                     Ok(None) => {
                         let now = Instant::now();
                         let now_ns = clock();
@@ -404,12 +389,13 @@ pub fn run(
                             // cyclic master's next frame (the frame's own
                             // firmware run comes right after it), and no
                             // timer wakes the runner there.
-                            let keep_out = at(w.from).checked_sub(idle_took + CHECK_EVERY);
+                            let next_idle = turns.next_idle();
+                            let keep_out = at(w.from).checked_sub(turns.idle_took() + CHECK_EVERY);
                             if keep_out.is_none_or(|k| next_idle >= k) && next_idle < at(w.until) {
-                                next_idle = at(w.until);
+                                turns.postpone_idle(at(w.until));
                             }
                         }
-                        let mut until = next_idle;
+                        let mut until = turns.next_idle();
                         if let Some((at, _)) = held.iter().min_by_key(|(at, _)| *at) {
                             until = until.min(*at);
                         }
@@ -472,15 +458,7 @@ pub fn run(
                     // slave (fail-safe).
                     let stopped = chain.service_until(clock(), &mut frame_waiting) == Ok(false);
                     persist_parameters(&chain, &mut states)?;
-                    if stopped {
-                        work_since.get_or_insert(t);
-                    } else {
-                        work_since = None;
-                        if t >= next_idle {
-                            idle_took = t.elapsed();
-                        }
-                        next_idle = Instant::now() + IDLE_TICK;
-                    }
+                    turns.ran(t, Instant::now(), stopped);
                 }
             }
             stats.spi = chain
