@@ -113,14 +113,7 @@ impl SoftEsc {
             end: f.logical_end(),
             physical: usize::from(f.physical),
         };
-        let mut bits = self.sm_active;
-        while bits != 0 {
-            let n = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let Some(sm) = self.sms.get(n) else { continue };
-            if !sm.overlaps(a, b) {
-                continue;
-            }
+        for (n, sm) in self.sms_overlapping(self.sm_active, a, b) {
             if sm.is_mailbox() {
                 return slow;
             }

@@ -72,14 +72,8 @@ impl SoftEsc {
         // could no longer read AL status to repair it).
         let ram = a.max(u32::from(reg::PROCESS_RAM));
         let mut complete = 0u8;
-        let mut bits = if ram < b { self.sm_active } else { 0 };
-        while bits != 0 {
-            let n = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let Some(sm) = self.sms.get(n) else { continue };
-            if !sm.overlaps(ram, b) {
-                continue;
-            }
+        let checked = if ram < b { self.sm_active } else { 0 };
+        for (n, sm) in self.sms_overlapping(checked, ram, b) {
             if sm.is_mailbox() {
                 if sm.ecat_writes() || !self.sm_status_bit(n, smr::STATUS_MAILBOX_FULL) {
                     return false;
@@ -156,14 +150,7 @@ impl SoftEsc {
             return true;
         }
         let mut complete = 0u8;
-        let mut bits = self.sm_active;
-        while bits != 0 {
-            let n = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let Some(sm) = self.sms.get(n) else { continue };
-            if !sm.overlaps(a, b) {
-                continue;
-            }
+        for (n, sm) in self.sms_overlapping(self.sm_active, a, b) {
             if !sm.ecat_writes() {
                 return false;
             }

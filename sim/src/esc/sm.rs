@@ -80,6 +80,29 @@ impl SoftEsc {
         }
     }
 
+    /// The SyncManagers of `set` (bit n = SM n) that overlap `[a, b)`,
+    /// lowest first, with their numbers.
+    pub(super) fn sms_overlapping(
+        &self,
+        set: u8,
+        a: u32,
+        b: u32,
+    ) -> impl Iterator<Item = (usize, SmConfig)> + '_ {
+        let mut bits = set;
+        core::iter::from_fn(move || {
+            while bits != 0 {
+                let n = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                if let Some(sm) = self.sms.get(n)
+                    && sm.overlaps(a, b)
+                {
+                    return Some((n, *sm));
+                }
+            }
+            None
+        })
+    }
+
     pub(super) fn sm_status(&self, n: usize) -> u8 {
         reg::sm(n as u8).map_or(0, |b| self.mem_u8(b + smr::STATUS))
     }
