@@ -38,11 +38,19 @@ pub(super) struct FmmuRoute {
     pub(super) write: bool,
     /// SyncManagers whose last byte the window covers (bit n = SM n).
     pub(super) complete: u8,
-    /// The logical window `[logical, end)`.
-    pub(super) logical: u64,
-    pub(super) end: u64,
-    /// The physical window's start.
-    pub(super) physical: usize,
+    /// The window: logical start, length, physical start (12 bytes a
+    /// route, so the routes of an ESC share two cache lines).
+    pub(super) logical: u32,
+    pub(super) len: u16,
+    pub(super) physical: u16,
+}
+
+impl FmmuRoute {
+    /// The logical window `[start, end)`.
+    fn window(&self) -> (u64, u64) {
+        let start = u64::from(self.logical);
+        (start, start + u64::from(self.len))
+    }
 }
 
 impl FmmuConfig {
@@ -109,9 +117,9 @@ impl SoftEsc {
             allowed: true,
             write: f.write,
             complete: 0,
-            logical: u64::from(f.logical),
-            end: f.logical_end(),
-            physical: usize::from(f.physical),
+            logical: f.logical,
+            len: f.len,
+            physical: f.physical,
         };
         for (n, sm) in self.sms_overlapping(self.sm_active, a, b) {
             if sm.is_mailbox() {
@@ -140,13 +148,10 @@ impl SoftEsc {
         if !route.allowed {
             return false;
         }
-        let (Ok(off), Ok(n)) = (
-            usize::try_from(route.logical - start),
-            usize::try_from(route.end - route.logical),
-        ) else {
+        let Ok(off) = usize::try_from(u64::from(route.logical) - start) else {
             return false;
         };
-        let p = route.physical;
+        let (n, p) = (usize::from(route.len), usize::from(route.physical));
         let (Some(window), Some(mem)) = (data.get_mut(off..off + n), self.mem.get_mut(p..p + n))
         else {
             return false;
@@ -199,10 +204,11 @@ impl SoftEsc {
                     && r.fast
                     && self.fast_routes
                 {
-                    if r.end <= start || r.logical >= end {
+                    let (r_start, r_end) = r.window();
+                    if r_end <= start || r_start >= end {
                         continue;
                     }
-                    if start <= r.logical && r.end <= end {
+                    if start <= r_start && r_end <= end {
                         let ok = self.route_transfer(&r, start, data);
                         if pass_write {
                             write_hit |= ok;
