@@ -301,7 +301,7 @@ fn pass(
     stamps: &mut [u64],
     head: Head,
     data: &mut [u8],
-) -> (u16, u32, u32) {
+) -> (u16, (u32, u32)) {
     let esc = s.esc_mut();
     if let Some(stamp) = stamps.get_mut(i)
         && *stamp != clock.frame
@@ -311,7 +311,7 @@ fn pass(
         esc.set_frame_times(p0, p1);
     }
     let wkc = esc.process_data(head.cmd, head.adp, head.ado, data);
-    (wkc, esc.fmmu_generation(), esc.address_generation())
+    (wkc, (esc.fmmu_generation(), esc.address_generation()))
 }
 
 /// Queues slave `i`'s firmware for the next service, once.
@@ -459,12 +459,26 @@ impl Chain {
         self.windows_stale = false;
     }
 
-    /// Marks the FMMU index stale if slave `i`'s FMMUs changed.
-    fn check_fmmus(&mut self, i: usize) {
-        if let (Some(s), Some(g)) = (self.slaves.get(i), self.fmmu_gens.get(i))
-            && s.esc().fmmu_generation() != *g
-        {
+    /// What a datagram changed in slave `i`, from the FMMU and address
+    /// generations its ESC reported after it ([`pass`]): (its FMMUs, so
+    /// the window index is stale; its address or alias, so the address
+    /// index is).
+    fn changes(&self, i: usize, (fmmu_gen, addr_gen): (u32, u32)) -> (bool, bool) {
+        (
+            self.fmmu_gens.get(i).is_some_and(|g| *g != fmmu_gen),
+            self.addr_gens.get(i).is_some_and(|g| *g != addr_gen),
+        )
+    }
+
+    /// Brings the indexes up to date after a write that `remapped` some
+    /// slave's FMMUs (the window index is rebuilt before the next logical
+    /// datagram) or `moved` its address (the address index at once).
+    fn after_write(&mut self, remapped: bool, moved: bool) {
+        if remapped {
             self.windows_stale = true;
+        }
+        if moved {
+            self.reindex();
         }
     }
 
@@ -727,14 +741,6 @@ impl Chain {
         }
     }
 
-    /// Rebuilds the address index if any slave's address or alias changed
-    /// (a register write, an EEPROM reload, the firmware through its PDI).
-    fn refresh_index(&mut self) {
-        if (0..self.slaves.len()).any(|i| self.moved(i)) {
-            self.reindex();
-        }
-    }
-
     /// Sets the delay a frame takes from one slave to the next (and back),
     /// which the DC units see in their receive times (default
     /// [`DEFAULT_HOP_NS`]).
@@ -766,42 +772,38 @@ impl Chain {
                     .get(usize::from(head.adp))
                     .map_or(usize::MAX, |&k| k as usize);
                 let mut k = first;
-                let mut moved = false;
+                let (mut remapped, mut moved) = (false, false);
                 while let Some(&(a, i)) = self.addresses.get(k) {
                     if a != head.adp {
                         break;
                     }
                     if let Some(s) = self.slaves.get_mut(i) {
-                        let (w, _, _) = pass(s.as_mut(), i, &clock, &mut self.stamps, head, data);
+                        let (w, gens) = pass(s.as_mut(), i, &clock, &mut self.stamps, head, data);
                         wkc_add = wkc_add.wrapping_add(w);
+                        if cmd.is_write() {
+                            let (r, m) = self.changes(i, gens);
+                            (remapped, moved) = (remapped | r, moved | m);
+                        }
                     }
                     self.touch(i);
-                    if cmd.is_write() {
-                        moved |= self.moved(i);
-                        self.check_fmmus(i);
-                    }
                     k += 1;
                 }
-                if moved {
-                    self.reindex();
-                }
+                self.after_write(remapped, moved);
             }
             Addressing::Position if cmd != Command::Armw => {
                 // Slave i sees ADP0 + i; the one seeing 0 is addressed.
                 let pos = usize::from(0u16.wrapping_sub(head.adp));
                 if let Some(s) = self.slaves.get_mut(pos) {
                     let at_zero = Head { adp: 0, ..head };
-                    let (w, _, _) = pass(s.as_mut(), pos, &clock, &mut self.stamps, at_zero, data);
+                    let (w, gens) = pass(s.as_mut(), pos, &clock, &mut self.stamps, at_zero, data);
                     wkc_add = w;
                     self.touch(pos);
-                }
-                dg.set_adp(head.adp.wrapping_add(n as u16));
-                if cmd.is_write() {
-                    self.check_fmmus(pos);
-                    if self.moved(pos) {
-                        self.reindex();
+                    if cmd.is_write() {
+                        let (remapped, moved) = self.changes(pos, gens);
+                        self.after_write(remapped, moved);
                     }
                 }
+                dg.set_adp(head.adp.wrapping_add(n as u16));
             }
             Addressing::Logical => {
                 // Only the slaves with an FMMU window overlapping the
@@ -833,22 +835,16 @@ impl Chain {
                         let Some(s) = self.slaves.get_mut(i) else {
                             continue;
                         };
-                        let (w, fmmu_gen, addr_gen) =
-                            pass(s.as_mut(), i, &clock, &mut self.stamps, head, data);
+                        let (w, gens) = pass(s.as_mut(), i, &clock, &mut self.stamps, head, data);
                         wkc_add = wkc_add.wrapping_add(w);
                         touch(&mut self.queued, &mut self.touched, i);
                         // An FMMU may map registers, even the FMMUs' own.
                         if cmd.is_write() {
-                            remapped |= self.fmmu_gens.get(i) != Some(&fmmu_gen);
-                            moved |= self.addr_gens.get(i) != Some(&addr_gen);
+                            let (r, m) = self.changes(i, gens);
+                            (remapped, moved) = (remapped | r, moved | m);
                         }
                     }
-                    if remapped {
-                        self.windows_stale = true;
-                    }
-                    if moved {
-                        self.reindex();
-                    }
+                    self.after_write(remapped, moved);
                 } else {
                     let mut hits = core::mem::take(&mut self.hits);
                     hits.clear();
@@ -862,26 +858,21 @@ impl Chain {
                     }
                     hits.sort_unstable();
                     hits.dedup();
+                    let (mut remapped, mut moved) = (false, false);
                     for &i in &hits {
                         if let Some(s) = self.slaves.get_mut(i) {
-                            let (w, _, _) =
+                            let (w, gens) =
                                 pass(s.as_mut(), i, &clock, &mut self.stamps, head, data);
                             wkc_add = wkc_add.wrapping_add(w);
+                            // An FMMU may map registers, even the FMMUs' own.
+                            if cmd.is_write() {
+                                let (r, m) = self.changes(i, gens);
+                                (remapped, moved) = (remapped | r, moved | m);
+                            }
                         }
                         self.touch(i);
                     }
-                    // An FMMU may map registers, even the FMMUs' own.
-                    if cmd.is_write() {
-                        let mut moved = false;
-                        for &i in &hits {
-                            self.check_fmmus(i);
-                            moved |= self.moved(i);
-                        }
-                        if moved {
-                            self.windows_stale = true;
-                            self.reindex();
-                        }
-                    }
+                    self.after_write(remapped, moved);
                     self.hits = hits;
                 }
             }
@@ -890,13 +881,17 @@ impl Chain {
             // and broadcast commands: slave i sees ADP0 + i).
             _ => {
                 let advances = cmd.addressing() != Addressing::Configured;
-                for (i, s) in self.slaves.iter_mut().enumerate() {
+                let (mut remapped, mut moved) = (false, false);
+                for i in 0..n {
                     let adp = if advances {
                         head.adp.wrapping_add(i as u16)
                     } else {
                         head.adp
                     };
-                    let (w, _, _) = pass(
+                    let Some(s) = self.slaves.get_mut(i) else {
+                        continue;
+                    };
+                    let (w, gens) = pass(
                         s.as_mut(),
                         i,
                         &clock,
@@ -905,17 +900,16 @@ impl Chain {
                         data,
                     );
                     wkc_add = wkc_add.wrapping_add(w);
+                    if cmd.is_write() {
+                        let (r, m) = self.changes(i, gens);
+                        (remapped, moved) = (remapped | r, moved | m);
+                    }
                 }
                 if advances {
                     dg.set_adp(head.adp.wrapping_add(n as u16));
                 }
                 self.touched_all = true;
-                if cmd.is_write() {
-                    self.refresh_index();
-                    for i in 0..n {
-                        self.check_fmmus(i);
-                    }
-                }
+                self.after_write(remapped, moved);
             }
         }
         if wkc_add != 0 {
