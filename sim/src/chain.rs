@@ -29,6 +29,9 @@ use ecat_slave::od::Od;
 use ecat_slave::wire::ecat::{Addressing, Command, Datagram, DatagramCursor, EcatFrame, FrameType};
 use ecat_slave::wire::ethernet::{ETHERTYPE_ETHERCAT, EthernetFrame};
 
+mod ahead;
+pub use ahead::Ahead;
+
 /// Slot capacity of a software slave's firmware store (2 MiB).
 pub const IMAGE_SLOT_CAPACITY: usize = 2 * 1024 * 1024;
 

@@ -19,6 +19,7 @@
 //! [`dc`]), the PDI side (`pdi.rs`) and raw memory access (`memory.rs`).
 
 mod addressing;
+mod ahead;
 pub mod dc;
 mod dc_unit;
 mod fmmu;

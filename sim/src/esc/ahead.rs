@@ -1,0 +1,148 @@
+//! What a datagram would read from this ESC, worked out without reading:
+//! the ESC's part of a line's answer ahead ([`crate::chain::Ahead`]).
+//!
+//! Only accesses whose result depends on nothing but the memory as it is
+//! now, and which no other access of a process-data frame can change, are
+//! worked out ahead; everything else returns `None` and the frame takes
+//! the normal path.
+
+use super::*;
+
+/// Registers an answer ahead may read: those below the event registers
+/// (ESC information, addresses, DL and AL control and status). Their ECAT
+/// read has no side effect, and no logical access changes them (a
+/// SyncManager's completion raises events at 0x0210 and 0x0220 and sets
+/// the SyncManager status at 0x0805; the DC receive times and the error
+/// counters lie above as well).
+pub(crate) const QUIET_REGISTERS_END: u32 = 0x0200;
+
+impl SoftEsc {
+    /// What [`SoftEsc::process_data`] would do with a logical datagram
+    /// (LRD, LWR, LRW) of `len` bytes at logical `addr`, without doing it:
+    /// calls `read(offset, bytes)` for every window it would copy into the
+    /// data, in the order it would (a later window over the same bytes
+    /// wins), and returns the working counter increment. What it would
+    /// write changes no data of the datagram.
+    ///
+    /// `None` when the answer could depend on more than the memory as it
+    /// is now: a window the general path takes (bit-granular, read-write,
+    /// over a mailbox SyncManager or the registers, or covered only in
+    /// part), routes not worked out yet since the last reconfiguration, or
+    /// any write window of this ESC overlapping any of its read windows in
+    /// physical memory (a write earlier in the frame would change what a
+    /// later read returns).
+    pub fn logical_ahead(
+        &self,
+        cmd: Command,
+        addr: u32,
+        len: usize,
+        mut read: impl FnMut(usize, &[u8]),
+    ) -> Option<u16> {
+        if self.fmmu_active == 0 || len == 0 {
+            return Some(0);
+        }
+        if self.routes_stale || !self.fast_routes || self.writes_reach_reads() {
+            return None;
+        }
+        let start = u64::from(addr);
+        let end = start + len as u64;
+        let want_read = matches!(cmd, Command::Lrd | Command::Lrw);
+        let want_write = matches!(cmd, Command::Lwr | Command::Lrw);
+        let (mut read_hit, mut write_hit) = (false, false);
+        for pass_write in [true, false] {
+            let mut bits = match (pass_write, want_write, want_read) {
+                (true, true, _) => self.fmmu_writes,
+                (false, _, true) => self.fmmu_reads,
+                _ => 0,
+            };
+            while bits != 0 {
+                let i = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let (Some(r), Some(f)) = (self.routes.get(i), self.fmmus.get(i)) else {
+                    continue;
+                };
+                if f.logical_end() <= start || u64::from(f.logical) >= end {
+                    continue;
+                }
+                let (r_start, r_end) = (
+                    u64::from(r.logical),
+                    u64::from(r.logical) + u64::from(r.len),
+                );
+                if !r.fast || r_start < start || r_end > end {
+                    return None;
+                }
+                // What `route_transfer` decides.
+                if !r.allowed {
+                    continue;
+                }
+                let off = usize::try_from(r_start - start).ok()?;
+                let (n, p) = (usize::from(r.len), usize::from(r.physical));
+                if off + n > len {
+                    continue;
+                }
+                let Some(mem) = self.mem.get(p..p + n) else {
+                    continue;
+                };
+                if pass_write {
+                    write_hit = true;
+                } else {
+                    read(off, mem);
+                    read_hit = true;
+                }
+            }
+        }
+        Some(match cmd {
+            Command::Lrw => u16::from(read_hit) + 2 * u16::from(write_hit),
+            _ => u16::from(read_hit || write_hit),
+        })
+    }
+
+    /// Whether some enabled writing FMMU of this ESC maps physical memory
+    /// that some enabled reading FMMU maps too (a read-write FMMU always).
+    fn writes_reach_reads(&self) -> bool {
+        let span = |f: &FmmuConfig| {
+            let a = u32::from(f.physical);
+            // A bit-granular window may reach one byte further.
+            (a, a + u32::from(f.len) + 1)
+        };
+        let mut writes = self.fmmu_writes;
+        while writes != 0 {
+            let w = writes.trailing_zeros() as usize;
+            writes &= writes - 1;
+            let Some((wa, wb)) = self.fmmus.get(w).map(span) else {
+                continue;
+            };
+            let mut reads = self.fmmu_reads;
+            while reads != 0 {
+                let r = reads.trailing_zeros() as usize;
+                reads &= reads - 1;
+                if let Some((ra, rb)) = self.fmmus.get(r).map(span)
+                    && ra < wb
+                    && wa < rb
+                {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// What a broadcast read (BRD) of `len` bytes at `ado` would OR into
+    /// the data, worked out without reading: `Some(Some(bytes))` (the
+    /// working counter counts this ESC), `Some(None)` (the ESC does not
+    /// implement those registers: no answer), or `None` beyond the
+    /// registers that may be read ahead ([`QUIET_REGISTERS_END`]).
+    pub fn broadcast_read_ahead(&self, ado: u16, len: usize) -> Option<Option<&[u8]>> {
+        let a = u32::from(ado);
+        let b = a + u32::try_from(len).ok()?;
+        if b > QUIET_REGISTERS_END {
+            return None;
+        }
+        // What `ecat_read_checked` decides for these registers: no DC
+        // register, no SyncManager, all within the modelled memory.
+        if !self.silicon.implements(a, b) {
+            return Some(None);
+        }
+        self.mem.get(a as usize..b as usize).map(Some)
+    }
+}
