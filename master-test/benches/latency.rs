@@ -16,8 +16,8 @@
 //! It prints p50, p99, p99.9 and max per case and the ratio runner/floor
 //! at p50 and p99, each runner against the floor measured just before it
 //! with the same frame. `--pace-us N` sends one frame every N us (1000: a
-//! 1 kHz cyclic master), back to back by default; `--busy-poll` passes
-//! that flag to the runners. Needs root and iproute2 (the namespace is
+//! 1 kHz cyclic master), back to back by default; `--busy-poll` and
+//! `--no-answer-ahead` pass those flags to the runners. Needs root and iproute2 (the namespace is
 //! removed at the end); builds `pam-slave` in release mode first.
 //!
 //! Run: `cargo bench -p master-test --bench latency` (`-- --frames N` for
@@ -58,7 +58,7 @@ impl Namespace {
             .args(["netns", "exec", &self.name, bin])
             .args(args)
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
+            .stderr(Stdio::inherit())
             .spawn()
             .expect("start pam-slave");
         self.child = Some(child);
@@ -270,6 +270,7 @@ fn main() {
     println!("| case | p50 | p99 | p99.9 | max | p50 / floor | p99 / floor |");
     println!("|---|---|---|---|---|---|---|");
     let busy_poll = args.iter().any(|a| a == "--busy-poll");
+    let no_ahead = args.iter().any(|a| a == "--no-answer-ahead");
     let mut floor: Option<(Duration, Duration)> = None;
     for (is_floor, n) in [
         (true, 1usize),
@@ -287,6 +288,9 @@ fn main() {
             let mut a = vec!["--iface", &slave, "--count", &count];
             if busy_poll {
                 a.push("--busy-poll");
+            }
+            if no_ahead {
+                a.push("--no-answer-ahead");
             }
             ns.start(&bin, &a);
             for i in 0..n as u16 {

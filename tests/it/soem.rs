@@ -267,6 +267,8 @@ fn soem_phases(tag: &str, line: &str, log: &str) -> Option<TempDir> {
             text.contains("stopped after"),
             "the runner stopped cleanly: {text}"
         );
+        // Every frame answered ahead got the reply the ESCs then gave.
+        assert!(!text.contains("differed"), "answers ahead: {text}");
         // Slaves on an SPI PDI: the emulated chips saw only well-formed
         // SPI and refused nothing.
         if line.contains('@') {

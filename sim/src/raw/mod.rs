@@ -6,6 +6,7 @@
 //! processed (source MAC with the locally administered bit set: our own
 //! replies seen again), is ignored.
 
+mod ahead;
 pub mod cycle;
 mod socket;
 mod turns;
@@ -17,6 +18,7 @@ use crate::faults::{Fate, FaultConfig, FaultInjector};
 use crate::file_store::FileStore;
 use crate::pcap::PcapWriter;
 use crate::state_dir::{Loaded, SlaveState};
+use ahead::AheadAnswers;
 use cycle::CycleWatch;
 use ecat_slave::firmware::ImageStore;
 use pnet_datalink::NetworkInterface;
@@ -57,11 +59,19 @@ pub struct RunnerConfig {
     /// vCPU takes time from the one the master and the kernel's veth path
     /// run on. Worth trying where the runner has a core of its own.
     pub busy_poll: bool,
+    /// Answer a cyclic master's process-data frames ahead
+    /// ([`Chain::ahead`]): the reply is worked out while the runner
+    /// waits, sent as the frame arrives, and the ESCs then run on the
+    /// frame as always (their reply must be the same; a difference is
+    /// counted in [`RunStats::ahead_differed`] and switches this off). On
+    /// by default.
+    pub answer_ahead: bool,
 }
 
 impl RunnerConfig {
     /// Serves `iface` with the defaults: no capture, no state directory,
-    /// no faults, no forwarding, [`IMAGE_SLOT_CAPACITY`], no busy polling.
+    /// no faults, no forwarding, [`IMAGE_SLOT_CAPACITY`], no busy polling,
+    /// answers ahead.
     pub fn new(iface: impl Into<String>) -> Self {
         Self {
             iface: iface.into(),
@@ -71,6 +81,7 @@ impl RunnerConfig {
             forward: None,
             image_slot_capacity: IMAGE_SLOT_CAPACITY,
             busy_poll: false,
+            answer_ahead: true,
         }
     }
 }
@@ -133,6 +144,13 @@ pub struct RunStats {
     /// The SPI wires' counters summed over the slaves whose firmware runs
     /// through an SPI driver and an emulated chip (`None`: no such slave).
     pub spi: Option<crate::slave::SpiStats>,
+    /// Of the frames answered, those answered ahead
+    /// ([`RunnerConfig::answer_ahead`]).
+    pub answered_ahead: u64,
+    /// Frames answered ahead whose reply from the ESCs then differed from
+    /// the one sent (0 unless there is a bug; the first switches answering
+    /// ahead off for the run).
+    pub ahead_differed: u64,
 }
 
 /// Most slaves one runner serves.
@@ -285,6 +303,9 @@ pub fn run(
     let mut cycle = CycleWatch::new();
     // When the firmware runs between frames.
     let mut turns = FirmwareTurns::new(Instant::now());
+    // Replies worked out ahead; forgotten whenever anything runs on the
+    // line.
+    let mut answers = AheadAnswers::new(config.answer_ahead);
     std::thread::scope(|scope| {
         let relay = out.as_ref().zip(out_iface.as_ref()).map(|(o, out_nic)| {
             let (o, shared, done) = (Arc::clone(o), &shared, &done);
@@ -302,9 +323,11 @@ pub fn run(
                 }
                 if let Some(up) = port1.poll() {
                     set_last_port1(&mut chain, up);
+                    answers.forget();
                 }
                 if port1.take_lost() {
                     set_last_port1(&mut chain, false);
+                    answers.forget();
                 }
                 if !held.is_empty() {
                     let t = Instant::now();
@@ -343,12 +366,31 @@ pub fn run(
                         was_down = down;
                         turns.frame_arrived(Instant::now());
                         if matches!(fate, Fate::DropBefore | Fate::LinkDown | Fate::Corrupt) {
+                            answers.forget();
                             if fate == Fate::Corrupt {
                                 chain.corrupted_frame();
                             }
                             continue;
                         }
                         let request = (fate == Fate::Duplicate).then(|| buf.to_vec());
+                        // A process-data frame of the shape worked out
+                        // ahead is answered at once; the ESCs then run on
+                        // it as on any other, and must reply the same.
+                        let answered = match fate {
+                            Fate::Deliver => answers.answer(buf),
+                            _ => None,
+                        };
+                        let ahead = match answered {
+                            Some(r) => {
+                                reply(&sock, &mut port1, r)?;
+                                true
+                            }
+                            None => {
+                                answers.forget();
+                                answers.learn(buf);
+                                false
+                            }
+                        };
                         // As on silicon, the ESCs answer the frame at once;
                         // the firmware runs afterwards, once no frame
                         // waits. A slow firmware step (a flash write with
@@ -359,7 +401,15 @@ pub fn run(
                         if let Some(p) = pcap.as_mut() {
                             let _ = p.write_frame(buf);
                         }
+                        if ahead && !answers.check(buf) {
+                            eprintln!(
+                                "error: a frame answered ahead differed from the ESCs' own reply \
+                                 (a bug: please report it with a capture, --pcap); \
+                                 no longer answering ahead"
+                            );
+                        }
                         match fate {
+                            _ if ahead => {}
                             Fate::DropAfter => {}
                             Fate::Delay(d) => held.push((Instant::now() + d, buf.to_vec())),
                             Fate::Reorder => {
@@ -380,6 +430,9 @@ pub fn run(
                     }
                     Ok(None) if turns.due(Instant::now()) => run_firmware = true,
                     Ok(None) => {
+                        // The line waits: what the next cyclic frame will
+                        // read is in the caches now.
+                        answers.prepare(&chain);
                         let now = Instant::now();
                         let now_ns = clock();
                         let at = |ns: u64| now + Duration::from_nanos(ns.saturating_sub(now_ns));
@@ -418,6 +471,7 @@ pub fn run(
                             chain.link_lost();
                         }
                         was_down = true;
+                        answers.forget();
                         let _ = chain.idle(clock());
                         persist_parameters(&chain, &mut states)?;
                         std::thread::sleep(Duration::from_millis(5));
@@ -444,6 +498,7 @@ pub fn run(
                     // Whatever a firmware step acknowledged (SAVE) is on
                     // stable storage before the master can read the
                     // acknowledgement.
+                    answers.forget();
                     let t = Instant::now();
                     let mut checked = t;
                     let mut frame_waiting = || {
@@ -461,6 +516,8 @@ pub fn run(
                     turns.ran(t, Instant::now(), stopped);
                 }
             }
+            stats.answered_ahead = answers.answered;
+            stats.ahead_differed = answers.differed;
             stats.spi = chain
                 .slaves()
                 .iter()

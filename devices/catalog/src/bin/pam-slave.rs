@@ -124,6 +124,13 @@ struct Cli {
     /// it made round trips slower; try it where it has a core of its own.
     #[arg(long)]
     busy_poll: bool,
+    /// Do not answer process-data frames ahead. By default the reply to a
+    /// cyclic master's frame is worked out while the runner waits and sent
+    /// as the frame arrives; the ESCs then run on the frame as always, and
+    /// their reply must be the same (a difference is reported and turns
+    /// answering ahead off).
+    #[arg(long)]
+    no_answer_ahead: bool,
 }
 
 fn main() -> ExitCode {
@@ -201,6 +208,7 @@ fn main() -> ExitCode {
         forward: cli.forward,
         image_slot_capacity: usize::try_from(cli.image_store_size).unwrap_or(usize::MAX),
         busy_poll: cli.busy_poll,
+        answer_ahead: !cli.no_answer_ahead,
     };
     let onward = cfg
         .forward
@@ -221,9 +229,16 @@ fn main() -> ExitCode {
     match run(&cfg, slaves, &stop) {
         Ok(stats) => {
             eprintln!(
-                "pam-slave: stopped after {} EtherCAT frames ({} other frames ignored)",
-                stats.answered, stats.ignored
+                "pam-slave: stopped after {} EtherCAT frames ({} answered ahead; {} other frames ignored)",
+                stats.answered, stats.answered_ahead, stats.ignored
             );
+            if stats.ahead_differed > 0 {
+                eprintln!(
+                    "pam-slave: error: {} frame(s) answered ahead differed from the ESCs' own reply",
+                    stats.ahead_differed
+                );
+                return Exit::Comm.into();
+            }
             if let Some(spi) = stats.spi {
                 eprintln!(
                     "pam-slave: SPI PDI wires: {} transactions, {} protocol errors, {} refused accesses",
