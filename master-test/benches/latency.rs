@@ -1,24 +1,28 @@
 //! Round-trip latency of the raw-socket runner against its floor, in the
-//! same run: a veth pair into a network namespace this bench creates, a
-//! fixed cyclic frame (LRW over the whole process image of PAM-sized
-//! slaves, 5 output + 14 input bytes each, plus a BRD of the AL status, as
-//! ethercrab's `tx_rx` sends it) sent from the host end and timed until
-//! its answer arrives, 20 000 times each:
+//! same run: two veth pairs, each into a network namespace of its own that
+//! this bench creates, a fixed cyclic frame (LRW over the whole process
+//! image of PAM-sized slaves, 5 output + 14 input bytes each, plus a BRD
+//! of the AL status, as ethercrab's `tx_rx` sends it) sent from the host
+//! ends and timed until its answer arrives, 20 000 times each:
 //!
-//! * `floor/N`: `pam-slave --reflect` on the namespace end, the same socket
-//!   path with no slave (what the kernel and the socket cost), answering
-//!   the frame of `runner/N` (the same size: a 64-slave frame carries
-//!   1.2 KB);
-//! * `runner/1`, `runner/8`, `runner/64`: `pam-slave --count N`, its ESCs
-//!   configured like a master does (station address, SM2/SM3, FMMUs), so
-//!   every LRW is really processed (the bench checks the working counter).
+//! * `floor/N`: `pam-slave --reflect` on one pair, the same socket path
+//!   with no slave (what the kernel and the socket cost), answering the
+//!   frame of `runner/N` (the same size: a 64-slave frame carries 1.2 KB);
+//! * `runner/1`, `runner/8`, `runner/64`: `pam-slave --count N` on the
+//!   other, its ESCs configured like a master does (station address,
+//!   SM2/SM3, FMMUs), so every LRW is really processed (the bench checks
+//!   the working counter).
 //!
-//! It prints p50, p99, p99.9 and max per case and the ratio runner/floor
-//! at p50 and p99, each runner against the floor measured just before it
-//! with the same frame. `--pace-us N` sends one frame every N us (1000: a
-//! 1 kHz cyclic master), back to back by default; `--busy-poll` and
-//! `--no-answer-ahead` pass those flags to the runners. Needs root and iproute2 (the namespace is
-//! removed at the end); builds `pam-slave` in release mode first.
+//! The floor's and the runner's frames alternate (with `--pace-us`, half
+//! a period apart), so both meet the host in the same state: on a shared
+//! VM whose noise moves the floor's own p50 by 1.5 × within seconds, two
+//! cases measured one after the other compare that noise as much as the
+//! code. It prints p50, p99, p99.9 and max per case and the ratio
+//! runner/floor at p50 and p99. `--pace-us N` sends one frame every N us
+//! to each (1000: a 1 kHz cyclic master), back to back by default;
+//! `--busy-poll` and `--no-answer-ahead` pass those flags to the runners.
+//! Needs root and iproute2 (the namespaces are removed at the end); builds
+//! `pam-slave` in release mode first.
 //!
 //! Run: `cargo bench -p master-test --bench latency` (`-- --frames N` for
 //! another count).
@@ -45,17 +49,54 @@ fn ip(args: &[&str]) {
     );
 }
 
-/// The namespace and the process in it; removed on drop.
-struct Namespace {
-    name: String,
+/// A veth pair whose slave end lies in a namespace of its own, the
+/// process serving that end, and the master's raw socket on the host end;
+/// removed on drop.
+struct Link {
+    ns: String,
+    host: String,
+    slave: String,
     child: Option<Child>,
+    master: Master,
 }
 
-impl Namespace {
+impl Link {
+    fn new(name: &str) -> Self {
+        let ns = format!("{name}n");
+        let host = format!("{name}m");
+        let slave = format!("{name}s");
+        ip(&["netns", "add", &ns]);
+        ip(&[
+            "link", "add", &host, "type", "veth", "peer", "name", &slave, "netns", &ns,
+        ]);
+        ip(&["link", "set", &host, "up"]);
+        ip(&["-n", &ns, "link", "set", &slave, "up"]);
+        let nic = pnet_datalink::interfaces()
+            .into_iter()
+            .find(|i| i.name == host)
+            .expect("host end");
+        let cfg = Config {
+            read_timeout: Some(Duration::from_millis(10)),
+            promiscuous: true,
+            ..Config::default()
+        };
+        let Ok(Channel::Ethernet(tx, rx)) = pnet_datalink::channel(&nic, cfg) else {
+            panic!("raw socket on {host}");
+        };
+        Self {
+            ns,
+            host,
+            slave,
+            child: None,
+            master: Master { tx, rx },
+        }
+    }
+
+    /// Starts `pam-slave --iface <slave end> <args>` in the namespace.
     fn start(&mut self, bin: &str, args: &[&str]) {
         self.stop();
         let child = Command::new("ip")
-            .args(["netns", "exec", &self.name, bin])
+            .args(["netns", "exec", &self.ns, bin, "--iface", &self.slave])
             .args(args)
             .stdout(Stdio::null())
             .stderr(Stdio::inherit())
@@ -75,12 +116,13 @@ impl Namespace {
     }
 }
 
-impl Drop for Namespace {
+impl Drop for Link {
     fn drop(&mut self) {
         self.stop();
         let _ = Command::new("ip")
-            .args(["netns", "del", &self.name])
+            .args(["link", "del", &self.host])
             .status();
+        let _ = Command::new("ip").args(["netns", "del", &self.ns]).status();
     }
 }
 
@@ -233,124 +275,113 @@ fn main() {
     let bin = format!("{target}/release/pam-slave");
 
     let pid = std::process::id();
-    let mut ns = Namespace {
-        name: format!("lat{pid}"),
-        child: None,
-    };
-    ip(&["netns", "add", &ns.name]);
-    let host = format!("lt{pid}m");
-    let slave = format!("lt{pid}s");
-    ip(&[
-        "link", "add", &host, "type", "veth", "peer", "name", &slave, "netns", &ns.name,
-    ]);
-    ip(&["link", "set", &host, "up"]);
-    ip(&["-n", &ns.name, "link", "set", &slave, "up"]);
-    let nic = pnet_datalink::interfaces()
-        .into_iter()
-        .find(|i| i.name == host)
-        .expect("host end");
-    let cfg = Config {
-        read_timeout: Some(Duration::from_millis(10)),
-        promiscuous: true,
-        ..Config::default()
-    };
-    let Ok(Channel::Ethernet(tx, rx)) = pnet_datalink::channel(&nic, cfg) else {
-        panic!("raw socket on {host}");
-    };
-    let mut m = Master { tx, rx };
+    // Two veth pairs, each into a namespace of its own: the floor on one,
+    // the runner on the other.
+    let mut floor_link = Link::new(&format!("lf{pid}"));
+    let mut runner_link = Link::new(&format!("lr{pid}"));
 
     println!(
-        "{frames} round trips per case over a veth pair, {}; times in microseconds",
+        "{frames} round trips per case over veth pairs, {}, the floor's and the runner's \
+         interleaved; times in microseconds",
         if pace.is_zero() {
             "back to back".to_string()
         } else {
-            format!("one frame every {} us", pace.as_micros())
+            format!("one frame every {} us to each", pace.as_micros())
         }
     );
     println!("| case | p50 | p99 | p99.9 | max | p50 / floor | p99 / floor |");
     println!("|---|---|---|---|---|---|---|");
     let busy_poll = args.iter().any(|a| a == "--busy-poll");
     let no_ahead = args.iter().any(|a| a == "--no-answer-ahead");
-    let mut floor: Option<(Duration, Duration)> = None;
-    for (is_floor, n) in [
-        (true, 1usize),
-        (false, 1),
-        (true, 8),
-        (false, 8),
-        (true, 64),
-        (false, 64),
-    ] {
-        let name = format!("{}/{n}", if is_floor { "floor" } else { "runner" });
-        if is_floor {
-            ns.start(&bin, &["--iface", &slave, "--reflect"]);
-        } else {
-            let count = n.to_string();
-            let mut a = vec!["--iface", &slave, "--count", &count];
-            if busy_poll {
-                a.push("--busy-poll");
-            }
-            if no_ahead {
-                a.push("--no-answer-ahead");
-            }
-            ns.start(&bin, &a);
-            for i in 0..n as u16 {
-                let (f, ends) = config_frame(i);
-                let (r, _) = m.exchange(&f);
-                assert!(
-                    ends.iter().all(|&e| wkc(&r, e) == 1),
-                    "slave {i} configured"
-                );
-            }
+    for n in [1usize, 8, 64] {
+        floor_link.start(&bin, &["--reflect"]);
+        let count = n.to_string();
+        let mut a = vec!["--count", &count];
+        if busy_poll {
+            a.push("--busy-poll");
+        }
+        if no_ahead {
+            a.push("--no-answer-ahead");
+        }
+        runner_link.start(&bin, &a);
+        for i in 0..n as u16 {
+            let (f, ends) = config_frame(i);
+            let (r, _) = runner_link.master.exchange(&f);
+            assert!(
+                ends.iter().all(|&e| wkc(&r, e) == 1),
+                "slave {i} configured"
+            );
         }
         let (f, ends) = cycle_frame(n);
-        let mut times = Vec::with_capacity(frames);
+        let (mut floor_times, mut runner_times) =
+            (Vec::with_capacity(frames), Vec::with_capacity(frames));
         let mut next = Instant::now();
         for k in 0..frames + 1000 {
-            if !pace.is_zero() {
-                // The next cycle starts one period after the last one
-                // started (a master's cycle timer), not after its answer.
-                next += pace;
-                let now = Instant::now();
-                if next > now {
-                    std::thread::sleep(next - now);
+            // Each cycle: the floor's frame, then half a period later the
+            // runner's, so both see one frame per period and whatever the
+            // host does to the round trips falls on both alike.
+            for runner in [false, true] {
+                if !pace.is_zero() {
+                    // One period after the last one started (a master's
+                    // cycle timer), not after its answer.
+                    next += pace / 2;
+                    let now = Instant::now();
+                    if next > now {
+                        std::thread::sleep(next - now);
+                    } else {
+                        next = now;
+                    }
+                }
+                let link = if runner {
+                    &mut runner_link
                 } else {
-                    next = now;
+                    &mut floor_link
+                };
+                let (r, t) = link.master.exchange(&f);
+                if runner {
+                    assert_eq!(
+                        usize::from(wkc(&r, ends[0])),
+                        3 * n,
+                        "LRW reached every slave"
+                    );
+                    assert_eq!(usize::from(wkc(&r, ends[1])), n, "BRD reached every slave");
+                }
+                // The first 1000 warm up the caches and the scheduler.
+                if k >= 1000 {
+                    if runner {
+                        runner_times.push(t);
+                    } else {
+                        floor_times.push(t);
+                    }
                 }
             }
-            let (r, t) = m.exchange(&f);
-            if !is_floor {
-                assert_eq!(
-                    usize::from(wkc(&r, ends[0])),
-                    3 * n,
-                    "LRW reached every slave"
-                );
-                assert_eq!(usize::from(wkc(&r, ends[1])), n, "BRD reached every slave");
-            }
-            // The first 1000 warm up the caches and the scheduler.
-            if k >= 1000 {
-                times.push(t);
-            }
         }
-        times.sort_unstable();
-        let (p50, p99) = (percentile(&times, 0.5), percentile(&times, 0.99));
-        let p999 = percentile(&times, 0.999);
-        let max = *times.last().expect("samples");
-        let (r50, r99) = match floor.take() {
-            Some((f50, f99)) if !is_floor => (
-                format!("{:.2}", us(p50) / us(f50)),
-                format!("{:.2}", us(p99) / us(f99)),
-            ),
-            _ => {
-                floor = Some((p50, p99));
-                ("1".into(), "1".into())
-            }
+        runner_link.stop();
+        floor_link.stop();
+        let stats = |times: &mut Vec<Duration>| {
+            times.sort_unstable();
+            let max = *times.last().expect("samples");
+            (
+                percentile(times, 0.5),
+                percentile(times, 0.99),
+                percentile(times, 0.999),
+                max,
+            )
         };
-        println!(
-            "| {name} | {:.1} | {:.1} | {:.1} | {:.1} | {r50} | {r99} |",
-            us(p50),
-            us(p99),
-            us(p999),
-            us(max)
-        );
+        let fl = stats(&mut floor_times);
+        let ru = stats(&mut runner_times);
+        for (name, (p50, p99, p999, max)) in
+            [(format!("floor/{n}"), fl), (format!("runner/{n}"), ru)]
+        {
+            println!(
+                "| {name} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} |",
+                us(p50),
+                us(p99),
+                us(p999),
+                us(max),
+                us(p50) / us(fl.0),
+                us(p99) / us(fl.1)
+            );
+        }
     }
 }

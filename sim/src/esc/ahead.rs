@@ -131,7 +131,7 @@ impl SoftEsc {
     /// the data, worked out without reading: `Some(Some(bytes))` (the
     /// working counter counts this ESC), `Some(None)` (the ESC does not
     /// implement those registers: no answer), or `None` beyond the
-    /// registers that may be read ahead ([`QUIET_REGISTERS_END`]).
+    /// registers that may be read ahead (those below 0x0200).
     pub fn broadcast_read_ahead(&self, ado: u16, len: usize) -> Option<Option<&[u8]>> {
         let a = u32::from(ado);
         let b = a + u32::try_from(len).ok()?;
