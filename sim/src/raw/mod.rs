@@ -305,7 +305,8 @@ pub fn run(
     let mut turns = FirmwareTurns::new(Instant::now());
     // Replies worked out ahead; forgotten whenever anything runs on the
     // line.
-    let mut answers = AheadAnswers::new(config.answer_ahead);
+    // (Not on a faulty wire: its frames take their fate first.)
+    let mut answers = AheadAnswers::new(config.answer_ahead && config.faults.is_none());
     std::thread::scope(|scope| {
         let relay = out.as_ref().zip(out_iface.as_ref()).map(|(o, out_nic)| {
             let (o, shared, done) = (Arc::clone(o), &shared, &done);
@@ -352,6 +353,18 @@ pub fn run(
                             continue;
                         }
                         let arrived = clock();
+                        // A process-data frame of the shape worked out
+                        // ahead is answered before anything else is looked
+                        // at (after a cycle's sleep each cache line and
+                        // page on the way to the reply costs); the ESCs
+                        // then run on it as on any other, and must reply
+                        // the same.
+                        let ahead = if let Some(r) = answers.answer(buf) {
+                            reply(&sock, &mut port1, r)?;
+                            true
+                        } else {
+                            false
+                        };
                         cycle.arrival(arrived);
                         if let Some(p) = pcap.as_mut() {
                             let _ = p.write_frame(buf);
@@ -373,24 +386,10 @@ pub fn run(
                             continue;
                         }
                         let request = (fate == Fate::Duplicate).then(|| buf.to_vec());
-                        // A process-data frame of the shape worked out
-                        // ahead is answered at once; the ESCs then run on
-                        // it as on any other, and must reply the same.
-                        let answered = match fate {
-                            Fate::Deliver => answers.answer(buf),
-                            _ => None,
-                        };
-                        let ahead = match answered {
-                            Some(r) => {
-                                reply(&sock, &mut port1, r)?;
-                                true
-                            }
-                            None => {
-                                answers.forget();
-                                answers.learn(buf);
-                                false
-                            }
-                        };
+                        if !ahead {
+                            answers.forget();
+                            answers.learn(buf);
+                        }
                         // As on silicon, the ESCs answer the frame at once;
                         // the firmware runs afterwards, once no frame
                         // waits. A slow firmware step (a flash write with
