@@ -234,7 +234,26 @@ impl Line {
     pub fn exchange(&mut self, frame: &mut [u8]) -> FrameOutcome {
         self.now_ns += STEP_NS;
         match self.path {
-            Path::Dispatch => self.chain.process(frame, self.now_ns),
+            Path::Dispatch => {
+                // Where the line works out an answer ahead (what the
+                // runner sends before the ESCs run), it is the line's
+                // reply to the frame, byte for byte.
+                let ahead = self.chain.ahead(frame).map(|a| {
+                    let mut reply = frame.to_vec();
+                    (a.answer(&mut reply), reply)
+                });
+                let outcome = self.chain.process_frame_at(frame, self.now_ns);
+                if let Some((answered, reply)) = ahead {
+                    assert!(answered, "the answer ahead refused its own frame");
+                    assert_eq!(
+                        reply.as_slice(),
+                        &*frame,
+                        "the answer ahead differs from the line's reply"
+                    );
+                }
+                let _ = self.chain.service(self.now_ns);
+                outcome
+            }
             Path::Serial => {
                 let outcome = self.chain.process_serial_at(frame, self.now_ns);
                 let _ = self.chain.poll(self.now_ns);

@@ -1023,6 +1023,7 @@ impl Chain {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::one_datagram;
     use ecat_slave::wire::builder::FrameBuilder;
     use proptest::prelude::*;
 
@@ -1237,15 +1238,6 @@ mod tests {
         line.process_frame(f);
         let wkc = u16::from_le_bytes([f[read.end], f[read.end + 1]]);
         assert_eq!(wkc, 1, "FPRD by the reloaded alias answered on the line");
-    }
-
-    fn one_datagram(cmd: Command, address: u32, data: &[u8]) -> Vec<u8> {
-        let mut buf = vec![0u8; 200];
-        let mut fb = FrameBuilder::new(&mut buf, [0x10; 6]).unwrap();
-        fb.push(cmd, address, data).unwrap();
-        let len = fb.finish();
-        buf.truncate(len);
-        buf
     }
 
     fn al_status(line: &Chain, i: usize) -> u16 {

@@ -46,15 +46,10 @@ impl SoftEsc {
         }
         let start = u64::from(addr);
         let end = start + len as u64;
-        let want_read = matches!(cmd, Command::Lrd | Command::Lrw);
-        let want_write = matches!(cmd, Command::Lwr | Command::Lrw);
         let (mut read_hit, mut write_hit) = (false, false);
+        // As `logical`: writes first (they change no data), then reads.
         for pass_write in [true, false] {
-            let mut bits = match (pass_write, want_write, want_read) {
-                (true, true, _) => self.fmmu_writes,
-                (false, _, true) => self.fmmu_reads,
-                _ => 0,
-            };
+            let mut bits = self.pass_fmmus(cmd, pass_write);
             while bits != 0 {
                 let i = bits.trailing_zeros() as usize;
                 bits &= bits - 1;
@@ -91,10 +86,7 @@ impl SoftEsc {
                 }
             }
         }
-        Some(match cmd {
-            Command::Lrw => u16::from(read_hit) + 2 * u16::from(write_hit),
-            _ => u16::from(read_hit || write_hit),
-        })
+        Some(fmmu::logical_wkc(cmd, read_hit, write_hit))
     }
 
     /// Whether some enabled writing FMMU of this ESC maps physical memory

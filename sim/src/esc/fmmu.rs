@@ -63,6 +63,17 @@ impl FmmuConfig {
     }
 }
 
+/// The working counter increment of a logical command that read
+/// (`read_hit`) or wrote (`write_hit`) through some FMMU: LRW +1 for a
+/// read and +2 for a write, LRD and LWR +1.
+#[inline]
+pub(super) fn logical_wkc(cmd: Command, read_hit: bool, write_hit: bool) -> u16 {
+    match cmd {
+        Command::Lrw => u16::from(read_hit) + 2 * u16::from(write_hit),
+        _ => u16::from(read_hit || write_hit),
+    }
+}
+
 impl SoftEsc {
     /// Changes whenever the FMMU configuration may have changed (a write
     /// to the FMMU registers, a power-on), so a line can cache which slave
@@ -183,8 +194,6 @@ impl SoftEsc {
         }
         let start = u64::from(addr);
         let end = start + data.len() as u64;
-        let want_read = matches!(cmd, Command::Lrd | Command::Lrw);
-        let want_write = matches!(cmd, Command::Lwr | Command::Lrw);
         if self.routes_stale {
             self.reroute();
         }
@@ -192,11 +201,7 @@ impl SoftEsc {
         let mut write_hit = false;
         // Writes first, with the data as it arrived; then reads overwrite.
         for pass_write in [true, false] {
-            let mut bits = match (pass_write, want_write, want_read) {
-                (true, true, _) => self.fmmu_writes,
-                (false, _, true) => self.fmmu_reads,
-                _ => 0,
-            };
+            let mut bits = self.pass_fmmus(cmd, pass_write);
             while bits != 0 {
                 let i = bits.trailing_zeros() as usize;
                 bits &= bits - 1;
@@ -238,9 +243,17 @@ impl SoftEsc {
                 }
             }
         }
-        match cmd {
-            Command::Lrw => u16::from(read_hit) + 2 * u16::from(write_hit),
-            _ => u16::from(read_hit || write_hit),
+        logical_wkc(cmd, read_hit, write_hit)
+    }
+
+    /// The FMMUs that a logical command's write pass (`write`) or read
+    /// pass reaches (bit n = FMMU n).
+    #[inline]
+    pub(super) fn pass_fmmus(&self, cmd: Command, write: bool) -> u8 {
+        match (write, cmd) {
+            (true, Command::Lwr | Command::Lrw) => self.fmmu_writes,
+            (false, Command::Lrd | Command::Lrw) => self.fmmu_reads,
+            _ => 0,
         }
     }
 

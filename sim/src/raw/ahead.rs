@@ -117,17 +117,9 @@ fn carries_process_data(frame: &[u8]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ecat_slave::wire::builder::FrameBuilder;
     use ecat_slave::wire::ecat::Command;
 
-    fn frame(cmd: Command, address: u32, data: &[u8]) -> Vec<u8> {
-        let mut buf = vec![0u8; 200];
-        let mut fb = FrameBuilder::new(&mut buf, [0x10; 6]).unwrap();
-        fb.push(cmd, address, data).unwrap();
-        let len = fb.finish();
-        buf.truncate(len);
-        buf
-    }
+    use crate::testing::one_datagram as frame;
 
     /// A line of one slave with 4 output bytes at logical 0 (into 0x1100),
     /// one cycle run.
