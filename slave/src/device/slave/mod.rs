@@ -546,15 +546,20 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             }
         }
         self.supervise(events)?;
+        // The outputs before the mailbox: a master that wrote outputs and
+        // then asks for them by SDO gets the values it wrote even when
+        // both reach the firmware in one pass (the frame with the SDO
+        // request can arrive before the firmware ran after the process
+        // data frame; the SSC's SM2 interrupt has the same order).
+        let pd = matches!(self.al.state, AlState::SafeOp | AlState::Op);
+        if pd {
+            self.read_outputs(events)?;
+        }
         if matches!(
             self.al.state,
             AlState::PreOp | AlState::SafeOp | AlState::Op | AlState::Boot
         ) {
             self.serve_mailbox(images)?;
-        }
-        let pd = matches!(self.al.state, AlState::SafeOp | AlState::Op);
-        if pd {
-            self.read_outputs(events)?;
         }
         self.sync0(events)?;
         self.run_app();
