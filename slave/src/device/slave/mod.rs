@@ -414,9 +414,9 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         self.no_valid_firmware
     }
 
-    /// Runs the firmware once at time `now_ns`: AL control, mailbox,
-    /// process data, application. Returns an error only if the PDI itself
-    /// fails.
+    /// Runs the firmware once at time `now_ns`: AL control, supervision,
+    /// the outputs, the mailbox, the application, the inputs. Returns an
+    /// error only if the PDI itself fails.
     pub fn poll(&mut self, now_ns: u64) -> Result<(), EscError> {
         self.poll_with(now_ns, None)
     }
