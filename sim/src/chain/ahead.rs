@@ -278,6 +278,7 @@ impl Ahead {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::{fmmu, sm};
     use ecat_slave::esc::Esc;
     use ecat_slave::wire::builder::FrameBuilder;
     use proptest::prelude::*;
@@ -294,29 +295,6 @@ mod tests {
         let len = fb.finish();
         buf.truncate(len);
         buf
-    }
-
-    /// FMMU registers: `len` bytes at `logical` to `physical`, reading
-    /// (`kind` 1) or writing (2), bit 0 to 7.
-    fn fmmu(logical: u32, len: u16, physical: u16, kind: u8) -> Vec<u8> {
-        let mut f = vec![0u8; 16];
-        f[0..4].copy_from_slice(&logical.to_le_bytes());
-        f[4..6].copy_from_slice(&len.to_le_bytes());
-        f[7] = 7;
-        f[8..10].copy_from_slice(&physical.to_le_bytes());
-        f[11] = kind;
-        f[12] = 1;
-        f
-    }
-
-    /// SyncManager registers: `len` bytes at `start`, `control`, enabled.
-    fn sm(start: u16, len: u16, control: u8) -> Vec<u8> {
-        let mut s = vec![0u8; 8];
-        s[0..2].copy_from_slice(&start.to_le_bytes());
-        s[2..4].copy_from_slice(&len.to_le_bytes());
-        s[4] = control;
-        s[6] = 1;
-        s
     }
 
     fn configured(address: u16, ado: u16) -> u32 {

@@ -125,12 +125,7 @@ mod tests {
     /// one cycle run.
     fn line() -> Chain {
         let mut line = crate::testing::line(1);
-        let mut f = [0u8; 16];
-        f[4] = 4;
-        f[7] = 7;
-        f[8..10].copy_from_slice(&0x1100u16.to_le_bytes());
-        f[11] = 2;
-        f[12] = 1;
+        let f = crate::testing::fmmu(0, 4, 0x1100, 2);
         line.process_frame(&mut frame(Command::Apwr, 0x0600 << 16, &f));
         line.process_frame(&mut frame(Command::Lwr, 0, &[0; 4]));
         line
