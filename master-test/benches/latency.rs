@@ -20,7 +20,9 @@
 //! code. It prints p50, p99, p99.9 and max per case and the ratio
 //! runner/floor at p50 and p99. `--pace-us N` sends one frame every N us
 //! to each (1000: a 1 kHz cyclic master), back to back by default;
-//! `--busy-poll` and `--no-answer-ahead` pass those flags to the runners.
+//! `--busy-poll` and `--no-answer-ahead` pass those flags to the runners;
+//! `--dump FILE` writes every timed round trip (`slaves case index µs`)
+//! for a look at the tail.
 //! Needs root and iproute2 (the namespaces are removed at the end); builds
 //! `pam-slave` in release mode first.
 //!
@@ -293,6 +295,12 @@ fn main() {
     println!("|---|---|---|---|---|---|---|");
     let busy_poll = args.iter().any(|a| a == "--busy-poll");
     let no_ahead = args.iter().any(|a| a == "--no-answer-ahead");
+    // `--dump FILE`: every timed round trip as `slaves case index µs`.
+    let mut dump = args
+        .iter()
+        .position(|a| a == "--dump")
+        .and_then(|i| args.get(i + 1))
+        .map(|p| std::io::BufWriter::new(std::fs::File::create(p).expect("--dump file")));
     for n in [1usize, 8, 64] {
         floor_link.start(&bin, &["--reflect"]);
         let count = n.to_string();
@@ -348,6 +356,11 @@ fn main() {
                 }
                 // The first 1000 warm up the caches and the scheduler.
                 if k >= 1000 {
+                    if let Some(d) = dump.as_mut() {
+                        use std::io::Write;
+                        let case = if runner { "runner" } else { "floor" };
+                        writeln!(d, "{n} {case} {} {:.1}", k - 1000, us(t)).expect("--dump");
+                    }
                     if runner {
                         runner_times.push(t);
                     } else {

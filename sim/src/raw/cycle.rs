@@ -33,6 +33,10 @@ const WINDOW_SHARE: u64 = 10;
 /// Margin added on each side of the window beyond twice the jitter.
 const WINDOW_MARGIN_NS: u64 = 10_000;
 
+/// Longest time after the expected frame that a timer keeps clear of it
+/// ([`Window::clear`]).
+pub const CLEAR_AFTER_NS: u64 = 500_000;
+
 /// The measured cycle of a master (all times in ns on one clock).
 #[derive(Debug, Clone, Default)]
 pub struct CycleWatch {
@@ -54,6 +58,13 @@ pub struct Window {
     pub expected: u64,
     /// Stop polling here (the frame is late or the master stopped).
     pub until: u64,
+    /// The earliest time after the window at which a timer of the runner
+    /// (its idle firmware run) does not meet the frame's round trip or
+    /// the work right after it: half a period after the expected time, at
+    /// most [`CLEAR_AFTER_NS`], never before `until`. A timer at `until`
+    /// fires just after a frame that came in time, often while it is
+    /// being answered or the master takes the answer.
+    pub clear: u64,
 }
 
 impl CycleWatch {
@@ -102,10 +113,14 @@ impl CycleWatch {
         let period = self.period()?;
         let expected = self.last_start?.saturating_add(period);
         let half = (2 * self.jitter + WINDOW_MARGIN_NS).min(period / WINDOW_SHARE);
+        let until = expected.saturating_add(half);
         Some(Window {
             from: expected.saturating_sub(half),
             expected,
-            until: expected.saturating_add(half),
+            until,
+            clear: expected
+                .saturating_add((period / 2).min(CLEAR_AFTER_NS))
+                .max(until),
         })
     }
 }
@@ -134,6 +149,23 @@ mod tests {
         // Within a tenth of the period on each side.
         assert!(win.expected - win.from <= 100 * US, "{win:?}");
         assert!(win.until - win.expected <= 100 * US, "{win:?}");
+    }
+
+    #[test]
+    fn timers_keep_clear_of_the_frame_for_half_a_period_at_most_500_us() {
+        let at_1_khz = fed((0..20).map(|k| k * MS)).window().expect("cyclic");
+        assert_eq!(at_1_khz.clear, 20 * MS + 500 * US);
+        let at_4_khz = fed((0..20).map(|k| k * 250 * US)).window().expect("cyclic");
+        assert_eq!(at_4_khz.clear, 20 * 250 * US + 125 * US);
+        // A slow, jittery master's window reaches further than that.
+        let at_20_hz = fed((0..20).map(|k| k * 50 * MS + (k % 2) * 2 * MS))
+            .window()
+            .expect("cyclic");
+        assert!(
+            at_20_hz.until > at_20_hz.expected + 500 * US,
+            "{at_20_hz:?}"
+        );
+        assert_eq!(at_20_hz.clear, at_20_hz.until);
     }
 
     #[test]
