@@ -248,6 +248,34 @@ fn outputs_reach_the_board_only_while_the_device_is_in_op() {
 }
 
 #[test]
+fn an_sdo_read_of_outputs_in_the_same_firmware_pass_sees_the_new_outputs() {
+    // A master writes outputs and then reads one back by SDO; both reach
+    // the firmware in one pass (the SDO request frame came before the
+    // firmware ran after the process-data frame). The pass takes the
+    // outputs first, as the SSC's SM2 interrupt does, so the SDO answer
+    // has the value just written.
+    let mut m = Master::new();
+    m.bring_to_op();
+    m.cycle(0x00, 1);
+    assert_eq!(m.slave.slave().od().get(OUTPUTS, 1), Some(0));
+    let layout = DEVICE.layout();
+    m.write(layout.pd_out, &[0xA5]);
+    // ETG.1000.6 5.6.2.4, SDO upload request of 0x7000:01: mailbox header
+    // (length 10, CoE, counter 1), CoE header (SDO request), initiate
+    // upload.
+    let mut request = vec![
+        10, 0, 0, 0, 0, 0x13, 0x00, 0x20, 0x40, 0x00, 0x70, 0x01, 0, 0, 0, 0,
+    ];
+    request.resize(usize::from(layout.mbx_out.1), 0);
+    m.write(layout.mbx_out.0, &request);
+    m.poll(1);
+    let response = m.read(layout.mbx_in.0, usize::from(layout.mbx_in.1));
+    // CoE SDO response, expedited upload of one byte: output 1 of 0xA5.
+    assert_eq!(&response[6..12], &[0x00, 0x30, 0x4F, 0x00, 0x70, 0x01]);
+    assert_eq!(response[12], 1, "0x7000:01 after outputs 0xA5");
+}
+
+#[test]
 fn an_expired_sm_watchdog_switches_the_outputs_off() {
     let mut m = Master::new();
     m.bring_to_op();
