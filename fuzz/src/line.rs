@@ -240,7 +240,7 @@ impl Line {
                 // reply to the frame, byte for byte.
                 let ahead = self.chain.ahead(frame).map(|a| {
                     let mut reply = frame.to_vec();
-                    (a.answer(&mut reply), reply)
+                    (a.answer(&mut reply, self.now_ns), reply)
                 });
                 let outcome = self.chain.process_frame_at(frame, self.now_ns);
                 if let Some((answered, reply)) = ahead {

@@ -424,6 +424,15 @@ fn soem_power_cycled_phases(
         eprintln!("--- SOEM {name} {} ---\n{out}", phase[0]);
         stop_runner(guard.runner.take().expect("runner"));
         assert!(ok, "SOEM {name} phase {} failed (log above)", phase[0]);
+        let text = std::fs::read_to_string(file(&format!("runner-{k}.log"))).unwrap_or_default();
+        eprintln!("--- runner-{k}.log ---\n{text}");
+        assert!(
+            text.contains("stopped after"),
+            "the runner stopped cleanly: {text}"
+        );
+        // Every frame answered ahead (SOEM's DC frames among them) got
+        // the reply the ESCs then gave.
+        assert!(!text.contains("differed"), "answers ahead: {text}");
     }
 }
 

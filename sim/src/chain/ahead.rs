@@ -10,7 +10,11 @@
 //! SyncManagers, broadcast reads of the status registers) in a simple way:
 //! every byte of the reply is either the master's byte or a byte of some
 //! ESC's memory (copied in by a read window, ORed in by a broadcast read),
-//! and the working counters depend on the configuration alone. A runner
+//! and the working counters depend on the configuration alone. The read
+//! of the DC system time a master with Distributed Clocks adds to its
+//! cycle (FRMW or ARMW of 0x0910) depends on the frame's time as well: the
+//! reference clock is worked out ahead and read once that time is known
+//! ([`Ahead::answer`] takes it). A runner
 //! works that out with [`Chain::ahead`] once the firmware has run (the
 //! state is in the caches then), answers the next frame of that shape with
 //! [`Ahead::answer`] and then runs the ESCs on it as always
@@ -23,7 +27,7 @@
 //! line (a frame, the firmware, a link change).
 
 use super::Chain;
-use crate::esc::SoftEsc;
+use crate::esc::{SoftEsc, SystemTimeAhead};
 use ecat_slave::wire::ecat::{Addressing, Command, Datagram, DatagramCursor, EcatFrame, FrameType};
 use ecat_slave::wire::ethernet::{ETHERTYPE_ETHERCAT, EthernetFrame};
 use std::ops::Range;
@@ -43,6 +47,21 @@ struct Expected {
     wkc_add: u16,
     /// Its changes to the data: `ops[ops.start..ops.end]`.
     ops: Range<usize>,
+    /// A read of the DC system time (FRMW, ARMW), read from the clock
+    /// when the frame's time is known.
+    time: Option<TimeRead>,
+}
+
+/// The DC system time a read-multiple-write takes from its reader: bytes
+/// `skip..skip + len` of the little-endian time at the frame's passing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct TimeRead {
+    clock: SystemTimeAhead,
+    /// When the frame passes the reader's port 0, after it entered the
+    /// line (its position × the hop delay).
+    after_ns: u64,
+    skip: usize,
+    len: usize,
 }
 
 /// One change to a datagram's data: `len` bytes at `at`, from
@@ -68,11 +87,13 @@ pub struct Ahead {
 }
 
 impl Ahead {
-    /// Turns `frame` (a request of the shape this was worked out for)
-    /// into the line's reply in place and returns `true`; returns `false`
-    /// for a frame of another shape (other length, commands, addresses),
-    /// which may then be partly changed and must not be sent.
-    pub fn answer(&self, frame: &mut [u8]) -> bool {
+    /// Turns `frame` (a request of the shape this was worked out for),
+    /// entering the line at `now_ns` (the time [`Chain::process_frame_at`]
+    /// then gets), into the line's reply in place and returns `true`;
+    /// returns `false` for a frame of another shape (other length,
+    /// commands, addresses), which may then be partly changed and must
+    /// not be sent.
+    pub fn answer(&self, frame: &mut [u8], now_ns: u64) -> bool {
         if frame.len() != self.frame_len {
             return false;
         }
@@ -118,6 +139,15 @@ impl Ahead {
                 dg.set_wkc(dg.wkc().wrapping_add(e.wkc_add));
             }
             let data = dg.data_mut();
+            if let Some(r) = e.time {
+                let time = r.clock.at(now_ns.saturating_add(r.after_ns)).to_le_bytes();
+                let (Some(dst), Some(src)) =
+                    (data.get_mut(..r.len), time.get(r.skip..r.skip + r.len))
+                else {
+                    return false;
+                };
+                dst.copy_from_slice(src);
+            }
             for op in self.ops.get(e.ops.clone()).unwrap_or_default() {
                 let (Some(dst), Some(src)) = (
                     data.get_mut(op.at..op.at + op.len),
@@ -143,8 +173,9 @@ impl Chain {
     /// The reply to frames of `request`'s shape, worked out now from the
     /// line's state ([`Ahead`]; valid until anything runs on the line), or
     /// `None` when the line's reply could depend on more than that: a
-    /// datagram other than a logical read or write or a broadcast read of
-    /// the registers below 0x0200 (DC time, mailboxes, any write to
+    /// datagram other than a logical read or write, a broadcast read of
+    /// the registers below 0x0200 or one read of the DC system time by
+    /// FRMW or ARMW (mailboxes, other DC registers, any other access to
     /// physical memory), a window the ESCs' general path takes, a write
     /// window over a read window, or indexes to rebuild first.
     pub fn ahead(&self, request: &[u8]) -> Option<Ahead> {
@@ -169,6 +200,7 @@ impl Chain {
         };
         let payload = ecat.payload();
         let mut cursor = DatagramCursor::new();
+        let mut time_read = false;
         while let Some(next) = cursor.next_range(payload) {
             let range = next.ok()?;
             let dg = Datagram::new_checked(payload.get(range.clone())?).ok()?;
@@ -176,6 +208,7 @@ impl Chain {
             let len = usize::from(dg.data_len());
             let first_op = ahead.ops.len();
             let (mut adp_add, mut wkc_add) = (0u16, 0u16);
+            let mut time = None;
             match cmd {
                 Command::Nop => {}
                 Command::Lrd | Command::Lwr | Command::Lrw => {
@@ -202,6 +235,39 @@ impl Chain {
                         ahead.push(first_op, 0, &mask, true);
                     }
                 }
+                // The DC system time: the reader's time as the frame
+                // passes it, every other ESC writes (its own drift
+                // control, nothing the reply shows). One per frame: the
+                // writes change the writers' clocks.
+                Command::Frmw | Command::Armw if !time_read => {
+                    time_read = true;
+                    let (adp, ado) = (dg.adp(), dg.ado());
+                    for (i, s) in self.slaves.iter().enumerate() {
+                        let esc = s.esc();
+                        let Some(clock) = esc.system_time_ahead(ado, len)? else {
+                            continue;
+                        };
+                        wkc_add = wkc_add.wrapping_add(1);
+                        let reads = if cmd == Command::Frmw {
+                            esc.answers_to(adp)
+                        } else {
+                            adp.wrapping_add(i as u16) == 0
+                        };
+                        if reads {
+                            if time.is_some() {
+                                // Two readers: the later overwrites.
+                                return None;
+                            }
+                            time = Some(TimeRead {
+                                clock,
+                                after_ns: (i as u64).saturating_mul(self.hop_ns),
+                                skip: usize::from(ado)
+                                    - usize::from(ecat_slave::esc::registers::DC_SYSTEM_TIME),
+                                len,
+                            });
+                        }
+                    }
+                }
                 _ => return None,
             }
             if matches!(
@@ -218,6 +284,7 @@ impl Chain {
                 adp_add,
                 wkc_add,
                 ops: first_op..ahead.ops.len(),
+                time,
             });
         }
         Some(ahead)
@@ -363,7 +430,7 @@ mod tests {
         let ahead = line.ahead(&cyclic(0x11)).expect("a process-data frame");
         let request = cyclic(0x22);
         let mut answered = request.clone();
-        assert!(ahead.answer(&mut answered));
+        assert!(ahead.answer(&mut answered, 0));
         let mut processed = request.clone();
         line.process_frame(&mut processed);
         assert_eq!(answered, processed);
@@ -384,6 +451,70 @@ mod tests {
         assert_eq!(dgs[1].adp(), N);
     }
 
+    /// SOEM's and ethercrab's cyclic frame with Distributed Clocks: the
+    /// process data and a FRMW of the reference clock's system time.
+    fn cyclic_dc(outputs: u8, reference: u16) -> Vec<u8> {
+        frame(&[
+            (Command::Lrw, 0, vec![outputs; 8 * usize::from(N)]),
+            (Command::Frmw, configured(reference, 0x0910), vec![0; 8]),
+        ])
+    }
+
+    #[test]
+    fn a_dc_time_read_is_answered_with_the_reference_clock_at_the_frames_time() {
+        let mut line = pd_line();
+        // The reference clock (slave 1) runs 100 ppm fast and has an
+        // offset; every other slave writes the time into its own 0x0910.
+        line.slaves_mut()[1].esc_mut().set_dc_oscillator(100_000);
+        let offset = 7_000_000_000u64.to_le_bytes();
+        let mut f = frame(&[(Command::Fpwr, configured(0x1001, 0x0920), offset.to_vec())]);
+        line.process_frame_at(&mut f, 1_000_000);
+        line.process_frame_at(&mut cyclic_dc(0, 0x1001), 2_000_000);
+        for (t, outputs) in [(3_000_000u64, 0x33u8), (4_000_250, 0x44)] {
+            let ahead = line.ahead(&cyclic_dc(0, 0x1001)).expect("answered ahead");
+            let request = cyclic_dc(outputs, 0x1001);
+            let mut answered = request.clone();
+            assert!(ahead.answer(&mut answered, t));
+            let mut processed = request.clone();
+            line.process_frame_at(&mut processed, t);
+            assert_eq!(answered, processed, "at {t} ns");
+            let eth = EthernetFrame::new_checked(&answered[..]).unwrap();
+            let ecat = EcatFrame::new_checked(eth.payload()).unwrap();
+            let dc = ecat.datagrams().nth(1).unwrap().unwrap();
+            let dc = Datagram::new_checked(&ecat.payload()[dc]).unwrap();
+            // Slave 1 reads (one hop after the frame entered), the other
+            // five write: all six count.
+            let esc = line.slaves()[1].esc();
+            let time = u64::from_le_bytes(dc.data().try_into().unwrap());
+            assert_eq!(time, esc.dc_system_time(t + crate::chain::DEFAULT_HOP_NS));
+            assert!(time > 7_000_000_000 + t);
+            assert_eq!(dc.wkc(), N);
+        }
+        // An ARMW at position 0: the first slave reads.
+        let armw = |b: u8| {
+            frame(&[
+                (Command::Lrw, 0, vec![b; 8 * usize::from(N)]),
+                (Command::Armw, 0x0910 << 16, vec![0; 8]),
+            ])
+        };
+        line.process_frame_at(&mut armw(0), 5_000_000);
+        let ahead = line.ahead(&armw(0)).expect("answered ahead");
+        let mut answered = armw(1);
+        assert!(ahead.answer(&mut answered, 6_000_000));
+        let mut processed = armw(1);
+        line.process_frame_at(&mut processed, 6_000_000);
+        assert_eq!(answered, processed);
+        // A FRMW to an address nobody has: every slave writes, the data
+        // stays the master's.
+        line.process_frame_at(&mut cyclic_dc(0, 0x2000), 7_000_000);
+        let ahead = line.ahead(&cyclic_dc(0, 0x2000)).expect("answered ahead");
+        let mut answered = cyclic_dc(5, 0x2000);
+        assert!(ahead.answer(&mut answered, 8_000_000));
+        let mut processed = cyclic_dc(5, 0x2000);
+        line.process_frame_at(&mut processed, 8_000_000);
+        assert_eq!(answered, processed);
+    }
+
     #[test]
     fn a_frame_of_another_shape_is_not_answered() {
         let line = pd_line();
@@ -399,19 +530,26 @@ mod tests {
         ]);
         let fewer = frame(&[(Command::Lrw, 0, vec![0; 8 * usize::from(N) + 12])]);
         for mut f in [other_length, other_address, other_command, fewer] {
-            assert!(!ahead.answer(&mut f));
+            assert!(!ahead.answer(&mut f, 0));
         }
-        assert!(!ahead.answer(&mut [0u8; 10]));
-        assert!(!ahead.answer(&mut []));
+        assert!(!ahead.answer(&mut [0u8; 10], 0));
+        assert!(!ahead.answer(&mut [], 0));
     }
 
     #[test]
     fn frames_whose_reply_depends_on_more_than_memory_are_not_worked_out() {
         let line = pd_line();
         let declined = [
-            // DC system time: the clock at the frame's arrival.
-            frame(&[(Command::Frmw, configured(0x1000, 0x0910), vec![0; 8])]),
+            // DC registers other than a read-multiple-write of the
+            // system time, or two of those (the writes of the first
+            // change the writers' clocks).
             frame(&[(Command::Brd, 0x0910 << 16, vec![0; 8])]),
+            frame(&[(Command::Frmw, configured(0x1000, 0x0918), vec![0; 8])]),
+            frame(&[(Command::Frmw, configured(0x1000, 0x090c), vec![0; 8])]),
+            frame(&[
+                (Command::Frmw, configured(0x1000, 0x0910), vec![0; 8]),
+                (Command::Frmw, configured(0x1001, 0x0910), vec![0; 8]),
+            ]),
             // Event registers a SyncManager completion changes.
             frame(&[(Command::Brd, 0x0220 << 16, vec![0; 4])]),
             // Writes, physical reads with side effects.
@@ -448,10 +586,19 @@ mod tests {
     #[derive(Debug, Clone)]
     enum Step {
         /// A cyclic frame: logical datagrams (command, start, length), an
-        /// optional BRD (register, length), the output data byte; the
-        /// answer is worked out from a frame of the same shape with other
-        /// data.
-        Cyclic(Vec<(Command, u32, usize)>, Option<(u16, usize)>, u8),
+        /// optional BRD (register, length), an optional read-multiple-write
+        /// (FRMW or ARMW, address, register, length), the output data
+        /// byte, the time since the last frame; the answer is worked out
+        /// from a frame of the same shape with other data.
+        Cyclic(
+            Vec<(Command, u32, usize)>,
+            Option<(u16, usize)>,
+            Option<(Command, u16, u16, usize)>,
+            u8,
+            u64,
+        ),
+        /// A slave's DC oscillator runs fast or slow (ppb).
+        Oscillator(usize, i64),
         /// A slave's firmware publishes inputs or writes elsewhere.
         Pdi(usize, u16, Vec<u8>),
         /// A master reconfigures a slave (FMMU or SyncManager registers,
@@ -478,14 +625,29 @@ mod tests {
                     1..4,
                 ),
                 proptest::option::of((0u16..0x0240, 1usize..9)),
+                proptest::option::of((
+                    prop_oneof![Just(Command::Frmw), Just(Command::Armw)],
+                    prop_oneof![0x1000u16..0x1000 + N, Just(0x2000), 0u16..2, Just(0xfffe)],
+                    prop_oneof![Just(0x0910u16), 0x0908u16..0x0920],
+                    prop_oneof![Just(8usize), Just(4), 1usize..9],
+                )),
                 any::<u8>(),
+                prop_oneof![Just(1_000_000u64), 0u64..3_000_000],
             )
-                .prop_map(|(l, b, d)| Step::Cyclic(l, b, d)),
+                .prop_map(|(l, b, dc, d, dt)| Step::Cyclic(l, b, dc, d, dt)),
+            1 => (0..usize::from(N), -500_000i64..500_000)
+                .prop_map(|(i, e)| Step::Oscillator(i, e)),
             3 => (0..usize::from(N), 0x1100u16..0x11a0, prop::collection::vec(any::<u8>(), 1..9))
                 .prop_map(|(i, a, d)| Step::Pdi(i, a, d)),
             1 => (
                 0..N,
-                prop_oneof![0x0600u16..0x0620, 0x0800u16..0x0820, Just(0x0010u16), 0x1100u16..0x1190],
+                prop_oneof![
+                    0x0600u16..0x0620,
+                    0x0800u16..0x0820,
+                    Just(0x0010u16),
+                    0x1100u16..0x1190,
+                    0x0900u16..0x0930,
+                ],
                 prop::collection::vec(any::<u8>(), 1..17),
             )
                 .prop_map(|(i, a, d)| Step::Write(i, a, d)),
@@ -521,10 +683,12 @@ mod tests {
         ) {
             let mut line = pd_line();
             let mut answered = 0;
-            let first = Step::Cyclic(vec![(Command::Lrw, 0, 48)], Some((0x0130, 2)), 0);
+            let mut now = 1_000_000u64;
+            let first = Step::Cyclic(vec![(Command::Lrw, 0, 48)], Some((0x0130, 2)), None, 0, 0);
             for (k, step) in std::iter::once(first).chain(steps).enumerate() {
                 match step {
-                    Step::Cyclic(logical, brd, data) => {
+                    Step::Cyclic(logical, brd, dc, data, dt) => {
+                        now += dt;
                         let shape = |byte: u8| {
                             let mut dgs: Vec<_> = logical
                                 .iter()
@@ -533,21 +697,27 @@ mod tests {
                             if let Some((ado, n)) = brd {
                                 dgs.push((Command::Brd, u32::from(ado) << 16, vec![byte; n]));
                             }
+                            if let Some((cmd, adp, ado, n)) = dc {
+                                dgs.push((cmd, configured(adp, ado), vec![byte; n]));
+                            }
                             frame(&dgs)
                         };
                         let ahead = line.ahead(&shape(data.wrapping_add(0x5a)));
                         let request = shape(data);
                         let mut processed = request.clone();
-                        line.process_frame(&mut processed);
+                        line.process_frame_at(&mut processed, now);
                         if let Some(ahead) = ahead {
                             let mut reply = request.clone();
-                            prop_assert!(ahead.answer(&mut reply), "step {}", k);
+                            prop_assert!(ahead.answer(&mut reply, now), "step {}", k);
                             prop_assert_eq!(&reply, &processed, "step {}", k);
                             answered += 1;
                         }
                     }
                     Step::Pdi(i, addr, data) => {
                         let _ = line.slaves_mut()[i].esc_mut().write(addr, &data);
+                    }
+                    Step::Oscillator(i, error_ppb) => {
+                        line.slaves_mut()[i].esc_mut().set_dc_oscillator(error_ppb);
                     }
                     Step::Remap(i, k, logical, len, physical, kind) => {
                         let mut f = frame(&[(

@@ -16,6 +16,35 @@ use super::*;
 /// counters lie above as well).
 pub(crate) const QUIET_REGISTERS_END: u32 = 0x0200;
 
+/// The DC system time register (0x0910-0x0917), which a cyclic master
+/// with Distributed Clocks reads every cycle (FRMW or ARMW: the reference
+/// clock reads, every other ESC writes its time into its own 0x0910).
+const SYSTEM_TIME: u32 = reg::DC_SYSTEM_TIME as u32;
+
+/// A read of the DC system time worked out ahead: the time depends on
+/// when the frame passes the ESC, so what is worked out is the clock, and
+/// the time is read from it once the frame's time is known
+/// ([`SystemTimeAhead::at`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SystemTimeAhead {
+    clock: dc::DcClock,
+    /// The system time offset (0x0920).
+    offset: u64,
+    /// The ESC's last frame time: its clock never reads earlier.
+    not_before: u64,
+}
+
+impl SystemTimeAhead {
+    /// The system time this ESC's 0x0910 holds when a frame passes its
+    /// port 0 at `port0_ns` (what [`SoftEsc::set_frame_times`] and the
+    /// read then give).
+    pub fn at(&self, port0_ns: u64) -> u64 {
+        self.clock
+            .local(port0_ns.max(self.not_before))
+            .wrapping_add(self.offset)
+    }
+}
+
 impl SoftEsc {
     /// What [`SoftEsc::process_data`] would do with a logical datagram
     /// (LRD, LWR, LRW) of `len` bytes at logical `addr`, without doing it:
@@ -136,5 +165,37 @@ impl SoftEsc {
             return Some(None);
         }
         self.mem.get(a as usize..b as usize).map(Some)
+    }
+
+    /// For a read-multiple-write (FRMW, ARMW) of `len` bytes at `ado`,
+    /// worked out without doing it: `Some(Some(clock))` when the access
+    /// lies within the DC system time (0x0910-0x0917) and this ESC
+    /// implements it (a read gives the time at the frame's passing, a
+    /// write is accepted; either counts once), `Some(None)` when it does
+    /// not implement it (no read, no write, no count), `None` for any
+    /// other registers.
+    pub fn system_time_ahead(&self, ado: u16, len: usize) -> Option<Option<SystemTimeAhead>> {
+        let a = u32::from(ado);
+        let b = a + u32::try_from(len).ok()?;
+        if len == 0 || a < SYSTEM_TIME || b > SYSTEM_TIME + 8 {
+            return None;
+        }
+        // What `ecat_read_checked` and `ecat_write` decide for these
+        // registers: no SyncManager lies over them, and a write is taken
+        // as a received time (`dc_receive`) and counted.
+        if !self.silicon.implements(a, b) {
+            return Some(None);
+        }
+        Some(Some(SystemTimeAhead {
+            clock: self.dc,
+            offset: self.mem_u64(reg::DC_SYSTEM_TIME_OFFSET),
+            not_before: self.dc_port0_ns,
+        }))
+    }
+
+    /// Whether a configured-address datagram to `adp` addresses this ESC
+    /// (its station address or, when set, its alias).
+    pub(crate) fn answers_to(&self, adp: u16) -> bool {
+        adp == self.station || (self.alias != 0 && adp == self.alias)
     }
 }

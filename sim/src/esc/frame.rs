@@ -69,7 +69,7 @@ impl SoftEsc {
                 self.phys_rw(cmd, ado, data, ReadMode::Copy)
             }
             Command::Fprd | Command::Fpwr | Command::Fprw | Command::Frmw => {
-                let me = adp == self.station || (self.alias != 0 && adp == self.alias);
+                let me = self.answers_to(adp);
                 match cmd {
                     Command::Frmw if me => self.phys_read_count(ado, data, ReadMode::Copy),
                     Command::Frmw => self.phys_write_count(ado, data),

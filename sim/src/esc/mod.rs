@@ -34,6 +34,7 @@ mod silicon;
 mod sm;
 mod watchdog;
 
+pub use ahead::SystemTimeAhead;
 pub use pdi::PdiFault;
 pub use silicon::Silicon;
 

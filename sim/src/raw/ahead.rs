@@ -56,15 +56,16 @@ impl AheadAnswers {
         }
     }
 
-    /// The reply to `request` if it has the shape worked out for. What was
-    /// worked out is used up either way (the frame changes the line).
-    pub(super) fn answer(&mut self, request: &[u8]) -> Option<&mut [u8]> {
+    /// The reply to `request`, which entered the line at `now_ns`, if it
+    /// has the shape worked out for. What was worked out is used up either
+    /// way (the frame changes the line).
+    pub(super) fn answer(&mut self, request: &[u8], now_ns: u64) -> Option<&mut [u8]> {
         let ahead = self.prepared.take();
         self.worked_out = false;
         let ahead = ahead?;
         self.reply.clear();
         self.reply.extend_from_slice(request);
-        if !ahead.answer(&mut self.reply) {
+        if !ahead.answer(&mut self.reply, now_ns) {
             return None;
         }
         self.answered += 1;
@@ -137,26 +138,37 @@ mod tests {
         let mut answers = AheadAnswers::new(true);
         // Nothing learnt yet.
         answers.prepare(&line);
-        assert!(answers.answer(&frame(Command::Lwr, 0, &[1; 4])).is_none());
+        assert!(
+            answers
+                .answer(&frame(Command::Lwr, 0, &[1; 4]), 0)
+                .is_none()
+        );
         // A status read is no template; the cyclic frame is.
         answers.learn(&frame(Command::Brd, 0x0130 << 16, &[0; 2]));
         answers.prepare(&line);
-        assert!(answers.answer(&frame(Command::Lwr, 0, &[1; 4])).is_none());
+        assert!(
+            answers
+                .answer(&frame(Command::Lwr, 0, &[1; 4]), 0)
+                .is_none()
+        );
         let request = frame(Command::Lwr, 0, &[1; 4]);
         answers.learn(&request);
         answers.prepare(&line);
-        let sent = answers.answer(&request).expect("answered ahead").to_vec();
+        let sent = answers
+            .answer(&request, 0)
+            .expect("answered ahead")
+            .to_vec();
         let mut processed = request.clone();
         line.process_frame(&mut processed);
         assert_eq!(sent, processed);
         assert!(answers.check(&processed));
         // Used up by the frame: worked out again before the next.
-        assert!(answers.answer(&request).is_none());
+        assert!(answers.answer(&request, 0).is_none());
         answers.prepare(&line);
         answers.forget();
-        assert!(answers.answer(&request).is_none());
+        assert!(answers.answer(&request, 0).is_none());
         answers.prepare(&line);
-        assert!(answers.answer(&request).is_some());
+        assert!(answers.answer(&request, 0).is_some());
         assert_eq!((answers.answered, answers.differed), (2, 0));
     }
 
@@ -167,11 +179,11 @@ mod tests {
         let request = frame(Command::Lwr, 0, &[1; 4]);
         answers.learn(&request);
         answers.prepare(&line);
-        assert!(answers.answer(&request).is_some());
+        assert!(answers.answer(&request, 0).is_some());
         assert!(!answers.check(&request));
         assert_eq!(answers.differed, 1);
         answers.prepare(&line);
-        assert!(answers.answer(&request).is_none());
+        assert!(answers.answer(&request, 0).is_none());
     }
 
     #[test]
@@ -181,7 +193,7 @@ mod tests {
         let request = frame(Command::Lwr, 0, &[1; 4]);
         answers.learn(&request);
         answers.prepare(&line);
-        assert!(answers.answer(&request).is_none());
+        assert!(answers.answer(&request, 0).is_none());
     }
 
     #[test]

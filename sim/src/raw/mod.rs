@@ -375,7 +375,7 @@ pub fn run(
                         // page on the way to the reply costs); the ESCs
                         // then run on it as on any other, and must reply
                         // the same.
-                        let ahead = if let Some(r) = answers.answer(buf) {
+                        let ahead = if let Some(r) = answers.answer(buf, arrived) {
                             reply(&sock, &mut port1, r)?;
                             let_the_master_run();
                             true
