@@ -21,6 +21,7 @@
 //! runner/floor at p50 and p99. `--pace-us N` sends one frame every N us
 //! to each (1000: a 1 kHz cyclic master), back to back by default;
 //! `--busy-poll` and `--no-answer-ahead` pass those flags to the runners;
+//! `--dc` adds a FRMW of the first slave's DC system time to the frame;
 //! `--dump FILE` writes every timed round trip (`slaves case index µs`)
 //! for a look at the tail.
 //! Needs root and iproute2 (the namespaces are removed at the end); builds
@@ -193,13 +194,24 @@ fn config_frame(i: u16) -> (Vec<u8>, Vec<usize>) {
     ])
 }
 
-/// The cyclic frame of `n` slaves: LRW over the image, BRD AL status.
-fn cycle_frame(n: usize) -> (Vec<u8>, Vec<usize>) {
+/// The cyclic frame of `n` slaves: LRW over the image, BRD AL status;
+/// with `dc`, a FRMW of the first slave's DC system time as well (what
+/// SOEM and ethercrab's `tx_rx_dc` add to their cycle with Distributed
+/// Clocks).
+fn cycle_frame(n: usize, dc: bool) -> (Vec<u8>, Vec<usize>) {
     let image = n * usize::from(OUT + IN);
-    frame(&[
+    let mut datagrams = vec![
         (Ecat::Lrw, 0, vec![0x5A; image]),
         (Ecat::Brd, u32::from(registers::AL_STATUS) << 16, vec![0, 0]),
-    ])
+    ];
+    if dc {
+        datagrams.push((
+            Ecat::Frmw,
+            0x1000 | (u32::from(registers::DC_SYSTEM_TIME) << 16),
+            vec![0; 8],
+        ));
+    }
+    frame(&datagrams)
 }
 
 struct Master {
@@ -294,6 +306,7 @@ fn main() {
     println!("| case | p50 | p99 | p99.9 | max | p50 / floor | p99 / floor |");
     println!("|---|---|---|---|---|---|---|");
     let busy_poll = args.iter().any(|a| a == "--busy-poll");
+    let dc = args.iter().any(|a| a == "--dc");
     let no_ahead = args.iter().any(|a| a == "--no-answer-ahead");
     // `--dump FILE`: every timed round trip as `slaves case index µs`.
     let mut dump = args
@@ -320,7 +333,7 @@ fn main() {
                 "slave {i} configured"
             );
         }
-        let (f, ends) = cycle_frame(n);
+        let (f, ends) = cycle_frame(n, dc);
         let (mut floor_times, mut runner_times) =
             (Vec::with_capacity(frames), Vec::with_capacity(frames));
         let mut next = Instant::now();
@@ -353,6 +366,9 @@ fn main() {
                         "LRW reached every slave"
                     );
                     assert_eq!(usize::from(wkc(&r, ends[1])), n, "BRD reached every slave");
+                    if dc {
+                        assert_eq!(usize::from(wkc(&r, ends[2])), n, "FRMW reached every slave");
+                    }
                 }
                 // The first 1000 warm up the caches and the scheduler.
                 if k >= 1000 {

@@ -50,6 +50,9 @@ pub const SII_DATA: u16 = R::SiiData as u16;
 /// DC receive time of port 0, `u32` (0x0900; a write latches every
 /// port's receive time).
 pub const DC_TIME_PORT0: u16 = R::DcTimePort0 as u16;
+/// DC system time (64 bit): the reference clock's time, which a master
+/// distributes with FRMW or ARMW.
+pub const DC_SYSTEM_TIME: u16 = R::DcSystemTime as u16;
 
 /// Bytes of one FMMU's register block (ETG.1000.4 Table 57).
 pub const FMMU_LEN: u16 = 16;

@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
-use turns::FirmwareTurns;
+use turns::{FirmwareTurns, YieldAfterReply};
 
 /// What to run (the slaves themselves are handed to [`run`]).
 #[derive(Debug, Clone)]
@@ -170,22 +170,6 @@ const CHECK_EVERY: Duration = Duration::from_micros(5);
 /// Receive buffer: a jumbo frame fits.
 const RECV_BUFFER: usize = 16 * 1024;
 
-/// Right after a reply, before the runner's own work on the frame (the
-/// ESCs' run, the firmware): gives the CPU to whoever the reply woke.
-///
-/// The reply wakes the master on the runner's CPU, most often (the kernel
-/// wakes it where the sender runs). Usually the woken master preempts the
-/// runner within the send, but not always: measured over veth at 1 kHz
-/// (the latency bench with timestamps on both sides, 5 000 frames per
-/// case), 1.4-5 % of the replies reached the master only after the
-/// runner's send returned, and then only after the runner's work on the
-/// frame ended, 35-145 µs later (the longer, the more slaves); those were
-/// most of the runner's p99 over the floor's. With `sched_yield` here none
-/// of 5 000 did at 1 and 8 slaves, 3 at 64.
-fn let_the_master_run() {
-    std::thread::yield_now();
-}
-
 /// Waits up to `d` for a frame on `sock`.
 fn sock_wait(sock: &PacketSocket, d: Duration) -> Result<(), RunnerError> {
     sock.wait(d).map(|_| ()).map_err(|source| RunnerError::Io {
@@ -319,6 +303,8 @@ pub fn run(
     let mut cycle = CycleWatch::new();
     // When the firmware runs between frames.
     let mut turns = FirmwareTurns::new(Instant::now());
+    // Whether the master gets the CPU right after a reply answered ahead.
+    let mut yielding = YieldAfterReply::default();
     // Replies worked out ahead; forgotten whenever anything runs on the
     // line.
     // (Not on a faulty wire: its frames take their fate first.)
@@ -377,7 +363,11 @@ pub fn run(
                         // the same.
                         let ahead = if let Some(r) = answers.answer(buf, arrived) {
                             reply(&sock, &mut port1, r)?;
-                            let_the_master_run();
+                            let now = Instant::now();
+                            if yielding.due(now) {
+                                std::thread::yield_now();
+                                yielding.yielded(now, Instant::now());
+                            }
                             true
                         } else {
                             false
@@ -433,7 +423,6 @@ pub fn run(
                             }
                             _ => {
                                 reply(&sock, &mut port1, buf)?;
-                                let_the_master_run();
                                 if let Some(mut again) = request {
                                     chain.process_frame_at(&mut again, arrived);
                                     reply(&sock, &mut port1, &mut again)?;
