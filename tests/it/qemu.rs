@@ -109,11 +109,14 @@ fn boot_qemu(elf: &Path, socket: &Path, console: &Path) -> (Killed, String) {
     let start = Instant::now();
     while start.elapsed() < Duration::from_secs(60) {
         let text = std::fs::read_to_string(console).unwrap_or_default();
+        // Whole lines only: the emulated UART writes the file a byte at a
+        // time, so the last line may still be coming.
         if let Some(line) = text
-            .lines()
+            .split_inclusive('\n')
+            .filter(|l| l.ends_with('\n'))
             .find(|l| l.contains("board-qemu:") && l.contains("firmware"))
         {
-            return (qemu, line.to_string());
+            return (qemu, line.trim_end().to_string());
         }
         std::thread::sleep(Duration::from_millis(50));
     }
