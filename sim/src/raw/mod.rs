@@ -151,6 +151,9 @@ pub struct RunStats {
     /// the one sent (0 unless there is a bug; the first switches answering
     /// ahead off for the run).
     pub ahead_differed: u64,
+    /// How often the yield after a reply answered ahead was paused for a
+    /// second because yields took long (a busy machine).
+    pub yield_pauses: u64,
 }
 
 /// Most slaves one runner serves.
@@ -525,6 +528,7 @@ pub fn run(
             }
             stats.answered_ahead = answers.answered;
             stats.ahead_differed = answers.differed;
+            stats.yield_pauses = yielding.pauses();
             stats.spi = chain
                 .slaves()
                 .iter()

@@ -122,6 +122,8 @@ pub(super) struct YieldAfterReply {
     paused_until: Option<Instant>,
     /// Yields in a row that took too long.
     too_long: u8,
+    /// Pauses so far.
+    pauses: u64,
 }
 
 impl YieldAfterReply {
@@ -140,7 +142,13 @@ impl YieldAfterReply {
         if self.too_long >= 2 {
             self.too_long = 0;
             self.paused_until = Some(now + YIELD_PAUSE);
+            self.pauses += 1;
         }
+    }
+
+    /// How often the yielding was paused.
+    pub(super) fn pauses(&self) -> u64 {
+        self.pauses
     }
 }
 
@@ -163,11 +171,13 @@ mod tests {
         y.yielded(t0 + 2000 * US, t0 + 2000 * US + slow);
         y.yielded(t0 + 3000 * US, t0 + 3010 * US);
         assert!(y.due(t0 + 3020 * US));
+        assert_eq!(y.pauses(), 0);
         // A busy machine: every yield comes back after a time slice.
         y.yielded(t0 + 3500 * US, t0 + 3500 * US + slow);
         let back = t0 + 4000 * US + slow;
         y.yielded(t0 + 4000 * US, back);
         assert!(!y.due(back));
+        assert_eq!(y.pauses(), 1);
         assert!(!y.due(back + YIELD_PAUSE - US));
         assert!(y.due(back + YIELD_PAUSE), "tried again after the pause");
     }

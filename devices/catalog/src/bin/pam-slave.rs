@@ -239,6 +239,12 @@ fn main() -> ExitCode {
                 );
                 return Exit::Comm.into();
             }
+            if stats.yield_pauses > 0 {
+                eprintln!(
+                    "pam-slave: the yield after replies answered ahead was paused {} time(s) for a second (yields took long: a busy machine)",
+                    stats.yield_pauses
+                );
+            }
             if let Some(spi) = stats.spi {
                 eprintln!(
                     "pam-slave: SPI PDI wires: {} transactions, {} protocol errors, {} refused accesses",
