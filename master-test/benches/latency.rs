@@ -2,7 +2,8 @@
 //! same run: two veth pairs, each into a network namespace of its own that
 //! this bench creates, a fixed cyclic frame (LRW over the whole process
 //! image of PAM-sized slaves, 5 output + 14 input bytes each, plus a BRD
-//! of the AL status, as ethercrab's `tx_rx` sends it) sent from the host
+//! of the AL status; ethercrab 0.7's `tx_rx` reads each subdevice's AL
+//! status by FPRD instead, which the runner answers ahead alike) sent from the host
 //! ends and timed until its answer arrives, 20 000 times each:
 //!
 //! * `floor/N`: `pam-slave --reflect` on one pair, the same socket path

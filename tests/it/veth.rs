@@ -28,12 +28,13 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
             ));
         }
     };
+    let log = std::env::temp_dir().join(format!("pam-veth-{}.log", std::process::id()));
     let child = Command::new("ip")
         .args(["netns", "exec", &guard.name])
         .arg(&bin)
         .args(["--iface", &slave_if, "--line", "pam,io8"])
         .stdout(Stdio::null())
-        .stderr(Stdio::inherit())
+        .stderr(std::fs::File::create(&log).expect("runner log"))
         .spawn()
         .expect("start pam-slave in the namespace");
     guard.runner = Some(child);
@@ -85,6 +86,13 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
             .await
             .expect("command value arrived");
         assert_eq!(v, 7000);
+        // ethercrab's cyclic frames, 1 ms apart: from the second on the
+        // runner answers them ahead (checked below from its log).
+        for _ in 0..200 {
+            let resp = group.tx_rx(md).await.expect("process data");
+            assert_eq!(resp.working_counter, 6);
+            smol::Timer::after(Duration::from_millis(1)).await;
+        }
     });
 
     // Garbage on the wire: random EtherType-0x88A4 payloads from a second
@@ -115,6 +123,22 @@ fn raw_runner_on_veth_reaches_op_with_ethercrab_raw_socket() {
         runner.try_wait().expect("status").is_none(),
         "pam-slave is still running after the garbage"
     );
+    // Stopped with Ctrl-C, the runner reports its frames: ethercrab's
+    // cycles were answered ahead, and every answer ahead was the reply
+    // the ESCs then gave.
+    let _ = Command::new("kill")
+        .args(["-INT", &runner.id().to_string()])
+        .status();
+    let _ = runner.wait();
+    let text = std::fs::read_to_string(&log).unwrap_or_default();
+    let _ = std::fs::remove_file(&log);
+    let ahead: u64 = text
+        .split_once(" EtherCAT frames (")
+        .and_then(|(_, rest)| rest.split_once(" answered ahead"))
+        .and_then(|(n, _)| n.parse().ok())
+        .unwrap_or_else(|| panic!("the runner's closing line: {text}"));
+    assert!(ahead >= 150, "ethercrab's cycles answered ahead: {text}");
+    assert!(!text.contains("differed"), "answers ahead: {text}");
 }
 
 #[test]

@@ -173,8 +173,9 @@ impl Chain {
     /// The reply to frames of `request`'s shape, worked out now from the
     /// line's state ([`Ahead`]; valid until anything runs on the line), or
     /// `None` when the line's reply could depend on more than that: a
-    /// datagram other than a logical read or write, a broadcast read of
-    /// the registers below 0x0200 or one read of the DC system time by
+    /// datagram other than a logical read or write, a broadcast,
+    /// configured-address or position read of the registers below 0x0200
+    /// or one read of the DC system time by
     /// FRMW or ARMW (mailboxes, other DC registers, any other access to
     /// physical memory), a window the ESCs' general path takes, a write
     /// window over a read window, or indexes to rebuild first.
@@ -233,6 +234,37 @@ impl Chain {
                     }
                     if mask.iter().any(|&b| b != 0) {
                         ahead.push(first_op, 0, &mask, true);
+                    }
+                }
+                // A status register of one slave (ethercrab's `tx_rx`
+                // reads each subdevice's AL status by FPRD): what the
+                // line's address index reaches, in its order.
+                Command::Fprd => {
+                    let adp = dg.adp();
+                    let mut k = self
+                        .first_of
+                        .get(usize::from(adp))
+                        .map_or(usize::MAX, |&k| k as usize);
+                    while let Some(&(a, i)) = self.addresses.get(k) {
+                        if a != adp {
+                            break;
+                        }
+                        let esc: &SoftEsc = self.slaves.get(i)?.esc();
+                        ahead.push(first_op, 0, esc.register_read_ahead(dg.ado(), len)?, false);
+                        wkc_add = wkc_add.wrapping_add(1);
+                        k += 1;
+                    }
+                }
+                Command::Aprd => {
+                    let pos = usize::from(0u16.wrapping_sub(dg.adp()));
+                    if let Some(s) = self.slaves.get(pos) {
+                        ahead.push(
+                            first_op,
+                            0,
+                            s.esc().register_read_ahead(dg.ado(), len)?,
+                            false,
+                        );
+                        wkc_add = 1;
                     }
                 }
                 // The DC system time: the reader's time as the frame
@@ -555,6 +587,8 @@ mod tests {
             // Writes, physical reads with side effects.
             frame(&[(Command::Fpwr, configured(0x1000, 0x1100), vec![0; 4])]),
             frame(&[(Command::Fprd, configured(0x1000, 0x1180), vec![0; 4])]),
+            frame(&[(Command::Fprd, configured(0x1000, 0x0220), vec![0; 4])]),
+            frame(&[(Command::Aprd, 0xffff | (0x0210 << 16), vec![0; 4])]),
             // A window covered in part.
             frame(&[(Command::Lrw, 2, vec![0; 4])]),
         ];
@@ -586,13 +620,14 @@ mod tests {
     #[derive(Debug, Clone)]
     enum Step {
         /// A cyclic frame: logical datagrams (command, start, length), an
-        /// optional BRD (register, length), an optional read-multiple-write
+        /// optional register read (BRD, FPRD or APRD, address, register,
+        /// length), an optional read-multiple-write
         /// (FRMW or ARMW, address, register, length), the output data
         /// byte, the time since the last frame; the answer is worked out
         /// from a frame of the same shape with other data.
         Cyclic(
             Vec<(Command, u32, usize)>,
-            Option<(u16, usize)>,
+            Option<(Command, u16, u16, usize)>,
             Option<(Command, u16, u16, usize)>,
             u8,
             u64,
@@ -624,7 +659,17 @@ mod tests {
                     ),
                     1..4,
                 ),
-                proptest::option::of((0u16..0x0240, 1usize..9)),
+                proptest::option::of((
+                    prop_oneof![Just(Command::Brd), Just(Command::Fprd), Just(Command::Aprd)],
+                    prop_oneof![
+                        0x1000u16..0x1000 + N,
+                        Just(0x2000),
+                        (0..N).prop_map(|i| 0u16.wrapping_sub(i)),
+                        any::<u16>(),
+                    ],
+                    prop_oneof![Just(0x0130u16), 0u16..0x0240],
+                    1usize..9,
+                )),
                 proptest::option::of((
                     prop_oneof![Just(Command::Frmw), Just(Command::Armw)],
                     prop_oneof![0x1000u16..0x1000 + N, Just(0x2000), 0u16..2, Just(0xfffe)],
@@ -684,7 +729,13 @@ mod tests {
             let mut line = pd_line();
             let mut answered = 0;
             let mut now = 1_000_000u64;
-            let first = Step::Cyclic(vec![(Command::Lrw, 0, 48)], Some((0x0130, 2)), None, 0, 0);
+            let first = Step::Cyclic(
+                vec![(Command::Lrw, 0, 48)],
+                Some((Command::Brd, 0, 0x0130, 2)),
+                None,
+                0,
+                0,
+            );
             for (k, step) in std::iter::once(first).chain(steps).enumerate() {
                 match step {
                     Step::Cyclic(logical, brd, dc, data, dt) => {
@@ -694,8 +745,8 @@ mod tests {
                                 .iter()
                                 .map(|&(cmd, start, len)| (cmd, start, vec![byte; len]))
                                 .collect();
-                            if let Some((ado, n)) = brd {
-                                dgs.push((Command::Brd, u32::from(ado) << 16, vec![byte; n]));
+                            if let Some((cmd, adp, ado, n)) = brd {
+                                dgs.push((cmd, configured(adp, ado), vec![byte; n]));
                             }
                             if let Some((cmd, adp, ado, n)) = dc {
                                 dgs.push((cmd, configured(adp, ado), vec![byte; n]));

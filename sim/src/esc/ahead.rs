@@ -167,6 +167,20 @@ impl SoftEsc {
         self.mem.get(a as usize..b as usize).map(Some)
     }
 
+    /// What a physical read with copy (FPRD, APRD) of `len` bytes at `ado`
+    /// addressed to this ESC would copy into the data (always counted:
+    /// the plain copy of `ecat_read` for the registers below the FMMUs),
+    /// or `None` beyond the registers that may be read ahead (those below
+    /// 0x0200).
+    pub fn register_read_ahead(&self, ado: u16, len: usize) -> Option<&[u8]> {
+        let a = usize::from(ado);
+        let b = a.checked_add(len)?;
+        if b > QUIET_REGISTERS_END as usize {
+            return None;
+        }
+        self.mem.get(a..b)
+    }
+
     /// For a read-multiple-write (FRMW, ARMW) of `len` bytes at `ado`,
     /// worked out without doing it: `Some(Some(clock))` when the access
     /// lies within the DC system time (0x0910-0x0917) and this ESC
