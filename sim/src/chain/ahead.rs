@@ -292,7 +292,10 @@ impl Chain {
                             }
                             time = Some(TimeRead {
                                 clock,
-                                after_ns: (i as u64).saturating_mul(self.hop_ns),
+                                // The line's rule for when a frame
+                                // passes port 0 ([`super::port_times`]),
+                                // for a frame entering at 0.
+                                after_ns: super::port_times(i, n, (0, self.hop_ns)).0,
                                 skip: usize::from(ado)
                                     - usize::from(ecat_slave::esc::registers::DC_SYSTEM_TIME),
                                 len,
