@@ -26,7 +26,10 @@ use ecat_slave::firmware::{self, FirmwareVersion, ImageStore, StoreError};
 use ecat_slave::hal::NvStorage;
 use ecat_slave::led::LedPattern;
 use ecat_slave::od::Od;
-use ecat_slave::wire::ecat::{Addressing, Command, Datagram, DatagramCursor, EcatFrame, FrameType};
+use ecat_slave::wire::ecat::{
+    Addressing, Command, DATAGRAM_HEADER_LEN, DatagramHead, EcatFrame, FrameType, MAX_DATAGRAMS,
+    WKC_LEN,
+};
 use ecat_slave::wire::ethernet::{ETHERTYPE_ETHERCAT, EthernetFrame};
 
 mod ahead;
@@ -288,6 +291,14 @@ struct Head {
     cmd: Command,
     adp: u16,
     ado: u16,
+}
+
+/// Writes a datagram header's ADP (bytes 2..4), as each position-addressed
+/// slave increments it on the way.
+fn set_adp(header: &mut [u8; DATAGRAM_HEADER_LEN], adp: u16) {
+    let [lo, hi] = adp.to_le_bytes();
+    header[2] = lo;
+    header[3] = hi;
 }
 
 /// Hands a datagram (`head`, its data in place) to slave `i`, telling its
@@ -719,18 +730,23 @@ impl Chain {
             return FrameOutcome::Malformed;
         }
         self.frames += 1;
-        let payload = ecat.payload_mut();
-        let mut cursor = DatagramCursor::new();
+        // Each datagram's header read once (`DatagramHead::split`); the
+        // walk ends where `DatagramCursor`'s does: a truncated datagram,
+        // the last one, or the MAX_DATAGRAMS-th. (The serial reference
+        // path keeps the cursor: the tests compare two walks written
+        // apart.)
+        let mut rest = ecat.payload_mut();
         let mut count = 0;
-        while let Some(Ok(range)) = cursor.next_range(payload) {
-            let Some(bytes) = payload.get_mut(range) else {
+        while count < MAX_DATAGRAMS {
+            let Some((head, dg, tail)) = DatagramHead::split(rest) else {
                 break;
             };
-            let Ok(mut dg) = Datagram::new_checked(bytes) else {
-                break;
-            };
-            self.dispatch(&mut dg, n);
+            self.dispatch(head, dg, n);
             count += 1;
+            if !head.more_follows {
+                break;
+            }
+            rest = tail;
         }
         FrameOutcome::Processed { datagrams: count }
     }
@@ -751,11 +767,22 @@ impl Chain {
         self.hop_ns = hop_ns;
     }
 
-    fn dispatch(&mut self, dg: &mut Datagram<&mut [u8]>, n: usize) {
+    /// Hands one datagram (`dg`: its header, data and working counter,
+    /// split off by [`DatagramHead::split`]) to the slaves it reaches.
+    fn dispatch(&mut self, dh: DatagramHead, dg: &mut [u8], n: usize) {
         let head = Head {
-            cmd: dg.command(),
-            adp: dg.adp(),
-            ado: dg.ado(),
+            cmd: dh.command,
+            adp: dh.adp,
+            ado: dh.ado,
+        };
+        let Some((header, body)) = dg.split_first_chunk_mut::<DATAGRAM_HEADER_LEN>() else {
+            return;
+        };
+        let Some((data, wkc)) = body.split_at_mut_checked(usize::from(dh.data_len)) else {
+            return;
+        };
+        let Some(wkc) = wkc.first_chunk_mut::<WKC_LEN>() else {
+            return;
         };
         let cmd = head.cmd;
         let clock = FrameClock {
@@ -764,8 +791,7 @@ impl Chain {
             n,
             frame: self.frames,
         };
-        let wkc0 = dg.wkc();
-        let data = dg.data_mut();
+        let wkc0 = u16::from_le_bytes(*wkc);
         let mut wkc_add = 0u16;
         match cmd.addressing() {
             Addressing::Configured if cmd != Command::Frmw => {
@@ -806,7 +832,7 @@ impl Chain {
                         self.after_write(remapped, moved);
                     }
                 }
-                dg.set_adp(head.adp.wrapping_add(n as u16));
+                set_adp(header, head.adp.wrapping_add(n as u16));
             }
             Addressing::Logical => {
                 // Only the slaves with an FMMU window overlapping the
@@ -909,14 +935,14 @@ impl Chain {
                     }
                 }
                 if advances {
-                    dg.set_adp(head.adp.wrapping_add(n as u16));
+                    set_adp(header, head.adp.wrapping_add(n as u16));
                 }
                 self.touched_all = true;
                 self.after_write(remapped, moved);
             }
         }
         if wkc_add != 0 {
-            dg.set_wkc(wkc0.wrapping_add(wkc_add));
+            *wkc = wkc0.wrapping_add(wkc_add).to_le_bytes();
         }
     }
 
@@ -1025,6 +1051,7 @@ mod tests {
     use super::*;
     use crate::testing::one_datagram;
     use ecat_slave::wire::builder::FrameBuilder;
+    use ecat_slave::wire::ecat::Datagram;
     use proptest::prelude::*;
 
     /// An EEPROM alias program + reload for one slave: the alias is
@@ -1502,10 +1529,81 @@ mod tests {
         assert_eq!(crate::testing::line(3).sweep_period_ns(), SWEEP_MIN_NS);
     }
 
+    /// A frame of 130 datagrams (BRD of the AL status, each with "more
+    /// follows"): both paths stop after MAX_DATAGRAMS (128), the last two
+    /// left unanswered.
+    #[test]
+    fn line_stops_after_128_datagrams_like_the_esc() {
+        // 130 × 14 bytes: longer than an Ethernet frame, within the
+        // EtherCAT header's 2047.
+        let mut buf = vec![0u8; 2048];
+        let mut fb = FrameBuilder::new(&mut buf, [0x10; 6]).unwrap();
+        let ends: Vec<usize> = (0..130)
+            .map(|_| fb.push(Command::Brd, 0x0130 << 16, &[0, 0]).unwrap().end)
+            .collect();
+        let len = fb.finish();
+        let mut f1 = buf[..len].to_vec();
+        let mut f2 = f1.clone();
+        let (mut serial, mut fast) = (crate::testing::line(3), crate::testing::line(3));
+        assert_eq!(
+            serial.process_serial(&mut f1),
+            FrameOutcome::Processed { datagrams: 128 }
+        );
+        assert_eq!(
+            fast.process_frame(&mut f2),
+            FrameOutcome::Processed { datagrams: 128 }
+        );
+        assert_eq!(f1, f2);
+        let wkc = |f: &[u8], end: usize| u16::from_le_bytes([f[end], f[end + 1]]);
+        assert_eq!(
+            wkc(&f2, ends[127]),
+            3,
+            "the 128th datagram reached all three"
+        );
+        assert_eq!(wkc(&f2, ends[128]), 0, "the 129th is not processed");
+    }
+
     proptest! {
         // 32 sequences of 128 frames: 4096 frames against fresh lines (the
         // xorshift loop this replaces ran one sequence of 3000).
         #![proptest_config(ProptestConfig::with_cases(32))]
+
+        /// Damaged frames (cut short anywhere, a byte anywhere in the
+        /// EtherCAT part overwritten: length fields running past the
+        /// frame, "more follows" bits set on the last datagram, wrong
+        /// commands) end the walk where the ESC's own walk ends: the line
+        /// path answers them byte for byte like the serial path.
+        #[test]
+        fn dispatch_equals_serial_on_damaged_frames(
+            frames in prop::collection::vec((random_frame(), any::<prop::sample::Index>(),
+                any::<prop::sample::Index>(), any::<u8>(), any::<bool>()), 64),
+        ) {
+            let (mut serial, mut fast) = configured_pair(false);
+            for (round, (frame, cut, at, byte, cut_first)) in frames.iter().enumerate() {
+                let mut f1 = frame.bytes();
+                // Ethernet header (14) and EtherCAT header (2) kept: the
+                // damage falls on the datagrams.
+                let body = f1.len().saturating_sub(16).max(1);
+                if *cut_first {
+                    // Cut inside the datagrams, the EtherCAT header's
+                    // length following (else the whole frame is refused
+                    // before any datagram is looked at).
+                    f1.truncate(16 + cut.index(body));
+                    let len = u16::try_from(f1.len() - 16).unwrap();
+                    let h = u16::from_le_bytes([f1[14], f1[15]]);
+                    f1[14..16].copy_from_slice(&((h & !0x07FF) | len).to_le_bytes());
+                }
+                let k = 16 + at.index(f1.len().saturating_sub(16).max(1));
+                if let Some(b) = f1.get_mut(k) {
+                    *b = *byte;
+                }
+                let mut f2 = f1.clone();
+                let o1 = serial.process_serial(&mut f1);
+                let o2 = fast.process_frame(&mut f2);
+                prop_assert_eq!(o1, o2, "round {}", round);
+                prop_assert_eq!(&f1, &f2, "frame differs in round {}", round);
+            }
+        }
 
         /// The line's dispatch (each datagram to the slaves it addresses)
         /// and the reference (every ESC walks the whole frame) give the

@@ -466,6 +466,47 @@ const DG_LEN_MASK: u16 = 0x07FF;
 const DG_CIRCULATING: u16 = 0x4000;
 const DG_MORE: u16 = 0x8000;
 
+/// A datagram's header fields read in one pass from its 10 bytes, for a
+/// walk that handles every datagram of a frame once (a software ESC's
+/// line); [`Datagram`] reads each field from the buffer when asked.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct DatagramHead {
+    /// The command.
+    pub command: Command,
+    /// Position / configured address (ADP), or the low half of a logical
+    /// address.
+    pub adp: u16,
+    /// Physical memory offset (ADO), or the high half of a logical
+    /// address.
+    pub ado: u16,
+    /// Length of the data.
+    pub data_len: u16,
+    /// The "more datagrams follow" bit.
+    pub more_follows: bool,
+}
+
+impl DatagramHead {
+    /// Splits the datagram at the start of `buf` off the rest: its header,
+    /// its bytes (header, data and working counter) and the bytes after
+    /// it. `None` when the header is missing ([`WireError::Truncated`] for
+    /// [`Datagram::check_len`]) or the length field runs past `buf`
+    /// ([`WireError::BadLength`]).
+    #[inline]
+    pub fn split(buf: &mut [u8]) -> Option<(Self, &mut [u8], &mut [u8])> {
+        let h = buf.first_chunk::<DATAGRAM_HEADER_LEN>()?;
+        let len = u16::from_le_bytes([h[6], h[7]]);
+        let head = Self {
+            command: Command::from(h[0]),
+            adp: u16::from_le_bytes([h[2], h[3]]),
+            ado: u16::from_le_bytes([h[4], h[5]]),
+            data_len: len & DG_LEN_MASK,
+            more_follows: len & DG_MORE != 0,
+        };
+        let (dg, rest) = buf.split_at_mut_checked(datagram_len(usize::from(head.data_len)))?;
+        Some((head, dg, rest))
+    }
+}
+
 impl<T: AsRef<[u8]>> Datagram<T> {
     /// Wraps a buffer without checking it.
     pub const fn new_unchecked(buffer: T) -> Self {
@@ -1100,6 +1141,51 @@ mod tests {
         let mut it = Datagrams::new(payload);
         assert_eq!(it.next(), Some(Err(WireError::BadLength)));
         assert_eq!(it.next(), None);
+    }
+
+    #[test]
+    fn datagram_head_split_reads_the_header_and_splits_off_the_rest() {
+        let mut bytes = [0u8; 19];
+        bytes[..16].copy_from_slice(&LRW_BYTES);
+        bytes[7] |= 0x80; // more follows
+        bytes[16..].copy_from_slice(&[0xAA, 0xBB, 0xCC]);
+        let (head, dg, rest) = DatagramHead::split(&mut bytes).unwrap();
+        assert_eq!(
+            head,
+            DatagramHead {
+                command: Command::Lrw,
+                adp: 0x0000,
+                ado: 0x0001,
+                data_len: 4,
+                more_follows: true,
+            }
+        );
+        assert_eq!(dg.len(), 16);
+        assert_eq!(&dg[10..14], &[0xde, 0xad, 0xbe, 0xef]);
+        assert_eq!(rest, &[0xAA, 0xBB, 0xCC]);
+    }
+
+    #[test]
+    fn datagram_head_split_refuses_what_check_len_refuses() {
+        // Header cut short, WKC missing, length field past the buffer,
+        // nothing at all: each refused, never a panic.
+        let mut short = [0u8; 9];
+        short.copy_from_slice(&BRD_FRAME_BYTES[2..11]);
+        assert_eq!(DatagramHead::split(&mut short), None);
+        let mut no_wkc = [0u8; 12];
+        no_wkc.copy_from_slice(&BRD_FRAME_BYTES[2..14]);
+        assert_eq!(DatagramHead::split(&mut no_wkc), None);
+        let mut long = LRW_BYTES;
+        long[6] = 0xFF;
+        long[7] = 0x07; // 2047 data bytes
+        assert_eq!(DatagramHead::split(&mut long), None);
+        assert_eq!(DatagramHead::split(&mut []), None);
+        // An unknown command code is carried, not refused.
+        let mut odd = LRW_BYTES;
+        odd[0] = 0x3F;
+        let (head, _, rest) = DatagramHead::split(&mut odd).unwrap();
+        assert_eq!(head.command, Command::Unknown(0x3F));
+        assert!(rest.is_empty());
     }
 
     #[test]
