@@ -24,7 +24,9 @@
 //! `--busy-poll` and `--no-answer-ahead` pass those flags to the runners;
 //! `--dc` adds a FRMW of the first slave's DC system time to the frame;
 //! `--dump FILE` writes every timed round trip (`slaves case index µs`)
-//! for a look at the tail.
+//! for a look at the tail; `--cpu N` runs the master (this bench), the
+//! floor and the runner on CPU N alone (`pam-slave --cpu N`), so no
+//! round trip pays a wake-up across cores.
 //! Needs root and iproute2 (the namespaces are removed at the end); builds
 //! `pam-slave` in release mode first.
 //!
@@ -289,6 +291,17 @@ fn main() {
         .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../target").to_string());
     let bin = format!("{target}/release/pam-slave");
 
+    // `--cpu N`: the master and both slaves on CPU N (after the build,
+    // which keeps every core).
+    let cpu = args
+        .iter()
+        .position(|a| a == "--cpu")
+        .and_then(|i| args.get(i + 1))
+        .map(|v| v.parse::<usize>().expect("--cpu N: a CPU number"));
+    if let Some(c) = cpu {
+        ecat_sim::raw::pin_to_cpu(c).unwrap_or_else(|e| panic!("--cpu: {e}"));
+    }
+    let cpu_arg = cpu.map(|c| c.to_string());
     let pid = std::process::id();
     // Two veth pairs, each into a namespace of its own: the floor on one,
     // the runner on the other.
@@ -297,12 +310,14 @@ fn main() {
 
     println!(
         "{frames} round trips per case over veth pairs, {}, the floor's and the runner's \
-         interleaved; times in microseconds",
+         interleaved{}; times in microseconds",
         if pace.is_zero() {
             "back to back".to_string()
         } else {
             format!("one frame every {} us to each", pace.as_micros())
-        }
+        },
+        cpu.map(|c| format!(", master and slaves on CPU {c}"))
+            .unwrap_or_default()
     );
     println!("| case | p50 | p99 | p99.9 | max | p50 / floor | p99 / floor |");
     println!("|---|---|---|---|---|---|---|");
@@ -316,9 +331,16 @@ fn main() {
         .and_then(|i| args.get(i + 1))
         .map(|p| std::io::BufWriter::new(std::fs::File::create(p).expect("--dump file")));
     for n in [1usize, 8, 64] {
-        floor_link.start(&bin, &["--reflect"]);
+        let mut floor_args = vec!["--reflect"];
+        if let Some(c) = &cpu_arg {
+            floor_args.extend(["--cpu", c.as_str()]);
+        }
+        floor_link.start(&bin, &floor_args);
         let count = n.to_string();
         let mut a = vec!["--count", &count];
+        if let Some(c) = &cpu_arg {
+            a.extend(["--cpu", c.as_str()]);
+        }
         if busy_poll {
             a.push("--busy-poll");
         }

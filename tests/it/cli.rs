@@ -677,6 +677,33 @@ fn master_test_scans_and_reads_an_eni_line_of_twins() {
 }
 
 #[test]
+fn pam_slave_cpu_names_a_cpu_that_cannot_be_used_and_takes_one_that_can() {
+    let runner = runner_binary().expect("pam-slave builds");
+    // A CPU that does not exist: refused before the interface is opened
+    // (no root needed), the CPUs that can be used named.
+    let (o, e) = expect(
+        &runner,
+        &["--iface", "lo", "--cpu", "99999", "--dry-run"],
+        2,
+    );
+    assert!(e.contains("cannot pin the runner to CPU 99999"), "{e}");
+    assert!(e.contains("this process may use CPUs"), "{e}");
+    assert!(o.is_empty(), "{o}");
+    // Not a number: clap names the option.
+    let (_, e) = expect(&runner, &["--iface", "lo", "--cpu", "first"], 2);
+    assert!(e.contains("--cpu"), "{e}");
+    // The first CPU this process may use (as the kernel lists them).
+    let status = std::fs::read_to_string("/proc/self/status").expect("/proc/self/status");
+    let first = status
+        .lines()
+        .find_map(|l| l.strip_prefix("Cpus_allowed_list:"))
+        .and_then(|l| l.trim().split([',', '-']).next().map(str::to_string))
+        .expect("Cpus_allowed_list");
+    let (o, _) = expect(&runner, &["--iface", "lo", "--cpu", &first, "--dry-run"], 0);
+    assert!(o.contains("PAM-199-P-ETC"), "{o}");
+}
+
+#[test]
 fn pam_slave_refuses_at_start_when_the_firmware_stores_could_exceed_the_memory_cap() {
     let runner = runner_binary().expect("pam-slave builds");
     // 4 slaves x 2 slots x 1 MiB = 8 MiB > 4 MiB: refused before the

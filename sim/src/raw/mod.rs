@@ -8,6 +8,7 @@
 
 mod ahead;
 pub mod cycle;
+mod pin;
 mod socket;
 mod turns;
 
@@ -21,6 +22,7 @@ use crate::state_dir::{Loaded, SlaveState};
 use ahead::AheadAnswers;
 use cycle::CycleWatch;
 use ecat_slave::firmware::ImageStore;
+pub use pin::{allowed_cpus, pin_to_cpu};
 use pnet_datalink::NetworkInterface;
 use socket::{PacketSocket, is_queue_full};
 use std::fs::File;
@@ -122,6 +124,15 @@ pub enum RunnerError {
         /// The forwarding interface.
         iface: String,
         /// What ended the relay.
+        reason: String,
+    },
+    /// The runner could not be pinned to the CPU asked for
+    /// ([`pin_to_cpu`]).
+    #[error("cannot pin the runner to CPU {cpu}: {reason}")]
+    Cpu {
+        /// The CPU asked for.
+        cpu: usize,
+        /// Why not, with the CPUs the process may use.
         reason: String,
     },
     /// Any other I/O failure.
