@@ -4,11 +4,12 @@
 //! process runs decides what a round trip costs: the reply wakes the
 //! master, and a wake-up on another core costs far more than one on the
 //! same core (on the 2-vCPU VMs of the performance tables, tens of
-//! microseconds against a few). Left to the scheduler, the runner, busier
-//! than a bare reflector, is moved between cores now and then, and a
-//! second of cross-core wake-ups sets its 99th percentile. Pinning the
-//! master and the runner to one core (`taskset -c N` for the master,
-//! `--cpu N` here) takes that away; see the performance chapter.
+//! microseconds against a few). Left to the scheduler, the runner's slow
+//! round trips come in bursts of about a second, which set its 99th
+//! percentile in some runs; with the master and the runner pinned to one
+//! core (`taskset -c N` for the master, `--cpu N` here) no run missed.
+//! That the bursts are seconds on the other core is the likely reading,
+//! not a measured one; see the performance chapter.
 
 use super::RunnerError;
 use rustix::thread::{CpuSet, sched_getaffinity, sched_setaffinity};
