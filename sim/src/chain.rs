@@ -775,7 +775,7 @@ impl Chain {
     /// datagram and decides itself whether it is addressed (station
     /// address, position, FMMU windows), as it does on the serial path;
     /// the line's indexes have nothing to choose between (they are still
-    /// kept up to date: answering ahead reads the address index). The
+    /// kept up to date: answering ahead reads them). The
     /// slave's firmware is queued after any datagram but a NOP, addressed
     /// or not; on longer lines only the slaves addressed are. With the
     /// index walks gone a cycle of one slave takes 733 instructions
@@ -793,6 +793,11 @@ impl Chain {
         let addressing = dh.command.addressing();
         if addressing == Addressing::None {
             return;
+        }
+        // The window index chooses nothing here, but answering ahead
+        // reads it (`Chain::ahead`): rebuilt as on longer lines.
+        if self.windows_stale && addressing == Addressing::Logical {
+            self.reindex_windows();
         }
         let clock = FrameClock {
             t: self.frame_ns,

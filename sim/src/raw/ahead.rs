@@ -172,6 +172,68 @@ mod tests {
         assert_eq!((answers.answered, answers.differed), (2, 0));
     }
 
+    /// The cyclic frame of a one-slave line (LWR of 4 bytes at logical
+    /// `at`, FPRD of the AL status at station 0x1000) answered ahead over
+    /// several cycles, the line changed in between by `change`: every
+    /// reply sent ahead must be the ESC's own.
+    fn answered_ahead_across(at: u32, change: &[u8]) {
+        use ecat_slave::wire::builder::FrameBuilder;
+        let mut line = line();
+        line.process_frame(&mut frame(
+            Command::Apwr,
+            0x0010 << 16,
+            &0x1000u16.to_le_bytes(),
+        ));
+        let mut buf = vec![0u8; 200];
+        let mut fb = FrameBuilder::new(&mut buf, [0x10; 6]).unwrap();
+        fb.push(Command::Lwr, at, &[1; 4]).unwrap();
+        fb.push(Command::Fprd, 0x1000 | (0x0130 << 16), &[0; 2])
+            .unwrap();
+        let len = fb.finish();
+        let request = buf[..len].to_vec();
+        let mut answers = AheadAnswers::new(true);
+        answers.learn(&request);
+        for cycle in 0..4 {
+            if cycle == 2 {
+                line.process_frame(&mut change.to_vec());
+                answers.forget();
+                answers.learn(&request);
+            }
+            answers.prepare(&line);
+            let sent = answers.answer(&request, 0).map(|r| r.to_vec());
+            let mut processed = request.clone();
+            line.process_frame(&mut processed);
+            if let Some(sent) = sent {
+                assert_eq!(sent, processed, "cycle {cycle}");
+                assert!(answers.check(&processed), "cycle {cycle}");
+            }
+        }
+        assert_eq!(answers.differed, 0);
+        assert!(answers.answered >= 2, "answered {}", answers.answered);
+    }
+
+    #[test]
+    fn a_one_slave_line_remapped_or_readdressed_is_answered_as_its_esc_answers() {
+        // The FMMU moved away from logical 0, where the LWR goes, and to
+        // logical 0x100, where it goes: the window index must follow.
+        for at in [0, 0x100] {
+            answered_ahead_across(
+                at,
+                &frame(
+                    Command::Apwr,
+                    0x0600 << 16,
+                    &crate::testing::fmmu(0x100, 4, 0x1100, 2),
+                ),
+            );
+        }
+        // The station address changed: the FPRD no longer reaches it (the
+        // address index must follow).
+        answered_ahead_across(
+            0,
+            &frame(Command::Apwr, 0x0010 << 16, &0x2000u16.to_le_bytes()),
+        );
+    }
+
     #[test]
     fn a_reply_that_differs_switches_answering_ahead_off() {
         let line = line();
