@@ -293,6 +293,21 @@ struct Head {
     ado: u16,
 }
 
+/// A datagram split off by [`DatagramHead::split`] in its parts: header,
+/// data (`dh.data_len` bytes) and working counter.
+fn datagram_parts(
+    dh: DatagramHead,
+    dg: &mut [u8],
+) -> Option<(
+    &mut [u8; DATAGRAM_HEADER_LEN],
+    &mut [u8],
+    &mut [u8; WKC_LEN],
+)> {
+    let (header, body) = dg.split_first_chunk_mut::<DATAGRAM_HEADER_LEN>()?;
+    let (data, wkc) = body.split_at_mut_checked(usize::from(dh.data_len))?;
+    Some((header, data, wkc.first_chunk_mut::<WKC_LEN>()?))
+}
+
 /// Writes a datagram header's ADP (bytes 2..4), as each position-addressed
 /// slave increments it on the way.
 fn set_adp(header: &mut [u8; DATAGRAM_HEADER_LEN], adp: u16) {
@@ -781,13 +796,7 @@ impl Chain {
     /// index walks gone a cycle of one slave takes 733 instructions
     /// instead of 882 (`cycle_count 1`).
     fn dispatch_one(&mut self, dh: DatagramHead, dg: &mut [u8]) {
-        let Some((header, body)) = dg.split_first_chunk_mut::<DATAGRAM_HEADER_LEN>() else {
-            return;
-        };
-        let Some((data, wkc)) = body.split_at_mut_checked(usize::from(dh.data_len)) else {
-            return;
-        };
-        let Some(wkc) = wkc.first_chunk_mut::<WKC_LEN>() else {
+        let Some((header, data, wkc)) = datagram_parts(dh, dg) else {
             return;
         };
         let addressing = dh.command.addressing();
@@ -835,13 +844,7 @@ impl Chain {
             adp: dh.adp,
             ado: dh.ado,
         };
-        let Some((header, body)) = dg.split_first_chunk_mut::<DATAGRAM_HEADER_LEN>() else {
-            return;
-        };
-        let Some((data, wkc)) = body.split_at_mut_checked(usize::from(dh.data_len)) else {
-            return;
-        };
-        let Some(wkc) = wkc.first_chunk_mut::<WKC_LEN>() else {
+        let Some((header, data, wkc)) = datagram_parts(dh, dg) else {
             return;
         };
         let cmd = head.cmd;
