@@ -27,8 +27,7 @@ use ecat_slave::hal::NvStorage;
 use ecat_slave::led::LedPattern;
 use ecat_slave::od::Od;
 use ecat_slave::wire::ecat::{
-    Addressing, Command, DATAGRAM_HEADER_LEN, DatagramHead, EcatFrame, FrameType, MAX_DATAGRAMS,
-    WKC_LEN,
+    Addressing, Command, DatagramHead, DatagramParts, EcatFrame, FrameType, MAX_DATAGRAMS,
 };
 use ecat_slave::wire::ethernet::{ETHERTYPE_ETHERCAT, EthernetFrame};
 
@@ -285,37 +284,6 @@ struct FrameClock {
     frame: u64,
 }
 
-/// A datagram's header, decoded once for every slave it reaches.
-#[derive(Debug, Clone, Copy)]
-struct Head {
-    cmd: Command,
-    adp: u16,
-    ado: u16,
-}
-
-/// A datagram split off by [`DatagramHead::split`] in its parts: header,
-/// data (`dh.data_len` bytes) and working counter.
-fn datagram_parts(
-    dh: DatagramHead,
-    dg: &mut [u8],
-) -> Option<(
-    &mut [u8; DATAGRAM_HEADER_LEN],
-    &mut [u8],
-    &mut [u8; WKC_LEN],
-)> {
-    let (header, body) = dg.split_first_chunk_mut::<DATAGRAM_HEADER_LEN>()?;
-    let (data, wkc) = body.split_at_mut_checked(usize::from(dh.data_len))?;
-    Some((header, data, wkc.first_chunk_mut::<WKC_LEN>()?))
-}
-
-/// Writes a datagram header's ADP (bytes 2..4), as each position-addressed
-/// slave increments it on the way.
-fn set_adp(header: &mut [u8; DATAGRAM_HEADER_LEN], adp: u16) {
-    let [lo, hi] = adp.to_le_bytes();
-    header[2] = lo;
-    header[3] = hi;
-}
-
 /// Hands a datagram (`head`, its data in place) to slave `i`, telling its
 /// DC unit when the frame passes its ports ([`port_times`]) once per
 /// frame: `stamps[i]` holds the number of the frame whose times slave `i`
@@ -328,7 +296,7 @@ fn pass(
     i: usize,
     clock: &FrameClock,
     stamps: &mut [u64],
-    head: Head,
+    head: DatagramHead,
     data: &mut [u8],
 ) -> (u16, (u32, u32)) {
     let esc = s.esc_mut();
@@ -339,7 +307,7 @@ fn pass(
         let (p0, p1) = port_times(i, clock.n, (clock.t, clock.hop));
         esc.set_frame_times(p0, p1);
     }
-    let wkc = esc.process_data(head.cmd, head.adp, head.ado, data);
+    let wkc = esc.process_data(head.command, head.adp, head.ado, data);
     (wkc, (esc.fmmu_generation(), esc.address_generation()))
 }
 
@@ -796,7 +764,7 @@ impl Chain {
     /// index walks gone a cycle of one slave takes 733 instructions
     /// instead of 882 (`cycle_count 1`).
     fn dispatch_one(&mut self, dh: DatagramHead, dg: &mut [u8]) {
-        let Some((header, data, wkc)) = datagram_parts(dh, dg) else {
+        let Some(mut parts) = DatagramParts::of(&dh, dg) else {
             return;
         };
         let addressing = dh.command.addressing();
@@ -814,17 +782,12 @@ impl Chain {
             n: 1,
             frame: self.frames,
         };
-        let head = Head {
-            cmd: dh.command,
-            adp: dh.adp,
-            ado: dh.ado,
-        };
         let Some(s) = self.slaves.first_mut() else {
             return;
         };
-        let (w, gens) = pass(s.as_mut(), 0, &clock, &mut self.stamps, head, data);
+        let (w, gens) = pass(s.as_mut(), 0, &clock, &mut self.stamps, dh, parts.data);
         if matches!(addressing, Addressing::Position | Addressing::Broadcast) {
-            set_adp(header, dh.adp.wrapping_add(1));
+            parts.set_adp(dh.adp.wrapping_add(1));
         }
         self.touch(0);
         if dh.command.is_write() {
@@ -832,29 +795,25 @@ impl Chain {
             self.after_write(remapped, moved);
         }
         if w != 0 {
-            *wkc = u16::from_le_bytes(*wkc).wrapping_add(w).to_le_bytes();
+            parts.set_wkc(parts.wkc().wrapping_add(w));
         }
     }
 
     /// Hands one datagram (`dg`: its header, data and working counter,
     /// split off by [`DatagramHead::split`]) to the slaves it reaches.
-    fn dispatch(&mut self, dh: DatagramHead, dg: &mut [u8], n: usize) {
-        let head = Head {
-            cmd: dh.command,
-            adp: dh.adp,
-            ado: dh.ado,
-        };
-        let Some((header, data, wkc)) = datagram_parts(dh, dg) else {
+    fn dispatch(&mut self, head: DatagramHead, dg: &mut [u8], n: usize) {
+        let Some(mut parts) = DatagramParts::of(&head, dg) else {
             return;
         };
-        let cmd = head.cmd;
+        let wkc0 = parts.wkc();
+        let data = &mut *parts.data;
+        let cmd = head.command;
         let clock = FrameClock {
             t: self.frame_ns,
             hop: self.hop_ns,
             n,
             frame: self.frames,
         };
-        let wkc0 = u16::from_le_bytes(*wkc);
         let mut wkc_add = 0u16;
         match cmd.addressing() {
             Addressing::Configured if cmd != Command::Frmw => {
@@ -886,7 +845,7 @@ impl Chain {
                 // Slave i sees ADP0 + i; the one seeing 0 is addressed.
                 let pos = usize::from(0u16.wrapping_sub(head.adp));
                 if let Some(s) = self.slaves.get_mut(pos) {
-                    let at_zero = Head { adp: 0, ..head };
+                    let at_zero = DatagramHead { adp: 0, ..head };
                     let (w, gens) = pass(s.as_mut(), pos, &clock, &mut self.stamps, at_zero, data);
                     wkc_add = w;
                     self.touch(pos);
@@ -895,7 +854,7 @@ impl Chain {
                         self.after_write(remapped, moved);
                     }
                 }
-                set_adp(header, head.adp.wrapping_add(n as u16));
+                parts.set_adp(head.adp.wrapping_add(n as u16));
             }
             Addressing::Logical => {
                 // Only the slaves with an FMMU window overlapping the
@@ -988,7 +947,7 @@ impl Chain {
                         i,
                         &clock,
                         &mut self.stamps,
-                        Head { adp, ..head },
+                        DatagramHead { adp, ..head },
                         data,
                     );
                     wkc_add = wkc_add.wrapping_add(w);
@@ -998,14 +957,14 @@ impl Chain {
                     }
                 }
                 if advances {
-                    set_adp(header, head.adp.wrapping_add(n as u16));
+                    parts.set_adp(head.adp.wrapping_add(n as u16));
                 }
                 self.touched_all = true;
                 self.after_write(remapped, moved);
             }
         }
         if wkc_add != 0 {
-            *wkc = wkc0.wrapping_add(wkc_add).to_le_bytes();
+            parts.set_wkc(wkc0.wrapping_add(wkc_add));
         }
     }
 
