@@ -49,9 +49,14 @@ fn target_dir() -> PathBuf {
 }
 
 /// Builds the QEMU firmware (release, in target/board-firmware, where
-/// `.ci/run` builds both board binaries first) and returns the ELF. The crate's `.cargo/config.toml` (target,
+/// `.ci/run` builds both board binaries first) and returns the ELF; or
+/// returns `BOARD_QEMU_ELF`, a firmware built elsewhere (the nightly size
+/// build of `examples/firmware/README.md` is run so). The crate's `.cargo/config.toml` (target,
 /// linker script) applies only when cargo runs inside its folder.
 fn build_firmware() -> PathBuf {
+    if let Some(elf) = std::env::var_os("BOARD_QEMU_ELF") {
+        return PathBuf::from(elf);
+    }
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/board/qemu");
     let target_dir = target_dir().join("board-firmware");
     let status = Command::new(env!("CARGO"))
