@@ -1,6 +1,6 @@
 //! Where a Cortex-M firmware's code goes, by source module.
 //!
-//!     code_by_module <linked-elf-with-debug-info> [top]
+//!     code_by_module [--lines] <linked-elf-with-debug-info> [top]
 //!
 //! Reads the Thumb-2 disassembly (`$OBJDUMP`, default
 //! `arm-none-eabi-objdump -d`) for the address and size of every
@@ -12,6 +12,10 @@
 //! the core counts for the module that uses it. Code with no frame of
 //! ours (compiler builtins such as memcpy, `core` functions kept out of
 //! line) counts for the innermost file named.
+//!
+//! With `--lines`, counts by source line (`file:line`) instead of file:
+//! where in a module the bytes are (a line inlined at several call sites
+//! counts once with all their bytes).
 //!
 //! Prints the `top` (default 40) files by bytes, then the totals of the
 //! areas the footprint table of docs/book/src/performance.md uses. LTO
@@ -80,12 +84,16 @@ fn other(file: &str) -> String {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    let Some(elf) = args.get(1) else {
-        eprintln!("usage: code_by_module <linked-elf-with-debug-info> [top]");
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let lines = args.first().is_some_and(|a| a == "--lines");
+    if lines {
+        args.remove(0);
+    }
+    let Some(elf) = args.first() else {
+        eprintln!("usage: code_by_module [--lines] <linked-elf-with-debug-info> [top]");
         exit(2);
     };
-    let top: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(40);
+    let top: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(40);
 
     let objdump = tool("OBJDUMP", "arm-none-eabi-objdump");
     let out = Command::new(&objdump)
@@ -145,7 +153,13 @@ fn main() {
         if let Some(hex) = line.strip_prefix("0x") {
             cur = u64::from_str_radix(hex, 16).ok();
         } else if let Some(a) = cur {
-            let file = line.rsplit_once(':').map_or(line, |(f, _)| f);
+            // "file:line (discriminator n)": the file, or file and line.
+            let at = line.split(" (discriminator").next().unwrap_or(line);
+            let file = if lines {
+                at
+            } else {
+                at.rsplit_once(':').map_or(at, |(f, _)| f)
+            };
             frames.entry(a).or_default().push(file.to_string());
         }
     }
@@ -165,7 +179,8 @@ fn main() {
         *by_file.entry(file).or_default() += size;
     }
 
-    println!("    {total} bytes of code; by the innermost source file of this repository:");
+    let unit = if lines { "line" } else { "file" };
+    println!("    {total} bytes of code; by the innermost source {unit} of this repository:");
     let mut files: Vec<(&String, &u64)> = by_file.iter().collect();
     files.sort_by(|a, b| b.1.cmp(a.1).then(a.0.cmp(b.0)));
     for (f, n) in files.iter().take(top) {
@@ -173,7 +188,7 @@ fn main() {
     }
     if files.len() > top {
         let rest: u64 = files.iter().skip(top).map(|(_, n)| **n).sum();
-        println!("    {rest:7} ({} more files)", files.len() - top);
+        println!("    {rest:7} ({} more {unit}s)", files.len() - top);
     }
     println!("    by area:");
     let mut areas = [0u64; AREAS.len()];
