@@ -275,9 +275,11 @@ pub fn value_len(e: &Entry) -> usize {
 }
 
 /// The natural range of a data type (`None` for strings, bytes and
-/// floats, whose limits are not integers). `i128` holds every bound,
-/// UNSIGNED64 included.
-fn natural_range(t: &DataType, bits: u16, dict: &Dictionary) -> Option<(i128, i128)> {
+/// floats, whose limits are not integers), as the 64-bit two's complement
+/// patterns whose low bytes are sent: no wider integer is needed for
+/// UNSIGNED64's maximum (128-bit shifts cost 440 bytes of Cortex-M code).
+fn natural_range(t: &DataType, bits: u16, dict: &Dictionary) -> Option<(u64, u64)> {
+    let b = u32::from(bits.clamp(1, 64));
     let r = match t {
         DataType::Bool => (0, 1),
         DataType::Enum(en) => {
@@ -285,28 +287,31 @@ fn natural_range(t: &DataType, bits: u16, dict: &Dictionary) -> Option<(i128, i1
             let lo = values.iter().map(|(v, _)| *v).min();
             let hi = values.iter().map(|(v, _)| *v).max();
             match (lo, hi) {
-                (Some(lo), Some(hi)) => (lo.into(), hi.into()),
-                _ => (0, (1i128 << u32::from(en.bit_len().min(64))) - 1),
+                (Some(lo), Some(hi)) => (lo as u64, hi as u64),
+                _ => (0, u64::MAX >> (64 - u32::from(en.bit_len().clamp(1, 64)))),
             }
         }
         t if t.is_bytes() || t.is_real() => return None,
         t if t.is_signed() => {
-            let b = u32::from(bits.clamp(1, 64));
-            (-(1i128 << (b - 1)), (1i128 << (b - 1)) - 1)
+            let lo = u64::MAX << (b - 1);
+            (lo, !lo)
         }
-        _ => (0, (1i128 << u32::from(bits.clamp(1, 64))) - 1),
+        _ => (0, u64::MAX >> (64 - b)),
     };
     Some(r)
 }
 
 /// The minimum and maximum an entry description reports: the model's range,
 /// else the type's natural range (an enumeration's from `dict`'s
-/// [`EnumDesc`](crate::od::EnumDesc)); `None` for strings.
-pub fn value_range(e: &Entry, dict: &Dictionary) -> Option<(i128, i128)> {
+/// [`EnumDesc`](crate::od::EnumDesc)); `None` for strings. Each is the
+/// 64-bit two's complement pattern of the value (an `i64` minimum as its
+/// bits, UNSIGNED64's maximum as `u64::MAX`): the response sends its low
+/// bytes.
+pub fn value_range(e: &Entry, dict: &Dictionary) -> Option<(u64, u64)> {
     let (lo, hi) = natural_range(&e.data_type, e.bit_len, dict)?;
     Some((
-        e.min().map_or(lo, i128::from),
-        e.max().map_or(hi, i128::from),
+        e.min().map_or(lo, |v| v as u64),
+        e.max().map_or(hi, |v| v as u64),
     ))
 }
 
@@ -596,7 +601,7 @@ fn write_entry_description(
     }
     if info & value_info::DEFAULT != 0 {
         match e.default {
-            DefaultValue::Int(v) => w.int(v.get().into(), n),
+            DefaultValue::Int(v) => w.int(v.get() as u64, n),
             DefaultValue::Str(s) => {
                 let text = s.as_bytes();
                 for i in 0..n {
@@ -692,13 +697,11 @@ impl<'a> Writer<'a> {
         self.bytes(&v.to_le_bytes());
     }
 
-    /// `v` in `n` bytes, little-endian two's complement.
-    fn int(&mut self, v: i128, n: usize) {
+    /// The low `n` bytes of the two's complement pattern `v`,
+    /// little-endian (a number entry has at most 8).
+    fn int(&mut self, v: u64, n: usize) {
         let b = v.to_le_bytes();
-        let fill = if v < 0 { 0xFF } else { 0 };
-        for i in 0..n {
-            self.u8(b.get(i).copied().unwrap_or(fill));
-        }
+        self.bytes(b.get(..n).unwrap_or(&b));
     }
 
     /// The length written, or `None` if something did not fit.
@@ -825,6 +828,62 @@ mod tests {
         let gap = &exchange(&request(5, &[0x00, 0x60, 2, 0x78]), 128)[0];
         assert_eq!(gap[7], 0, "no value info for padding");
         assert_eq!(&gap[8..14], &[0, 0, 7, 0, 0, 0], "NULL, 7 bits, no access");
+    }
+
+    #[test]
+    fn natural_ranges_are_sent_in_the_entrys_bytes_for_every_integer_width() {
+        use crate::od::build::base;
+        use crate::od::types::Access;
+        let sent = |t: DataType| {
+            let e = base(1, "x", t, Access::Ro, PdoMapping::None, 0);
+            let (lo, hi) = value_range(&e, &DICT).expect("an integer has a range");
+            let mut buf = [0u8; 16];
+            let mut w = Writer::new(&mut buf);
+            w.int(lo, value_len(&e));
+            w.int(hi, value_len(&e));
+            let n = w.finish().unwrap();
+            buf[..n].to_vec()
+        };
+        assert_eq!(sent(DataType::Bool), [0, 1]);
+        assert_eq!(sent(DataType::Int8), [0x80, 0x7F]);
+        assert_eq!(sent(DataType::UInt8), [0x00, 0xFF]);
+        assert_eq!(sent(DataType::Int16), [0x00, 0x80, 0xFF, 0x7F]);
+        assert_eq!(sent(DataType::UInt24), [0, 0, 0, 0xFF, 0xFF, 0xFF]);
+        assert_eq!(
+            sent(DataType::Int40),
+            [0, 0, 0, 0, 0x80, 0xFF, 0xFF, 0xFF, 0xFF, 0x7F]
+        );
+        let mut int64 = vec![0; 7];
+        int64.extend([0x80]);
+        int64.extend([0xFF; 7]);
+        int64.push(0x7F);
+        assert_eq!(sent(DataType::Int64), int64);
+        let mut uint64 = vec![0; 8];
+        uint64.extend([0xFF; 8]);
+        assert_eq!(sent(DataType::UInt64), uint64);
+        // No integer range for strings and floats.
+        for t in [DataType::VisibleString, DataType::Real32, DataType::Real64] {
+            let e = base(1, "x", t, Access::Ro, PdoMapping::None, 0);
+            assert_eq!(value_range(&e, &DICT), None, "{t:?}");
+        }
+    }
+
+    #[test]
+    fn a_model_range_is_sent_as_its_twos_complement_bytes() {
+        use crate::od::build::base;
+        use crate::od::types::{Access, Limits};
+        const L: Limits = Limits::range(-300, 5, "");
+        let e = Entry {
+            limits: &L,
+            ..base(1, "x", DataType::Int16, Access::Rw, PdoMapping::None, 0)
+        };
+        let (lo, hi) = value_range(&e, &DICT).unwrap();
+        let mut buf = [0u8; 4];
+        let mut w = Writer::new(&mut buf);
+        w.int(lo, 2);
+        w.int(hi, 2);
+        assert_eq!(w.finish(), Some(4));
+        assert_eq!(buf, [0xD4, 0xFE, 5, 0]);
     }
 
     #[test]
