@@ -652,8 +652,7 @@ fn info_file(ctx: &FoeContext<'_>) -> Text<INFO_FILE_CAPACITY> {
         ("\nproduct_code=0x", id.product_code),
         ("\nrevision=0x", id.revision),
     ] {
-        text.push_str(key)
-            .push_hex_digits(u64::from(value), 8, true);
+        text.push_str(key).push_hex_digits(value, 8, true);
     }
     text.push_str("\nversion=")
         .push_str(ctx.version)

@@ -185,6 +185,12 @@ impl core::fmt::Display for EfwError {
 
 impl core::error::Error for EfwError {}
 
+/// A length as a 32-bit number of a text (saturated: a slot or an image
+/// never holds 4 GiB).
+fn n32(v: usize) -> u32 {
+    u32::try_from(v).unwrap_or(u32::MAX)
+}
+
 impl EfwError {
     /// The text of the error, as the FoE error reply carries it and
     /// `Display` prints it (built without `core::fmt`, see [`crate::text`]).
@@ -194,50 +200,50 @@ impl EfwError {
             Self::BadMagic => t.push_str("not an .efw image (bad magic)"),
             Self::UnsupportedFormat(v) => t
                 .push_str("unsupported .efw format version ")
-                .push_dec(u64::from(v)),
-            Self::BadHeaderLen(n) => t.push_str("bad .efw header length ").push_dec(u64::from(n)),
+                .push_dec(u32::from(v)),
+            Self::BadHeaderLen(n) => t.push_str("bad .efw header length ").push_dec(u32::from(n)),
             Self::HeaderCrc { expected, computed } => t
                 .push_str("header CRC ")
-                .push_hex(u64::from(expected), 8, false)
+                .push_hex(expected, 8, false)
                 .push_str(", computed ")
-                .push_hex(u64::from(computed), 8, false),
+                .push_hex(computed, 8, false),
             Self::WrongVendor { expected, found } => t
                 .push_str("image vendor ")
-                .push_hex(u64::from(found), 0, false)
+                .push_hex(found, 0, false)
                 .push_str(", device vendor ")
-                .push_hex(u64::from(expected), 0, false),
+                .push_hex(expected, 0, false),
             Self::WrongProduct { expected, found } => t
                 .push_str("image product ")
-                .push_hex(u64::from(found), 0, false)
+                .push_hex(found, 0, false)
                 .push_str(", device product ")
-                .push_hex(u64::from(expected), 0, false),
+                .push_hex(expected, 0, false),
             Self::RevisionOutOfRange { revision, min, max } => t
                 .push_str("device revision ")
-                .push_hex(u64::from(revision), 0, false)
+                .push_hex(revision, 0, false)
                 .push_str(" not in ")
-                .push_hex(u64::from(min), 0, false)
+                .push_hex(min, 0, false)
                 .push_str("..=")
-                .push_hex(u64::from(max), 0, false),
+                .push_hex(max, 0, false),
             Self::TooLarge { len, capacity } => t
                 .push_str("payload of ")
-                .push_dec(len as u64)
+                .push_dec(n32(len))
                 .push_str(" bytes exceeds slot capacity ")
-                .push_dec(capacity as u64),
+                .push_dec(n32(capacity)),
             Self::Truncated { expected, received } => t
                 .push_str("image truncated: ")
-                .push_dec(received as u64)
+                .push_dec(n32(received))
                 .push_str(" of ")
-                .push_dec(expected as u64)
+                .push_dec(n32(expected))
                 .push_str(" bytes"),
             Self::Oversized { expected } => t
                 .push_str("image longer than the ")
-                .push_dec(expected as u64)
+                .push_dec(n32(expected))
                 .push_str(" bytes announced"),
             Self::PayloadCrc { expected, computed } => t
                 .push_str("payload CRC ")
-                .push_hex(u64::from(expected), 8, false)
+                .push_hex(expected, 8, false)
                 .push_str(", computed ")
-                .push_hex(u64::from(computed), 8, false),
+                .push_hex(computed, 8, false),
             Self::BufferTooSmall => t.push_str("output buffer too small"),
             Self::EmptyPayload => t.push_str("image has an empty payload"),
             Self::Unsigned => {
@@ -1313,6 +1319,59 @@ mod tests {
             validate(&img, 64, 1000),
             Err(EfwError::PayloadCrc { .. })
         ));
+    }
+
+    #[test]
+    fn error_texts_print_their_numbers_in_decimal_and_hex() {
+        let cases = [
+            (
+                EfwError::UnsupportedFormat(2),
+                "unsupported .efw format version 2",
+            ),
+            (
+                EfwError::BadHeaderLen(65535),
+                "bad .efw header length 65535",
+            ),
+            (
+                EfwError::HeaderCrc {
+                    expected: 0xCBF4_3926,
+                    computed: 0x0000_00FF,
+                },
+                "header CRC 0xcbf43926, computed 0x000000ff",
+            ),
+            (
+                EfwError::WrongVendor {
+                    expected: 0xABC,
+                    found: 0xFFFF_FFFF,
+                },
+                "image vendor 0xffffffff, device vendor 0xabc",
+            ),
+            (
+                EfwError::TooLarge {
+                    len: 4_294_967_295,
+                    capacity: 0,
+                },
+                "payload of 4294967295 bytes exceeds slot capacity 0",
+            ),
+            (
+                EfwError::Truncated {
+                    expected: 100,
+                    received: 9,
+                },
+                "image truncated: 9 of 100 bytes",
+            ),
+        ];
+        for (e, text) in cases {
+            assert_eq!(e.text().as_str(), text);
+        }
+        // A length past 32 bits (a 64-bit host only) prints saturated.
+        if let Ok(huge) = usize::try_from(u64::from(u32::MAX) + 1) {
+            let e = EfwError::Oversized { expected: huge };
+            assert_eq!(
+                e.text().as_str(),
+                "image longer than the 4294967295 bytes announced"
+            );
+        }
     }
 
     #[test]
