@@ -63,53 +63,59 @@ impl core::fmt::Display for AlState {
 }
 
 /// AL status codes (register 0x0134, ETG.1000.6 table 11).
+///
+/// Each variant's discriminant is its code (`repr(u16)`), so
+/// [`AlStatusCode::code`], a `match` returning them, compiles to the tag
+/// itself instead of a table of 22 arms. `Other`'s tag is 0xFFFF, not a
+/// code: its own field holds the code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u16)]
 pub enum AlStatusCode {
     /// 0x0000 no error.
-    NoError,
+    NoError = 0x0000,
     /// 0x0001 unspecified error.
-    Unspecified,
+    Unspecified = 0x0001,
     /// 0x0007 firmware update not successful, old firmware still running.
-    FirmwareUpdateFailed,
+    FirmwareUpdateFailed = 0x0007,
     /// 0x0011 invalid requested state change.
-    InvalidStateChange,
+    InvalidStateChange = 0x0011,
     /// 0x0012 unknown requested state.
-    UnknownState,
+    UnknownState = 0x0012,
     /// 0x0013 bootstrap not supported.
-    BootNotSupported,
+    BootNotSupported = 0x0013,
     /// 0x0014 no valid firmware.
-    NoValidFirmware,
+    NoValidFirmware = 0x0014,
     /// 0x0015 invalid mailbox configuration (BOOT).
-    InvalidMailboxBoot,
+    InvalidMailboxBoot = 0x0015,
     /// 0x0016 invalid mailbox configuration (PRE-OP).
-    InvalidMailboxPreOp,
+    InvalidMailboxPreOp = 0x0016,
     /// 0x0017 invalid SyncManager configuration.
-    InvalidSmConfig,
+    InvalidSmConfig = 0x0017,
     /// 0x001A synchronisation error.
-    SyncError,
+    SyncError = 0x001A,
     /// 0x001B SyncManager watchdog.
-    SmWatchdog,
+    SmWatchdog = 0x001B,
     /// 0x001D invalid output configuration.
-    InvalidOutputConfig,
+    InvalidOutputConfig = 0x001D,
     /// 0x001E invalid input configuration.
-    InvalidInputConfig,
+    InvalidInputConfig = 0x001E,
     /// 0x0021 waiting for INIT.
-    WaitingForInit,
+    WaitingForInit = 0x0021,
     /// 0x0024 invalid input mapping.
-    InvalidInputMapping,
+    InvalidInputMapping = 0x0024,
     /// 0x0025 invalid output mapping.
-    InvalidOutputMapping,
+    InvalidOutputMapping = 0x0025,
     /// 0x002C fatal sync error.
-    FatalSyncError,
+    FatalSyncError = 0x002C,
     /// 0x0030 invalid DC SYNC configuration.
-    InvalidDcSyncConfig,
+    InvalidDcSyncConfig = 0x0030,
     /// 0x0035 invalid DC sync cycle time.
-    InvalidDcCycleTime,
+    InvalidDcCycleTime = 0x0035,
     /// 0x0070 the configured module ident list (0xF030) does not match the
     /// detected one (0xF050) (ETG.1000.6; ETG.5001 modular devices).
-    ModuleIdentMismatch,
+    ModuleIdentMismatch = 0x0070,
     /// Any other code.
-    Other(u16),
+    Other(u16) = 0xFFFF,
 }
 
 impl AlStatusCode {

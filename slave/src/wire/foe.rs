@@ -99,44 +99,49 @@ impl From<FoeOpcode> for u8 {
 /// EtherCAT Slave Stack Code (`foeappl.h`, SSC 5.12) and are decoded by
 /// common masters (TwinCAT, EC-Master), so this stack uses them for
 /// firmware-image errors, where they say more than "program error".
+///
+/// Each variant's discriminant is its code (`repr(u32)`), so the
+/// conversion to `u32`, a `match` returning them, compiles to the tag
+/// itself. `Unknown`'s tag is 0xFFFFFFFF, not a code: its field holds it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u32)]
 pub enum FoeErrorCode {
     /// `0x8000` Not defined (see the error text).
-    NotDefined,
+    NotDefined = 0x8000,
     /// `0x8001` The file requested by a read request does not exist.
-    NotFound,
+    NotFound = 0x8001,
     /// `0x8002` Access to the file is not allowed.
-    AccessDenied,
+    AccessDenied = 0x8002,
     /// `0x8003` Disk full: the file does not fit the storage.
-    DiskFull,
+    DiskFull = 0x8003,
     /// `0x8004` Illegal FoE operation (e.g. unexpected or unknown opcode).
-    Illegal,
+    Illegal = 0x8004,
     /// `0x8005` Packet number wrong.
-    PacketNumberWrong,
+    PacketNumberWrong = 0x8005,
     /// `0x8006` The file already exists.
-    AlreadyExists,
+    AlreadyExists = 0x8006,
     /// `0x8007` No user.
-    NoUser,
+    NoUser = 0x8007,
     /// `0x8008` Bootstrap only: the service is available in BOOT only.
-    BootstrapOnly,
+    BootstrapOnly = 0x8008,
     /// `0x8009` Not bootstrap: this file (name) is not valid in BOOT.
-    NotBootstrap,
+    NotBootstrap = 0x8009,
     /// `0x800A` No rights: password invalid.
-    NoRights,
+    NoRights = 0x800A,
     /// `0x800B` Program error (generic, when no other code applies).
-    ProgramError,
+    ProgramError = 0x800B,
     /// `0x800C` (SSC) Checksum included in the file is invalid.
-    InvalidChecksum,
+    InvalidChecksum = 0x800C,
     /// `0x800D` (SSC) The hardware does not support this firmware.
-    InvalidFirmware,
+    InvalidFirmware = 0x800D,
     /// `0x800F` (SSC) No file to read (deprecated, same as `NotFound`).
-    NoFile,
+    NoFile = 0x800F,
     /// `0x8010` (SSC) File header missing or wrong.
-    NoFileHeader,
+    NoFileHeader = 0x8010,
     /// `0x8011` (SSC) Flash cannot be accessed.
-    FlashError,
+    FlashError = 0x8011,
     /// Any other value.
-    Unknown(u32),
+    Unknown(u32) = 0xFFFF_FFFF,
 }
 
 impl From<u32> for FoeErrorCode {
