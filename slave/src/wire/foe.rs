@@ -46,22 +46,26 @@ mod field {
 }
 
 /// FoE operation code (ETG.1000.6 §5.8, Table "FoE elements", `OpCode`).
+///
+/// Each variant's discriminant is its code (`repr(u8)`): the conversion
+/// to `u8` compiles to the tag. `Unknown`'s tag is not a code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
 pub enum FoeOpcode {
     /// `1`: read request (upload, slave → master).
-    ReadRequest,
+    ReadRequest = 1,
     /// `2`: write request (download, master → slave).
-    WriteRequest,
+    WriteRequest = 2,
     /// `3`: one packet of file data.
-    Data,
+    Data = 3,
     /// `4`: acknowledges a write request (packet 0) or a data packet.
-    Ack,
+    Ack = 4,
     /// `5`: aborts the transfer with an error code and text.
-    Error,
+    Error = 5,
     /// `6`: the receiver cannot take the packet yet; it is to be repeated.
-    Busy,
+    Busy = 6,
     /// Any other value.
-    Unknown(u8),
+    Unknown(u8) = 0xFF,
 }
 
 impl From<u8> for FoeOpcode {

@@ -46,24 +46,28 @@ mod field {
 
 /// Mailbox protocol type (ETG.1000.4 / ETG.1000.6 §5.5, mailbox header
 /// "Type" field).
+///
+/// Each variant's discriminant is its code (`repr(u8)`): the conversion
+/// to `u8` compiles to the tag. `Unknown`'s tag is not a code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
 pub enum MailboxType {
     /// `0x00`: mailbox error reply ([`MailboxError`]).
-    Error,
+    Error = 0x00,
     /// `0x01`: ADS over EtherCAT.
-    AoE,
+    AoE = 0x01,
     /// `0x02`: Ethernet over EtherCAT.
-    EoE,
+    EoE = 0x02,
     /// `0x03`: CANopen over EtherCAT.
-    CoE,
+    CoE = 0x03,
     /// `0x04`: File access over EtherCAT.
-    FoE,
+    FoE = 0x04,
     /// `0x05`: Servo profile over EtherCAT.
-    SoE,
+    SoE = 0x05,
     /// `0x0F`: Vendor specific.
-    VoE,
+    VoE = 0x0F,
     /// Any other (reserved) value.
-    Unknown(u8),
+    Unknown(u8) = 0xFF,
 }
 
 impl From<u8> for MailboxType {
@@ -342,28 +346,32 @@ pub const ERROR_LEN: usize = field::ERR_DETAIL.end;
 
 /// Mailbox error detail code (ETG.1000.6 §5.5, mailbox error reply
 /// "Detail" codes `MBXERR_*`).
+///
+/// Each variant's discriminant is its code (`repr(u16)`): the conversion
+/// to `u16` compiles to the tag. `Unknown`'s tag is not a code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u16)]
 pub enum MailboxErrorCode {
     /// `0x01` Syntax of the 6-octet mailbox header is wrong.
-    Syntax,
+    Syntax = 0x01,
     /// `0x02` The mailbox protocol is not supported.
-    UnsupportedProtocol,
+    UnsupportedProtocol = 0x02,
     /// `0x03` Channel field contains a wrong value.
-    InvalidChannel,
+    InvalidChannel = 0x03,
     /// `0x04` The service in the mailbox protocol is not supported.
-    ServiceNotSupported,
+    ServiceNotSupported = 0x04,
     /// `0x05` The mailbox protocol header is wrong (without the 6-octet
     /// mailbox header).
-    InvalidHeader,
+    InvalidHeader = 0x05,
     /// `0x06` Length of the received mailbox data is too short.
-    SizeTooShort,
+    SizeTooShort = 0x06,
     /// `0x07` The mailbox protocol cannot be processed for lack of
     /// resources.
-    NoMoreMemory,
+    NoMoreMemory = 0x07,
     /// `0x08` The length of the data is inconsistent.
-    InvalidSize,
+    InvalidSize = 0x08,
     /// Any other detail code.
-    Unknown(u16),
+    Unknown(u16) = 0xFFFF,
 }
 
 impl From<u16> for MailboxErrorCode {

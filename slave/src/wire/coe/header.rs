@@ -3,26 +3,30 @@
 use super::*;
 
 /// CoE service (ETG.1000.6 Table 29 "CoE elements", service field).
+///
+/// Each variant's discriminant is its code (`repr(u8)`): the conversion
+/// to `u8` compiles to the tag. `Unknown`'s tag is not a code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
 pub enum CoeService {
     /// `1` Emergency.
-    Emergency,
+    Emergency = 1,
     /// `2` SDO request.
-    SdoRequest,
+    SdoRequest = 2,
     /// `3` SDO response.
-    SdoResponse,
+    SdoResponse = 3,
     /// `4` TxPDO.
-    TxPdo,
+    TxPdo = 4,
     /// `5` RxPDO.
-    RxPdo,
+    RxPdo = 5,
     /// `6` TxPDO remote request.
-    TxPdoRemoteReq,
+    TxPdoRemoteReq = 6,
     /// `7` RxPDO remote request.
-    RxPdoRemoteReq,
+    RxPdoRemoteReq = 7,
     /// `8` SDO information.
-    SdoInformation,
+    SdoInformation = 8,
     /// Any other (reserved) value.
-    Unknown(u8),
+    Unknown(u8) = 0xFF,
 }
 
 impl From<u8> for CoeService {

@@ -5,24 +5,28 @@ use super::*;
 
 /// SDO information opcode (ETG.1000.6 §5.6.3.2, SDO information header
 /// "OpCode").
+///
+/// Each variant's discriminant is its code (`repr(u8)`): the conversion
+/// to `u8` compiles to the tag. `Unknown`'s tag is not a code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
 pub enum SdoInfoOpcode {
     /// `1` Get OD list request.
-    GetOdListReq,
+    GetOdListReq = 1,
     /// `2` Get OD list response.
-    GetOdListResp,
+    GetOdListResp = 2,
     /// `3` Get object description request.
-    GetObjDescReq,
+    GetObjDescReq = 3,
     /// `4` Get object description response.
-    GetObjDescResp,
+    GetObjDescResp = 4,
     /// `5` Get entry description request.
-    GetEntryDescReq,
+    GetEntryDescReq = 5,
     /// `6` Get entry description response.
-    GetEntryDescResp,
+    GetEntryDescResp = 6,
     /// `7` SDO information error request.
-    SdoInfoErrorReq,
+    SdoInfoErrorReq = 7,
     /// Any other value.
-    Unknown(u8),
+    Unknown(u8) = 0xFF,
 }
 
 impl From<u8> for SdoInfoOpcode {
