@@ -5,19 +5,21 @@
 //! on its SyncManagers; it returns the new AL status (0x0130/0x0134). It
 //! knows nothing of the ESC or the object dictionary.
 
-/// EtherCAT device states (AL status bits 0-3).
+/// EtherCAT device states (AL status bits 0-3). Each discriminant is the
+/// state's bits (`repr(u8)`), so [`AlState::bits`] is the tag itself.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
 pub enum AlState {
     /// INIT (1).
-    Init,
+    Init = 1,
     /// PRE-OPERATIONAL (2): mailbox running.
-    PreOp,
+    PreOp = 2,
     /// BOOTSTRAP (3): firmware update over FoE only.
-    Boot,
+    Boot = 3,
     /// SAFE-OPERATIONAL (4): inputs valid, outputs in safe state.
-    SafeOp,
+    SafeOp = 4,
     /// OPERATIONAL (8).
-    Op,
+    Op = 8,
 }
 
 impl AlState {
