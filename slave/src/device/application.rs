@@ -89,6 +89,8 @@ impl<'a> Changes<'a> {
     }
 
     /// The pairs, in subindex order.
+    // One copy in a firmware (each of the five walks built its own).
+    #[inline(never)]
     pub fn iter(&self) -> ChangesIter<'a> {
         ChangesIter(match self.0 {
             Source::List(pairs) => IterSource::List(pairs.iter()),
