@@ -493,9 +493,7 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             // The ESC answers again after a PDI failure whose AL status
             // write was lost: the master must see SAFE-OP + ERR 0x0001 now,
             // not at its next AL control request.
-            self.esc
-                .write_u16(reg::AL_STATUS_CODE, self.al.code.code())?;
-            self.esc.write_u16(reg::AL_STATUS, self.al.register())?;
+            self.write_al_status()?;
             self.status_unwritten = false;
         }
         let sm1 = reg::al_event_sm(1);
@@ -539,9 +537,7 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
                         error: true,
                         code: AlStatusCode::FirmwareUpdateFailed,
                     };
-                    self.esc
-                        .write_u16(reg::AL_STATUS_CODE, self.al.code.code())?;
-                    self.esc.write_u16(reg::AL_STATUS, self.al.register())?;
+                    self.write_al_status()?;
                 }
             }
         }
@@ -628,7 +624,17 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             error: true,
             code,
         };
-        self.esc.write_u16(reg::AL_STATUS_CODE, code.code())?;
+        self.write_al_status()
+    }
+
+    /// Writes `self.al` into the AL status code and AL status registers,
+    /// the code first (a master that sees the error flag reads its code).
+    /// One copy for the four places that report a state (each wrote both
+    /// registers itself).
+    #[inline(never)]
+    pub(super) fn write_al_status(&mut self) -> Result<(), EscError> {
+        self.esc
+            .write_u16(reg::AL_STATUS_CODE, self.al.code.code())?;
         self.esc.write_u16(reg::AL_STATUS, self.al.register())
     }
 

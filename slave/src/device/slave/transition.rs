@@ -299,8 +299,6 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             self.mailbox.reset();
         }
         self.al = after;
-        self.esc.write_u16(reg::AL_STATUS_CODE, after.code.code())?;
-        self.esc.write_u16(reg::AL_STATUS, after.register())?;
-        Ok(())
+        self.write_al_status()
     }
 }
