@@ -697,11 +697,15 @@ impl<'a> Writer<'a> {
         self.bytes(&v.to_le_bytes());
     }
 
-    /// The low `n` bytes of the two's complement pattern `v`,
-    /// little-endian (a number entry has at most 8).
+    /// The two's complement pattern `v` in `n` bytes, little-endian
+    /// (sign-filled beyond 8: a byte entry's zero default is as long as
+    /// the entry).
     fn int(&mut self, v: u64, n: usize) {
         let b = v.to_le_bytes();
-        self.bytes(b.get(..n).unwrap_or(&b));
+        let fill = if (v as i64) < 0 { 0xFF } else { 0 };
+        for i in 0..n {
+            self.u8(b.get(i).copied().unwrap_or(fill));
+        }
     }
 
     /// The length written, or `None` if something did not fit.
@@ -866,6 +870,31 @@ mod tests {
             let e = base(1, "x", t, Access::Ro, PdoMapping::None, 0);
             assert_eq!(value_range(&e, &DICT), None, "{t:?}");
         }
+    }
+
+    #[test]
+    fn a_byte_entrys_zero_default_is_described_in_all_its_bytes() {
+        use crate::od::build::base;
+        use crate::od::types::Access;
+        let e = Entry {
+            bit_len: 128,
+            ..base(
+                1,
+                "x",
+                DataType::OctetString,
+                Access::Ro,
+                PdoMapping::None,
+                0,
+            )
+        };
+        let mut buf = [0xAAu8; 64];
+        let mut w = Writer::new(&mut buf);
+        write_entry_description(&mut w, 0x2000, &e, value_info::DEFAULT, &DICT);
+        let n = w.finish().unwrap();
+        // index, sub, info, type, bits, access (10 bytes), then the default.
+        assert_eq!(buf[3], value_info::DEFAULT);
+        assert_eq!(&buf[10..26], &[0u8; 16]);
+        assert_eq!(&buf[26..n], b"x");
     }
 
     #[test]
