@@ -109,6 +109,21 @@ pub enum DescriptionBuildError {
     /// A mailbox SyncManager is missing.
     #[error("{0}: the ESI has a mailbox protocol but no MBoxOut/MBoxIn SyncManager")]
     NoMailboxSm(String),
+    /// A mailbox is longer than a twin's firmware buffers hold (the core's
+    /// [`MAX_MAILBOX`](ecat_slave::device::MAX_MAILBOX)).
+    #[error(
+        "{device}: the {which} mailbox is {len} bytes long; a twin serves mailboxes of at most {max} bytes"
+    )]
+    MailboxTooLong {
+        /// The device.
+        device: String,
+        /// `MBoxOut`, `MBoxIn`, or the bootstrap `out` / `in` mailbox.
+        which: &'static str,
+        /// Its length in the ESI.
+        len: u16,
+        /// The longest a twin serves.
+        max: usize,
+    },
     /// A modular device's slots or modules cannot be used.
     #[error("{at}: {problem}")]
     Modular {
@@ -353,6 +368,25 @@ pub(super) fn build_description(dev: &EsiDevice) -> Result<Described, Descriptio
         pd_out,
         pd_in,
     };
+    // The firmware's buffers hold MAX_MAILBOX bytes; the description's
+    // check sees the output mailboxes only, so the input ones are checked
+    // here too (a longer one would not fit the firmware's buffers).
+    let max = ecat_slave::device::MAX_MAILBOX;
+    for (which, len) in [
+        ("MBoxOut", layout.mbx_out.1),
+        ("MBoxIn", layout.mbx_in.1),
+        ("bootstrap out", layout.boot_out.1),
+        ("bootstrap in", layout.boot_in.1),
+    ] {
+        if usize::from(len) > max {
+            return Err(DescriptionBuildError::MailboxTooLong {
+                device: dev.label(),
+                which,
+                len,
+                max,
+            });
+        }
+    }
     let coe = dev.coe_details;
     let cd = &dev.config_data;
     let (identity, names) = crate::identity_and_names(dev);
@@ -435,6 +469,37 @@ mod tests {
 </Device></Devices></Descriptions></EtherCATInfo>"##
         );
         EsiFile::parse(&text).unwrap().devices.remove(0)
+    }
+
+    #[test]
+    fn a_mailbox_longer_than_a_twin_serves_is_a_load_error_not_a_panic() {
+        let sms = |out: u16, inp: u16| {
+            format!(
+                "<Sm StartAddress=\"#x1000\" DefaultSize=\"{out}\" ControlByte=\"#x26\" Enable=\"1\">MBoxOut</Sm>\n\
+                 <Sm StartAddress=\"#x1800\" DefaultSize=\"{inp}\" ControlByte=\"#x22\" Enable=\"1\">MBoxIn</Sm>"
+            )
+        };
+        let e = describe(&dev_with_sms(&sms(128, 2048))).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "D rev 0x00000001: the MBoxIn mailbox is 2048 bytes long; a twin serves mailboxes of at most 1024 bytes"
+        );
+        // The longest there is loads, and its twin runs.
+        let dev = dev_with_sms(&sms(1024, 1024));
+        assert!(describe(&dev).is_ok());
+        let mut t = crate::twin(&dev, Some(7), crate::InputRule::ALL[0].1).unwrap();
+        let _ = t.poll_with(1_000_000, None);
+        // A bootstrap mailbox too.
+        let boot = format!(
+            "{}\n<Eeprom><ByteSize>2048</ByteSize><BootStrap>0010008000180080</BootStrap></Eeprom>",
+            sms(128, 128)
+        );
+        let e = describe(&dev_with_sms(&boot)).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("the bootstrap out mailbox is 32768 bytes long"),
+            "{e}"
+        );
     }
 
     #[test]
