@@ -317,6 +317,12 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
 
     /// Uses another memory layout (standard mailbox size); it must match
     /// the SII the ESC serves.
+    ///
+    /// # Panics
+    ///
+    /// If a mailbox of `layout` is longer than `MBX` (the firmware's
+    /// buffers): a loader of untrusted files checks the lengths first, as
+    /// the twins' does.
     pub fn set_layout(&mut self, layout: MemoryLayout) {
         let lens = [
             layout.mbx_out.1,
