@@ -284,11 +284,13 @@ fn natural_range(t: &DataType, bits: u16, dict: &Dictionary) -> Option<(u64, u64
         DataType::Bool => (0, 1),
         DataType::Enum(en) => {
             let values = dict.find_enum(en.index()).map_or(&[][..], |d| d.values);
-            let lo = values.iter().map(|(v, _)| *v).min();
-            let hi = values.iter().map(|(v, _)| *v).max();
-            match (lo, hi) {
-                (Some(lo), Some(hi)) => (lo as u64, hi as u64),
-                _ => (0, u64::MAX >> (64 - u32::from(en.bit_len().clamp(1, 64)))),
+            // One pass for both ends.
+            let range = values.iter().fold(None, |r: Option<(i64, i64)>, &(v, _)| {
+                Some(r.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))))
+            });
+            match range {
+                Some((lo, hi)) => (lo as u64, hi as u64),
+                None => (0, u64::MAX >> (64 - u32::from(en.bit_len().clamp(1, 64)))),
             }
         }
         t if t.is_bytes() || t.is_real() => return None,
@@ -865,6 +867,16 @@ mod tests {
         let mut uint64 = vec![0; 8];
         uint64.extend([0xFF; 8]);
         assert_eq!(sent(DataType::UInt64), uint64);
+        // An enumeration: its smallest and largest listed value; one the
+        // dictionary does not list, its bits' range.
+        assert_eq!(sent(crate::testing::MODE.data_type()), [1, 2]);
+        let unlisted = crate::od::EnumDesc {
+            index: 0x0801,
+            name: "DT0801EN04",
+            bit_len: 4,
+            values: &[],
+        };
+        assert_eq!(sent(unlisted.data_type()), [0, 0x0F]);
         // No integer range for strings and floats.
         for t in [DataType::VisibleString, DataType::Real32, DataType::Real64] {
             let e = base(1, "x", t, Access::Ro, PdoMapping::None, 0);
