@@ -48,7 +48,7 @@ const AREAS: [(&str, &[&str]); 12] = [
     ("the device's application and board", &["devices/", "examples/io8/", "profiles/"]),
     ("the firmware example's glue and board stores", &["examples/firmware/"]),
     ("the PDI trait and SPI drivers (drivers/)", &["drivers/"]),
-    ("compiler builtins, core and other crates", &[""]),
+    ("core, compiler builtins, the C library and other crates", &[""]),
 ];
 
 fn tool(var: &str, default: &str) -> String {
