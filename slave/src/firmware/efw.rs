@@ -1322,6 +1322,97 @@ mod tests {
     }
 
     #[test]
+    fn every_error_has_its_text_with_its_numbers_in_place() {
+        let v = |s: &str| FirmwareVersion::new(s).unwrap();
+        let cases = [
+            (EfwError::BadMagic, "not an .efw image (bad magic)"),
+            (
+                EfwError::UnsupportedFormat(9),
+                "unsupported .efw format version 9",
+            ),
+            (EfwError::BadHeaderLen(17), "bad .efw header length 17"),
+            (
+                EfwError::HeaderCrc {
+                    expected: 0x12,
+                    computed: 0xDEAD_BEEF,
+                },
+                "header CRC 0x00000012, computed 0xdeadbeef",
+            ),
+            (
+                EfwError::WrongVendor {
+                    expected: 0x2,
+                    found: 0x1,
+                },
+                "image vendor 0x1, device vendor 0x2",
+            ),
+            (
+                EfwError::WrongProduct {
+                    expected: 0x20,
+                    found: 0x10,
+                },
+                "image product 0x10, device product 0x20",
+            ),
+            (
+                EfwError::RevisionOutOfRange {
+                    revision: 0x5,
+                    min: 0x1,
+                    max: 0x3,
+                },
+                "device revision 0x5 not in 0x1..=0x3",
+            ),
+            (
+                EfwError::TooLarge {
+                    len: 5000,
+                    capacity: 4096,
+                },
+                "payload of 5000 bytes exceeds slot capacity 4096",
+            ),
+            (
+                EfwError::Truncated {
+                    expected: 10,
+                    received: 3,
+                },
+                "image truncated: 3 of 10 bytes",
+            ),
+            (
+                EfwError::Oversized { expected: 12 },
+                "image longer than the 12 bytes announced",
+            ),
+            (
+                EfwError::PayloadCrc {
+                    expected: 0xA,
+                    computed: 0xB,
+                },
+                "payload CRC 0x0000000a, computed 0x0000000b",
+            ),
+            (EfwError::BufferTooSmall, "output buffer too small"),
+            (EfwError::EmptyPayload, "image has an empty payload"),
+            (
+                EfwError::Unsigned,
+                "image not signed; this device accepts only signed images",
+            ),
+            (
+                EfwError::BadSignature,
+                "image signature does not verify with the device's key",
+            ),
+            (
+                EfwError::SignatureUnsupported,
+                "this device requires signed images but cannot check signatures",
+            ),
+            (
+                EfwError::Rollback {
+                    version: v("0.9"),
+                    floor: v("1.0"),
+                },
+                "version 0.9 is older than the minimum 1.0: downgrade refused",
+            ),
+        ];
+        for (e, text) in cases {
+            assert_eq!(e.text().as_str(), text, "{e:?}");
+        }
+    }
+
+    #[test]
     fn error_texts_print_their_numbers_in_decimal_and_hex() {
         let cases = [
             (
