@@ -5,6 +5,7 @@
 //! on its SyncManagers; it returns the new AL status (0x0130/0x0134). It
 //! knows nothing of the ESC or the object dictionary.
 
+use crate::codes::protocol_codes;
 /// EtherCAT device states (AL status bits 0-3). Each discriminant is the
 /// state's bits (`repr(u8)`), so [`AlState::bits`] is the tag itself.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -64,91 +65,65 @@ impl core::fmt::Display for AlState {
     }
 }
 
-/// AL status codes (register 0x0134, ETG.1000.6 table 11).
-///
-/// Each variant's discriminant is its code (`repr(u16)`), so
-/// [`AlStatusCode::code`], a `match` returning them, compiles to the tag
-/// itself instead of a table of 22 arms. `Other`'s tag is 0xFFFF, not a
-/// code: its own field holds the code.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u16)]
-pub enum AlStatusCode {
-    /// 0x0000 no error.
-    NoError = 0x0000,
-    /// 0x0001 unspecified error.
-    Unspecified = 0x0001,
-    /// 0x0007 firmware update not successful, old firmware still running.
-    FirmwareUpdateFailed = 0x0007,
-    /// 0x0011 invalid requested state change.
-    InvalidStateChange = 0x0011,
-    /// 0x0012 unknown requested state.
-    UnknownState = 0x0012,
-    /// 0x0013 bootstrap not supported.
-    BootNotSupported = 0x0013,
-    /// 0x0014 no valid firmware.
-    NoValidFirmware = 0x0014,
-    /// 0x0015 invalid mailbox configuration (BOOT).
-    InvalidMailboxBoot = 0x0015,
-    /// 0x0016 invalid mailbox configuration (PRE-OP).
-    InvalidMailboxPreOp = 0x0016,
-    /// 0x0017 invalid SyncManager configuration.
-    InvalidSmConfig = 0x0017,
-    /// 0x001A synchronisation error.
-    SyncError = 0x001A,
-    /// 0x001B SyncManager watchdog.
-    SmWatchdog = 0x001B,
-    /// 0x001D invalid output configuration.
-    InvalidOutputConfig = 0x001D,
-    /// 0x001E invalid input configuration.
-    InvalidInputConfig = 0x001E,
-    /// 0x0021 waiting for INIT.
-    WaitingForInit = 0x0021,
-    /// 0x0024 invalid input mapping.
-    InvalidInputMapping = 0x0024,
-    /// 0x0025 invalid output mapping.
-    InvalidOutputMapping = 0x0025,
-    /// 0x002C fatal sync error.
-    FatalSyncError = 0x002C,
-    /// 0x0030 invalid DC SYNC configuration.
-    InvalidDcSyncConfig = 0x0030,
-    /// 0x0035 invalid DC sync cycle time.
-    InvalidDcCycleTime = 0x0035,
-    /// 0x0070 the configured module ident list (0xF030) does not match the
-    /// detected one (0xF050) (ETG.1000.6; ETG.5001 modular devices).
-    ModuleIdentMismatch = 0x0070,
-    /// Any other code.
-    Other(u16) = 0xFFFF,
+protocol_codes! {
+    /// AL status codes (register 0x0134, ETG.1000.6 table 11).
+    ///
+    /// Each variant's discriminant is its code (`repr(u16)`), so
+    /// [`AlStatusCode::code`], a `match` returning them, compiles to the tag
+    /// itself instead of a table of 22 arms. `Other`'s tag is 0xFFFF, not a
+    /// code: its own field holds the code.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum AlStatusCode(u16) {
+        /// 0x0000 no error.
+        NoError = 0x0000,
+        /// 0x0001 unspecified error.
+        Unspecified = 0x0001,
+        /// 0x0007 firmware update not successful, old firmware still running.
+        FirmwareUpdateFailed = 0x0007,
+        /// 0x0011 invalid requested state change.
+        InvalidStateChange = 0x0011,
+        /// 0x0012 unknown requested state.
+        UnknownState = 0x0012,
+        /// 0x0013 bootstrap not supported.
+        BootNotSupported = 0x0013,
+        /// 0x0014 no valid firmware.
+        NoValidFirmware = 0x0014,
+        /// 0x0015 invalid mailbox configuration (BOOT).
+        InvalidMailboxBoot = 0x0015,
+        /// 0x0016 invalid mailbox configuration (PRE-OP).
+        InvalidMailboxPreOp = 0x0016,
+        /// 0x0017 invalid SyncManager configuration.
+        InvalidSmConfig = 0x0017,
+        /// 0x001A synchronisation error.
+        SyncError = 0x001A,
+        /// 0x001B SyncManager watchdog.
+        SmWatchdog = 0x001B,
+        /// 0x001D invalid output configuration.
+        InvalidOutputConfig = 0x001D,
+        /// 0x001E invalid input configuration.
+        InvalidInputConfig = 0x001E,
+        /// 0x0021 waiting for INIT.
+        WaitingForInit = 0x0021,
+        /// 0x0024 invalid input mapping.
+        InvalidInputMapping = 0x0024,
+        /// 0x0025 invalid output mapping.
+        InvalidOutputMapping = 0x0025,
+        /// 0x002C fatal sync error.
+        FatalSyncError = 0x002C,
+        /// 0x0030 invalid DC SYNC configuration.
+        InvalidDcSyncConfig = 0x0030,
+        /// 0x0035 invalid DC sync cycle time.
+        InvalidDcCycleTime = 0x0035,
+        /// 0x0070 the configured module ident list (0xF030) does not match the
+        /// detected one (0xF050) (ETG.1000.6; ETG.5001 modular devices).
+        ModuleIdentMismatch = 0x0070,
+    } else {
+        /// Any other code.
+        Other = 0xFFFF,
+    }
 }
 
 impl AlStatusCode {
-    /// The register value.
-    pub const fn code(self) -> u16 {
-        match self {
-            AlStatusCode::NoError => 0x0000,
-            AlStatusCode::Unspecified => 0x0001,
-            AlStatusCode::FirmwareUpdateFailed => 0x0007,
-            AlStatusCode::InvalidStateChange => 0x0011,
-            AlStatusCode::UnknownState => 0x0012,
-            AlStatusCode::BootNotSupported => 0x0013,
-            AlStatusCode::NoValidFirmware => 0x0014,
-            AlStatusCode::InvalidMailboxBoot => 0x0015,
-            AlStatusCode::InvalidMailboxPreOp => 0x0016,
-            AlStatusCode::InvalidSmConfig => 0x0017,
-            AlStatusCode::SyncError => 0x001A,
-            AlStatusCode::SmWatchdog => 0x001B,
-            AlStatusCode::InvalidOutputConfig => 0x001D,
-            AlStatusCode::InvalidInputConfig => 0x001E,
-            AlStatusCode::WaitingForInit => 0x0021,
-            AlStatusCode::InvalidInputMapping => 0x0024,
-            AlStatusCode::InvalidOutputMapping => 0x0025,
-            AlStatusCode::FatalSyncError => 0x002C,
-            AlStatusCode::InvalidDcSyncConfig => 0x0030,
-            AlStatusCode::InvalidDcCycleTime => 0x0035,
-            AlStatusCode::ModuleIdentMismatch => 0x0070,
-            AlStatusCode::Other(c) => c,
-        }
-    }
-
     /// The ETG.1000.6 description of the code.
     pub const fn text(self) -> &'static str {
         match self {
@@ -178,34 +153,6 @@ impl AlStatusCode {
                 "detected module ident list (0xF050) and configured module ident list (0xF030) do not match"
             }
             AlStatusCode::Other(_) => "other AL status code",
-        }
-    }
-
-    /// Decodes a register value.
-    pub const fn from_code(code: u16) -> Self {
-        match code {
-            0x0000 => AlStatusCode::NoError,
-            0x0001 => AlStatusCode::Unspecified,
-            0x0007 => AlStatusCode::FirmwareUpdateFailed,
-            0x0011 => AlStatusCode::InvalidStateChange,
-            0x0012 => AlStatusCode::UnknownState,
-            0x0013 => AlStatusCode::BootNotSupported,
-            0x0014 => AlStatusCode::NoValidFirmware,
-            0x0015 => AlStatusCode::InvalidMailboxBoot,
-            0x0016 => AlStatusCode::InvalidMailboxPreOp,
-            0x0017 => AlStatusCode::InvalidSmConfig,
-            0x001A => AlStatusCode::SyncError,
-            0x001B => AlStatusCode::SmWatchdog,
-            0x001D => AlStatusCode::InvalidOutputConfig,
-            0x001E => AlStatusCode::InvalidInputConfig,
-            0x0021 => AlStatusCode::WaitingForInit,
-            0x0024 => AlStatusCode::InvalidInputMapping,
-            0x0025 => AlStatusCode::InvalidOutputMapping,
-            0x002C => AlStatusCode::FatalSyncError,
-            0x0030 => AlStatusCode::InvalidDcSyncConfig,
-            0x0035 => AlStatusCode::InvalidDcCycleTime,
-            0x0070 => AlStatusCode::ModuleIdentMismatch,
-            c => AlStatusCode::Other(c),
         }
     }
 }

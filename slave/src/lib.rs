@@ -20,7 +20,7 @@
 //!
 //! Layers: `device` → `mailbox` → `foe`, `coe` → `params`, `pdo` →
 //! `od` → `led`, `firmware` → `al` → `esc` → `sii` → `hal` → `wire`,
-//! `limits`, `text`
+//! `limits`, `text` → `codes`
 #![cfg_attr(not(any(test, feature = "std", feature = "testing")), no_std)]
 #![forbid(unsafe_code)]
 #![cfg_attr(
@@ -34,6 +34,7 @@
 )]
 
 pub mod al;
+mod codes;
 pub mod coe;
 pub mod device;
 pub mod esc;

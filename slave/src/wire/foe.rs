@@ -24,6 +24,7 @@
 //! end of the mailbox data (the mailbox header's length field).
 
 use super::{Field, Rest, WireError};
+use crate::codes::protocol_codes;
 
 /// Length of the FoE header (opcode, reserved byte, 32-bit word).
 pub const HEADER_LEN: usize = field::TAIL.start;
@@ -45,156 +46,82 @@ mod field {
     pub const TAIL: Rest = 6..;
 }
 
-/// FoE operation code (ETG.1000.6 §5.8, Table "FoE elements", `OpCode`).
-///
-/// Each variant's discriminant is its code (`repr(u8)`): the conversion
-/// to `u8` compiles to the tag. `Unknown`'s tag is not a code.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u8)]
-pub enum FoeOpcode {
-    /// `1`: read request (upload, slave → master).
-    ReadRequest = 1,
-    /// `2`: write request (download, master → slave).
-    WriteRequest = 2,
-    /// `3`: one packet of file data.
-    Data = 3,
-    /// `4`: acknowledges a write request (packet 0) or a data packet.
-    Ack = 4,
-    /// `5`: aborts the transfer with an error code and text.
-    Error = 5,
-    /// `6`: the receiver cannot take the packet yet; it is to be repeated.
-    Busy = 6,
-    /// Any other value.
-    Unknown(u8) = 0xFF,
-}
-
-impl From<u8> for FoeOpcode {
-    fn from(raw: u8) -> Self {
-        match raw {
-            1 => Self::ReadRequest,
-            2 => Self::WriteRequest,
-            3 => Self::Data,
-            4 => Self::Ack,
-            5 => Self::Error,
-            6 => Self::Busy,
-            other => Self::Unknown(other),
-        }
+protocol_codes! {
+    /// FoE operation code (ETG.1000.6 §5.8, Table "FoE elements", `OpCode`).
+    ///
+    /// Each variant's discriminant is its code (`repr(u8)`): the conversion
+    /// to `u8` compiles to the tag. `Unknown`'s tag is not a code.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum FoeOpcode(u8) {
+        /// `1`: read request (upload, slave → master).
+        ReadRequest = 1,
+        /// `2`: write request (download, master → slave).
+        WriteRequest = 2,
+        /// `3`: one packet of file data.
+        Data = 3,
+        /// `4`: acknowledges a write request (packet 0) or a data packet.
+        Ack = 4,
+        /// `5`: aborts the transfer with an error code and text.
+        Error = 5,
+        /// `6`: the receiver cannot take the packet yet; it is to be repeated.
+        Busy = 6,
+    } else {
+        /// Any other value.
+        Unknown = 0xFF,
     }
 }
 
-impl From<FoeOpcode> for u8 {
-    fn from(op: FoeOpcode) -> Self {
-        match op {
-            FoeOpcode::ReadRequest => 1,
-            FoeOpcode::WriteRequest => 2,
-            FoeOpcode::Data => 3,
-            FoeOpcode::Ack => 4,
-            FoeOpcode::Error => 5,
-            FoeOpcode::Busy => 6,
-            FoeOpcode::Unknown(raw) => raw,
-        }
-    }
-}
-
-/// FoE error code (ETG.1000.6 §5.8, Table "FoE error codes", `0x8000` to
-/// `0x800B`).
-///
-/// `0x800C` to `0x8011` are not in that table; they are defined by ETG's
-/// EtherCAT Slave Stack Code (`foeappl.h`, SSC 5.12) and are decoded by
-/// common masters (TwinCAT, EC-Master), so this stack uses them for
-/// firmware-image errors, where they say more than "program error".
-///
-/// Each variant's discriminant is its code (`repr(u32)`), so the
-/// conversion to `u32`, a `match` returning them, compiles to the tag
-/// itself. `Unknown`'s tag is 0xFFFFFFFF, not a code: its field holds it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u32)]
-pub enum FoeErrorCode {
-    /// `0x8000` Not defined (see the error text).
-    NotDefined = 0x8000,
-    /// `0x8001` The file requested by a read request does not exist.
-    NotFound = 0x8001,
-    /// `0x8002` Access to the file is not allowed.
-    AccessDenied = 0x8002,
-    /// `0x8003` Disk full: the file does not fit the storage.
-    DiskFull = 0x8003,
-    /// `0x8004` Illegal FoE operation (e.g. unexpected or unknown opcode).
-    Illegal = 0x8004,
-    /// `0x8005` Packet number wrong.
-    PacketNumberWrong = 0x8005,
-    /// `0x8006` The file already exists.
-    AlreadyExists = 0x8006,
-    /// `0x8007` No user.
-    NoUser = 0x8007,
-    /// `0x8008` Bootstrap only: the service is available in BOOT only.
-    BootstrapOnly = 0x8008,
-    /// `0x8009` Not bootstrap: this file (name) is not valid in BOOT.
-    NotBootstrap = 0x8009,
-    /// `0x800A` No rights: password invalid.
-    NoRights = 0x800A,
-    /// `0x800B` Program error (generic, when no other code applies).
-    ProgramError = 0x800B,
-    /// `0x800C` (SSC) Checksum included in the file is invalid.
-    InvalidChecksum = 0x800C,
-    /// `0x800D` (SSC) The hardware does not support this firmware.
-    InvalidFirmware = 0x800D,
-    /// `0x800F` (SSC) No file to read (deprecated, same as `NotFound`).
-    NoFile = 0x800F,
-    /// `0x8010` (SSC) File header missing or wrong.
-    NoFileHeader = 0x8010,
-    /// `0x8011` (SSC) Flash cannot be accessed.
-    FlashError = 0x8011,
-    /// Any other value.
-    Unknown(u32) = 0xFFFF_FFFF,
-}
-
-impl From<u32> for FoeErrorCode {
-    fn from(raw: u32) -> Self {
-        match raw {
-            0x8000 => Self::NotDefined,
-            0x8001 => Self::NotFound,
-            0x8002 => Self::AccessDenied,
-            0x8003 => Self::DiskFull,
-            0x8004 => Self::Illegal,
-            0x8005 => Self::PacketNumberWrong,
-            0x8006 => Self::AlreadyExists,
-            0x8007 => Self::NoUser,
-            0x8008 => Self::BootstrapOnly,
-            0x8009 => Self::NotBootstrap,
-            0x800A => Self::NoRights,
-            0x800B => Self::ProgramError,
-            0x800C => Self::InvalidChecksum,
-            0x800D => Self::InvalidFirmware,
-            0x800F => Self::NoFile,
-            0x8010 => Self::NoFileHeader,
-            0x8011 => Self::FlashError,
-            other => Self::Unknown(other),
-        }
-    }
-}
-
-impl From<FoeErrorCode> for u32 {
-    fn from(code: FoeErrorCode) -> Self {
-        match code {
-            FoeErrorCode::NotDefined => 0x8000,
-            FoeErrorCode::NotFound => 0x8001,
-            FoeErrorCode::AccessDenied => 0x8002,
-            FoeErrorCode::DiskFull => 0x8003,
-            FoeErrorCode::Illegal => 0x8004,
-            FoeErrorCode::PacketNumberWrong => 0x8005,
-            FoeErrorCode::AlreadyExists => 0x8006,
-            FoeErrorCode::NoUser => 0x8007,
-            FoeErrorCode::BootstrapOnly => 0x8008,
-            FoeErrorCode::NotBootstrap => 0x8009,
-            FoeErrorCode::NoRights => 0x800A,
-            FoeErrorCode::ProgramError => 0x800B,
-            FoeErrorCode::InvalidChecksum => 0x800C,
-            FoeErrorCode::InvalidFirmware => 0x800D,
-            FoeErrorCode::NoFile => 0x800F,
-            FoeErrorCode::NoFileHeader => 0x8010,
-            FoeErrorCode::FlashError => 0x8011,
-            FoeErrorCode::Unknown(raw) => raw,
-        }
+protocol_codes! {
+    /// FoE error code (ETG.1000.6 §5.8, Table "FoE error codes", `0x8000` to
+    /// `0x800B`).
+    ///
+    /// `0x800C` to `0x8011` are not in that table; they are defined by ETG's
+    /// EtherCAT Slave Stack Code (`foeappl.h`, SSC 5.12) and are decoded by
+    /// common masters (TwinCAT, EC-Master), so this stack uses them for
+    /// firmware-image errors, where they say more than "program error".
+    ///
+    /// Each variant's discriminant is its code (`repr(u32)`), so the
+    /// conversion to `u32`, a `match` returning them, compiles to the tag
+    /// itself. `Unknown`'s tag is 0xFFFFFFFF, not a code: its field holds it.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum FoeErrorCode(u32) {
+        /// `0x8000` Not defined (see the error text).
+        NotDefined = 0x8000,
+        /// `0x8001` The file requested by a read request does not exist.
+        NotFound = 0x8001,
+        /// `0x8002` Access to the file is not allowed.
+        AccessDenied = 0x8002,
+        /// `0x8003` Disk full: the file does not fit the storage.
+        DiskFull = 0x8003,
+        /// `0x8004` Illegal FoE operation (e.g. unexpected or unknown opcode).
+        Illegal = 0x8004,
+        /// `0x8005` Packet number wrong.
+        PacketNumberWrong = 0x8005,
+        /// `0x8006` The file already exists.
+        AlreadyExists = 0x8006,
+        /// `0x8007` No user.
+        NoUser = 0x8007,
+        /// `0x8008` Bootstrap only: the service is available in BOOT only.
+        BootstrapOnly = 0x8008,
+        /// `0x8009` Not bootstrap: this file (name) is not valid in BOOT.
+        NotBootstrap = 0x8009,
+        /// `0x800A` No rights: password invalid.
+        NoRights = 0x800A,
+        /// `0x800B` Program error (generic, when no other code applies).
+        ProgramError = 0x800B,
+        /// `0x800C` (SSC) Checksum included in the file is invalid.
+        InvalidChecksum = 0x800C,
+        /// `0x800D` (SSC) The hardware does not support this firmware.
+        InvalidFirmware = 0x800D,
+        /// `0x800F` (SSC) No file to read (deprecated, same as `NotFound`).
+        NoFile = 0x800F,
+        /// `0x8010` (SSC) File header missing or wrong.
+        NoFileHeader = 0x8010,
+        /// `0x8011` (SSC) Flash cannot be accessed.
+        FlashError = 0x8011,
+    } else {
+        /// Any other value.
+        Unknown = 0xFFFF_FFFF,
     }
 }
 

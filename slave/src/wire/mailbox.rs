@@ -17,6 +17,7 @@
 //! [`Mailbox::payload`].
 
 use super::{Field, Rest, WireError};
+use crate::codes::protocol_codes;
 
 /// Length of the mailbox header.
 pub const HEADER_LEN: usize = field::DATA.start;
@@ -44,59 +45,31 @@ mod field {
     pub const ERR_DETAIL: Field = 2..4;
 }
 
-/// Mailbox protocol type (ETG.1000.4 / ETG.1000.6 §5.5, mailbox header
-/// "Type" field).
-///
-/// Each variant's discriminant is its code (`repr(u8)`): the conversion
-/// to `u8` compiles to the tag. `Unknown`'s tag is not a code.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u8)]
-pub enum MailboxType {
-    /// `0x00`: mailbox error reply ([`MailboxError`]).
-    Error = 0x00,
-    /// `0x01`: ADS over EtherCAT.
-    AoE = 0x01,
-    /// `0x02`: Ethernet over EtherCAT.
-    EoE = 0x02,
-    /// `0x03`: CANopen over EtherCAT.
-    CoE = 0x03,
-    /// `0x04`: File access over EtherCAT.
-    FoE = 0x04,
-    /// `0x05`: Servo profile over EtherCAT.
-    SoE = 0x05,
-    /// `0x0F`: Vendor specific.
-    VoE = 0x0F,
-    /// Any other (reserved) value.
-    Unknown(u8) = 0xFF,
-}
-
-impl From<u8> for MailboxType {
-    fn from(raw: u8) -> Self {
-        match raw {
-            0x00 => Self::Error,
-            0x01 => Self::AoE,
-            0x02 => Self::EoE,
-            0x03 => Self::CoE,
-            0x04 => Self::FoE,
-            0x05 => Self::SoE,
-            0x0F => Self::VoE,
-            other => Self::Unknown(other),
-        }
-    }
-}
-
-impl From<MailboxType> for u8 {
-    fn from(ty: MailboxType) -> Self {
-        match ty {
-            MailboxType::Error => 0x00,
-            MailboxType::AoE => 0x01,
-            MailboxType::EoE => 0x02,
-            MailboxType::CoE => 0x03,
-            MailboxType::FoE => 0x04,
-            MailboxType::SoE => 0x05,
-            MailboxType::VoE => 0x0F,
-            MailboxType::Unknown(raw) => raw,
-        }
+protocol_codes! {
+    /// Mailbox protocol type (ETG.1000.4 / ETG.1000.6 §5.5, mailbox header
+    /// "Type" field).
+    ///
+    /// Each variant's discriminant is its code (`repr(u8)`): the conversion
+    /// to `u8` compiles to the tag. `Unknown`'s tag is not a code.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum MailboxType(u8) {
+        /// `0x00`: mailbox error reply ([`MailboxError`]).
+        Error = 0x00,
+        /// `0x01`: ADS over EtherCAT.
+        AoE = 0x01,
+        /// `0x02`: Ethernet over EtherCAT.
+        EoE = 0x02,
+        /// `0x03`: CANopen over EtherCAT.
+        CoE = 0x03,
+        /// `0x04`: File access over EtherCAT.
+        FoE = 0x04,
+        /// `0x05`: Servo profile over EtherCAT.
+        SoE = 0x05,
+        /// `0x0F`: Vendor specific.
+        VoE = 0x0F,
+    } else {
+        /// Any other (reserved) value.
+        Unknown = 0xFF,
     }
 }
 
@@ -344,65 +317,35 @@ pub const ERROR_TYPE_SERVICE: u16 = 0x0001;
 /// Length of a mailbox error reply body.
 pub const ERROR_LEN: usize = field::ERR_DETAIL.end;
 
-/// Mailbox error detail code (ETG.1000.6 §5.5, mailbox error reply
-/// "Detail" codes `MBXERR_*`).
-///
-/// Each variant's discriminant is its code (`repr(u16)`): the conversion
-/// to `u16` compiles to the tag. `Unknown`'s tag is not a code.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u16)]
-pub enum MailboxErrorCode {
-    /// `0x01` Syntax of the 6-octet mailbox header is wrong.
-    Syntax = 0x01,
-    /// `0x02` The mailbox protocol is not supported.
-    UnsupportedProtocol = 0x02,
-    /// `0x03` Channel field contains a wrong value.
-    InvalidChannel = 0x03,
-    /// `0x04` The service in the mailbox protocol is not supported.
-    ServiceNotSupported = 0x04,
-    /// `0x05` The mailbox protocol header is wrong (without the 6-octet
-    /// mailbox header).
-    InvalidHeader = 0x05,
-    /// `0x06` Length of the received mailbox data is too short.
-    SizeTooShort = 0x06,
-    /// `0x07` The mailbox protocol cannot be processed for lack of
-    /// resources.
-    NoMoreMemory = 0x07,
-    /// `0x08` The length of the data is inconsistent.
-    InvalidSize = 0x08,
-    /// Any other detail code.
-    Unknown(u16) = 0xFFFF,
-}
-
-impl From<u16> for MailboxErrorCode {
-    fn from(raw: u16) -> Self {
-        match raw {
-            0x01 => Self::Syntax,
-            0x02 => Self::UnsupportedProtocol,
-            0x03 => Self::InvalidChannel,
-            0x04 => Self::ServiceNotSupported,
-            0x05 => Self::InvalidHeader,
-            0x06 => Self::SizeTooShort,
-            0x07 => Self::NoMoreMemory,
-            0x08 => Self::InvalidSize,
-            other => Self::Unknown(other),
-        }
-    }
-}
-
-impl From<MailboxErrorCode> for u16 {
-    fn from(code: MailboxErrorCode) -> Self {
-        match code {
-            MailboxErrorCode::Syntax => 0x01,
-            MailboxErrorCode::UnsupportedProtocol => 0x02,
-            MailboxErrorCode::InvalidChannel => 0x03,
-            MailboxErrorCode::ServiceNotSupported => 0x04,
-            MailboxErrorCode::InvalidHeader => 0x05,
-            MailboxErrorCode::SizeTooShort => 0x06,
-            MailboxErrorCode::NoMoreMemory => 0x07,
-            MailboxErrorCode::InvalidSize => 0x08,
-            MailboxErrorCode::Unknown(raw) => raw,
-        }
+protocol_codes! {
+    /// Mailbox error detail code (ETG.1000.6 §5.5, mailbox error reply
+    /// "Detail" codes `MBXERR_*`).
+    ///
+    /// Each variant's discriminant is its code (`repr(u16)`): the conversion
+    /// to `u16` compiles to the tag. `Unknown`'s tag is not a code.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum MailboxErrorCode(u16) {
+        /// `0x01` Syntax of the 6-octet mailbox header is wrong.
+        Syntax = 0x01,
+        /// `0x02` The mailbox protocol is not supported.
+        UnsupportedProtocol = 0x02,
+        /// `0x03` Channel field contains a wrong value.
+        InvalidChannel = 0x03,
+        /// `0x04` The service in the mailbox protocol is not supported.
+        ServiceNotSupported = 0x04,
+        /// `0x05` The mailbox protocol header is wrong (without the 6-octet
+        /// mailbox header).
+        InvalidHeader = 0x05,
+        /// `0x06` Length of the received mailbox data is too short.
+        SizeTooShort = 0x06,
+        /// `0x07` The mailbox protocol cannot be processed for lack of
+        /// resources.
+        NoMoreMemory = 0x07,
+        /// `0x08` The length of the data is inconsistent.
+        InvalidSize = 0x08,
+    } else {
+        /// Any other detail code.
+        Unknown = 0xFFFF,
     }
 }
 

@@ -1,63 +1,34 @@
 //! The CoE header (ETG.1000.6 Table 29): number and service.
 
 use super::*;
+use crate::codes::protocol_codes;
 
-/// CoE service (ETG.1000.6 Table 29 "CoE elements", service field).
-///
-/// Each variant's discriminant is its code (`repr(u8)`): the conversion
-/// to `u8` compiles to the tag. `Unknown`'s tag is not a code.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u8)]
-pub enum CoeService {
-    /// `1` Emergency.
-    Emergency = 1,
-    /// `2` SDO request.
-    SdoRequest = 2,
-    /// `3` SDO response.
-    SdoResponse = 3,
-    /// `4` TxPDO.
-    TxPdo = 4,
-    /// `5` RxPDO.
-    RxPdo = 5,
-    /// `6` TxPDO remote request.
-    TxPdoRemoteReq = 6,
-    /// `7` RxPDO remote request.
-    RxPdoRemoteReq = 7,
-    /// `8` SDO information.
-    SdoInformation = 8,
-    /// Any other (reserved) value.
-    Unknown(u8) = 0xFF,
-}
-
-impl From<u8> for CoeService {
-    fn from(raw: u8) -> Self {
-        match raw {
-            1 => Self::Emergency,
-            2 => Self::SdoRequest,
-            3 => Self::SdoResponse,
-            4 => Self::TxPdo,
-            5 => Self::RxPdo,
-            6 => Self::TxPdoRemoteReq,
-            7 => Self::RxPdoRemoteReq,
-            8 => Self::SdoInformation,
-            other => Self::Unknown(other),
-        }
-    }
-}
-
-impl From<CoeService> for u8 {
-    fn from(service: CoeService) -> Self {
-        match service {
-            CoeService::Emergency => 1,
-            CoeService::SdoRequest => 2,
-            CoeService::SdoResponse => 3,
-            CoeService::TxPdo => 4,
-            CoeService::RxPdo => 5,
-            CoeService::TxPdoRemoteReq => 6,
-            CoeService::RxPdoRemoteReq => 7,
-            CoeService::SdoInformation => 8,
-            CoeService::Unknown(raw) => raw,
-        }
+protocol_codes! {
+    /// CoE service (ETG.1000.6 Table 29 "CoE elements", service field).
+    ///
+    /// Each variant's discriminant is its code (`repr(u8)`): the conversion
+    /// to `u8` compiles to the tag. `Unknown`'s tag is not a code.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum CoeService(u8) {
+        /// `1` Emergency.
+        Emergency = 1,
+        /// `2` SDO request.
+        SdoRequest = 2,
+        /// `3` SDO response.
+        SdoResponse = 3,
+        /// `4` TxPDO.
+        TxPdo = 4,
+        /// `5` RxPDO.
+        RxPdo = 5,
+        /// `6` TxPDO remote request.
+        TxPdoRemoteReq = 6,
+        /// `7` RxPDO remote request.
+        RxPdoRemoteReq = 7,
+        /// `8` SDO information.
+        SdoInformation = 8,
+    } else {
+        /// Any other (reserved) value.
+        Unknown = 0xFF,
     }
 }
 

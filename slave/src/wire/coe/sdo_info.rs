@@ -2,60 +2,33 @@
 //! flag, fragments left.
 
 use super::*;
+use crate::codes::protocol_codes;
 
-/// SDO information opcode (ETG.1000.6 §5.6.3.2, SDO information header
-/// "OpCode").
-///
-/// Each variant's discriminant is its code (`repr(u8)`): the conversion
-/// to `u8` compiles to the tag. `Unknown`'s tag is not a code.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u8)]
-pub enum SdoInfoOpcode {
-    /// `1` Get OD list request.
-    GetOdListReq = 1,
-    /// `2` Get OD list response.
-    GetOdListResp = 2,
-    /// `3` Get object description request.
-    GetObjDescReq = 3,
-    /// `4` Get object description response.
-    GetObjDescResp = 4,
-    /// `5` Get entry description request.
-    GetEntryDescReq = 5,
-    /// `6` Get entry description response.
-    GetEntryDescResp = 6,
-    /// `7` SDO information error request.
-    SdoInfoErrorReq = 7,
-    /// Any other value.
-    Unknown(u8) = 0xFF,
-}
-
-impl From<u8> for SdoInfoOpcode {
-    fn from(raw: u8) -> Self {
-        match raw {
-            1 => Self::GetOdListReq,
-            2 => Self::GetOdListResp,
-            3 => Self::GetObjDescReq,
-            4 => Self::GetObjDescResp,
-            5 => Self::GetEntryDescReq,
-            6 => Self::GetEntryDescResp,
-            7 => Self::SdoInfoErrorReq,
-            other => Self::Unknown(other),
-        }
-    }
-}
-
-impl From<SdoInfoOpcode> for u8 {
-    fn from(op: SdoInfoOpcode) -> Self {
-        match op {
-            SdoInfoOpcode::GetOdListReq => 1,
-            SdoInfoOpcode::GetOdListResp => 2,
-            SdoInfoOpcode::GetObjDescReq => 3,
-            SdoInfoOpcode::GetObjDescResp => 4,
-            SdoInfoOpcode::GetEntryDescReq => 5,
-            SdoInfoOpcode::GetEntryDescResp => 6,
-            SdoInfoOpcode::SdoInfoErrorReq => 7,
-            SdoInfoOpcode::Unknown(raw) => raw,
-        }
+protocol_codes! {
+    /// SDO information opcode (ETG.1000.6 §5.6.3.2, SDO information header
+    /// "OpCode").
+    ///
+    /// Each variant's discriminant is its code (`repr(u8)`): the conversion
+    /// to `u8` compiles to the tag. `Unknown`'s tag is not a code.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum SdoInfoOpcode(u8) {
+        /// `1` Get OD list request.
+        GetOdListReq = 1,
+        /// `2` Get OD list response.
+        GetOdListResp = 2,
+        /// `3` Get object description request.
+        GetObjDescReq = 3,
+        /// `4` Get object description response.
+        GetObjDescResp = 4,
+        /// `5` Get entry description request.
+        GetEntryDescReq = 5,
+        /// `6` Get entry description response.
+        GetEntryDescResp = 6,
+        /// `7` SDO information error request.
+        SdoInfoErrorReq = 7,
+    } else {
+        /// Any other value.
+        Unknown = 0xFF,
     }
 }
 
