@@ -472,6 +472,11 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         if first && self.emergencies_enabled && state != AlState::Init && state != AlState::Boot {
             self.emergencies.pdi_failure(e);
         }
+        // Both writes are tried even when the first fails, unlike
+        // `write_al_status`, which stops at the first error: the PDI just
+        // failed, and the status (SAFE-OP + ERR) is what the master must
+        // see if either write gets through. A lost write is retried at the
+        // next pass that reaches the ESC.
         let code = self.esc.write_u16(reg::AL_STATUS_CODE, self.al.code.code());
         let status = self.esc.write_u16(reg::AL_STATUS, self.al.register());
         if code.is_err() || status.is_err() {
