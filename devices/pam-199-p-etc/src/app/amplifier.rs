@@ -255,7 +255,7 @@ impl Amplifier {
                 return;
             }
         };
-        let due = (now_ns - last) / TICK_NS;
+        let due = super::div_rem_u64(now_ns - last, TICK_NS).0;
         if due > MAX_CATCH_UP {
             self.last_ns = Some(now_ns);
             self.tick(store, stage, now_ns, outputs_valid);

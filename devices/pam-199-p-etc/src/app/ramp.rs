@@ -94,8 +94,9 @@ impl Core {
                 // Reaching the final target is handled at the loop head.
             } else {
                 // den >= 1000, and units < dist <= 20000: fits in i32.
-                let units = i32::try_from(acc / den).unwrap_or(0);
-                self.rem = acc % den;
+                let (units, rem) = super::div_rem_u64(acc, den);
+                let units = i32::try_from(units).unwrap_or(0);
+                self.rem = rem;
                 self.output = if seg_target > self.output {
                     self.output.saturating_add(units)
                 } else {
