@@ -283,9 +283,18 @@ ARM_CFLAGS=(-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16 -Os -nost
 MEM_SYMS="memcpy memmove memset memcmp bcmp __aeabi_memcpy __aeabi_memcpy4 __aeabi_memcpy8
     __aeabi_memmove __aeabi_memmove4 __aeabi_memmove8 __aeabi_memset __aeabi_memset4
     __aeabi_memset8 __aeabi_memclr __aeabi_memclr4 __aeabi_memclr8"
+# Without newlib-nano (Debian: libnewlib-arm-none-eabi) the counted link
+# is the plain one, and the script says so.
+NANO_SPECS=$(arm-none-eabi-gcc -print-file-name=nano.specs)
 c_mem_link() { # plain-elf out-elf staticlib [extra link args...]
     local plain=$1 out=$2 lib=$3
     shift 3
+    if [ ! -f "$NANO_SPECS" ]; then
+        echo "    NOTE: newlib-nano not found (Debian: libnewlib-arm-none-eabi): the figures keep"
+        echo "    compiler_builtins' memory functions"
+        run cp "$plain" "$out"
+        return
+    fi
     local undef=()
     for sym in $(arm-none-eabi-nm "$plain" | awk '{ print $NF }' | sort -u); do
         case " $(echo $MEM_SYMS) " in *" $sym "*) undef+=("-Wl,-u,$sym") ;; esac
