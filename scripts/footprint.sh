@@ -395,6 +395,7 @@ if command -v arm-none-eabi-addr2line >/dev/null; then
             "$OUT/debuginfo/$ARM_TARGET/release/libecat_firmware.a" ||
             fail "linking the $dev firmware with debug info failed"
         run "$CODE_TOOL" "$OUT/fw-$dev-m4-debuginfo.elf" 25
+        [ "$dev" != io8 ] || run "$CODE_TOOL" --functions "$OUT/fw-$dev-m4-debuginfo.elf" 25
     done
 else
     echo "  skipped (arm-none-eabi-addr2line not found)"

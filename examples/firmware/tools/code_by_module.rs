@@ -1,6 +1,6 @@
 //! Where a Cortex-M firmware's code goes, by source module.
 //!
-//!     code_by_module [--lines] <linked-elf-with-debug-info> [top]
+//!     code_by_module [--lines | --functions] <linked-elf-with-debug-info> [top]
 //!
 //! Reads the Thumb-2 disassembly (`$OBJDUMP`, default
 //! `arm-none-eabi-objdump -d`) for the address and size of every
@@ -15,7 +15,10 @@
 //!
 //! With `--lines`, counts by source line (`file:line`) instead of file:
 //! where in a module the bytes are (a line inlined at several call sites
-//! counts once with all their bytes).
+//! counts once with all their bytes). With `--functions`, by the
+//! innermost function of ours (`addr2line -f -C`): the bytes a function
+//! brings wherever LTO inlined it, which `nm` cannot say (a function
+//! inlined into `fw_poll` has no symbol of its own).
 //!
 //! Prints the `top` (default 40) files by bytes, then the totals of the
 //! areas the footprint table of docs/book/src/performance.md uses. LTO
@@ -34,21 +37,43 @@ const OURS: [&str; 5] = ["slave/", "devices/", "examples/", "drivers/", "profile
 
 /// The areas of the footprint table: (label, path prefixes).
 const AREAS: [(&str, &[&str]); 12] = [
-    ("device API (device/: poll, AL transitions, mailbox, SDO adapter)", &["slave/src/device/"]),
+    (
+        "device API (device/: poll, AL transitions, mailbox, SDO adapter)",
+        &["slave/src/device/"],
+    ),
     (
         "firmware update (FoE, .efw check, A/B store, boot state)",
-        &["slave/src/firmware/", "slave/src/foe.rs", "slave/src/wire/foe.rs"],
+        &[
+            "slave/src/firmware/",
+            "slave/src/foe.rs",
+            "slave/src/wire/foe.rs",
+        ],
     ),
-    ("object dictionary and parameters (od/, params)", &["slave/src/od/", "slave/src/params.rs"]),
+    (
+        "object dictionary and parameters (od/, params)",
+        &["slave/src/od/", "slave/src/params.rs"],
+    ),
     ("SDO Information", &["slave/src/coe/sdo_info.rs"]),
     ("CoE: SDO, emergencies", &["slave/src/coe/"]),
     ("wire formats (wire/)", &["slave/src/wire/"]),
     ("PDO engine (pdo.rs)", &["slave/src/pdo.rs"]),
-    ("AL state machine, mailbox, texts, rest of the core", &["slave/"]),
-    ("the device's application and board", &["devices/", "examples/io8/", "profiles/"]),
-    ("the firmware example's glue and board stores", &["examples/firmware/"]),
+    (
+        "AL state machine, mailbox, texts, rest of the core",
+        &["slave/"],
+    ),
+    (
+        "the device's application and board",
+        &["devices/", "examples/io8/", "profiles/"],
+    ),
+    (
+        "the firmware example's glue and board stores",
+        &["examples/firmware/"],
+    ),
     ("the PDI trait and SPI drivers (drivers/)", &["drivers/"]),
-    ("core, compiler builtins, the C library and other crates", &[""]),
+    (
+        "core, compiler builtins, the C library and other crates",
+        &[""],
+    ),
 ];
 
 fn tool(var: &str, default: &str) -> String {
@@ -65,6 +90,43 @@ fn short(file: &str) -> Option<String> {
         }
     }
     None
+}
+
+/// A demangled name without generic arguments (`a::B<T>::f` →
+/// `a::B::f`), so the instances of one function count together; a trait
+/// method keeps its `<Type as Trait>` head, shortened the same way.
+fn short_name(name: &str) -> String {
+    if let Some(rest) = name.strip_prefix('<') {
+        // The head's closing '>' at depth 0.
+        let mut depth = 0usize;
+        for (i, c) in rest.char_indices() {
+            match c {
+                '<' => depth += 1,
+                '>' if depth == 0 => {
+                    let (head, tail) = rest.split_at(i);
+                    return format!("<{}>{}", short_name(head), short_name(&tail[1..]));
+                }
+                '>' => depth -= 1,
+                _ => {}
+            }
+        }
+    }
+    let mut out = String::new();
+    let mut depth = 0usize;
+    for (i, c) in name.char_indices() {
+        match c {
+            // `m::<impl m::Type>::f`: the impl block, named as such.
+            '<' if depth == 0 && name[i + 1..].starts_with("impl ") => {
+                out.push_str("<impl>");
+                depth += 1;
+            }
+            '<' => depth += 1,
+            '>' => depth = depth.saturating_sub(1),
+            _ if depth == 0 => out.push(c),
+            _ => {}
+        }
+    }
+    out
 }
 
 fn other(file: &str) -> String {
@@ -86,11 +148,14 @@ fn other(file: &str) -> String {
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
     let lines = args.first().is_some_and(|a| a == "--lines");
-    if lines {
+    let functions = args.first().is_some_and(|a| a == "--functions");
+    if lines || functions {
         args.remove(0);
     }
     let Some(elf) = args.first() else {
-        eprintln!("usage: code_by_module [--lines] <linked-elf-with-debug-info> [top]");
+        eprintln!(
+            "usage: code_by_module [--lines | --functions] <linked-elf-with-debug-info> [top]"
+        );
         exit(2);
     };
     let top: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(40);
@@ -125,8 +190,12 @@ fn main() {
     }
 
     let addr2line = tool("ADDR2LINE", "arm-none-eabi-addr2line");
+    let mut a2l_args = vec!["-e", elf.as_str(), "-i", "-a"];
+    if functions {
+        a2l_args.extend(["-f", "-C"]);
+    }
     let mut child = Command::new(&addr2line)
-        .args(["-e", elf, "-i", "-a"])
+        .args(&a2l_args)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .spawn()
@@ -146,13 +215,22 @@ fn main() {
         exit(1);
     }
 
-    // Frames per address, innermost first (addr2line -i's order).
+    // Frames per address, innermost first (addr2line -i's order): the
+    // file (or file:line), and with --functions the function's name.
     let mut frames: BTreeMap<u64, Vec<String>> = BTreeMap::new();
+    let mut names: BTreeMap<u64, Vec<String>> = BTreeMap::new();
     let mut cur = None;
+    // With -f each frame is two lines: the function, then its location.
+    let mut name: Option<String> = None;
     for line in String::from_utf8_lossy(&out.stdout).lines() {
         if let Some(hex) = line.strip_prefix("0x") {
             cur = u64::from_str_radix(hex, 16).ok();
+            name = None;
         } else if let Some(a) = cur {
+            if functions && name.is_none() {
+                name = Some(line.to_string());
+                continue;
+            }
             // "file:line (discriminator n)": the file, or file and line.
             let at = line.split(" (discriminator").next().unwrap_or(line);
             let file = if lines {
@@ -161,10 +239,14 @@ fn main() {
                 at.rsplit_once(':').map_or(at, |(f, _)| f)
             };
             frames.entry(a).or_default().push(file.to_string());
+            if let Some(n) = name.take() {
+                names.entry(a).or_default().push(n);
+            }
         }
     }
 
     let mut by_file: BTreeMap<String, u64> = BTreeMap::new();
+    let mut by_func: BTreeMap<String, u64> = BTreeMap::new();
     let mut total = 0;
     for (i, &a) in addrs.iter().enumerate() {
         // Thumb-2 instructions are 2 or 4 bytes; the last one, or one
@@ -172,11 +254,36 @@ fn main() {
         let size = addrs.get(i + 1).map_or(2, |n| (n - a).min(4));
         total += size;
         let fr = frames.get(&a);
+        let ours = fr.and_then(|f| f.iter().position(|f| short(f).is_some()));
         let file = fr
             .and_then(|f| f.iter().find_map(|f| short(f)))
             .or_else(|| fr.and_then(|f| f.first()).map(|f| other(f)))
             .unwrap_or_else(|| "??".to_string());
+        if functions {
+            // The function whose body holds the innermost frame of ours
+            // (the frame's location is inside that function).
+            let f = names.get(&a);
+            let func = ours
+                .and_then(|i| f.and_then(|f| f.get(i)))
+                .or_else(|| f.and_then(|f| f.first()))
+                .map_or_else(|| "??".to_string(), |n| short_name(n));
+            *by_func.entry(func).or_default() += size;
+        }
         *by_file.entry(file).or_default() += size;
+    }
+
+    if functions {
+        let mut fs: Vec<(&String, &u64)> = by_func.iter().collect();
+        fs.sort_by(|a, b| b.1.cmp(a.1).then(a.0.cmp(b.0)));
+        println!("    {total} bytes of code; by the innermost function of this repository:");
+        for (f, n) in fs.iter().take(top) {
+            println!("    {n:7} {f}");
+        }
+        if fs.len() > top {
+            let rest: u64 = fs.iter().skip(top).map(|(_, n)| **n).sum();
+            println!("    {rest:7} ({} more functions)", fs.len() - top);
+        }
+        return;
     }
 
     let unit = if lines { "line" } else { "file" };
