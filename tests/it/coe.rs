@@ -79,6 +79,50 @@ fn pdo_assignment_complete_access_is_accepted_in_preop_only() {
     });
 }
 
+/// The PAM's mappings are fixed (every entry of 0x16xx/0x1Axx read-only):
+/// a complete access writing back what a mapping holds changes nothing and
+/// is acknowledged in any state with a mailbox; one changing a value is
+/// refused as read-only, and the mapping stays as it was. (The mapping
+/// rules for writable mappings, PRE-OP only among them, are tested on the
+/// CiA 402 drive, tests/it/servo402.rs.)
+#[test]
+fn a_fixed_mapping_takes_its_own_values_back_and_refuses_others_in_every_state() {
+    smol::block_on(async {
+        let bus = VirtualBus::new(1).expect("bus");
+        let md = &*bus.maindevice;
+        let group = bus.init().await.expect("init");
+        let station = group.subdevice(md, 0).expect("slave").configured_address();
+        let mut c = MailboxClient::new(md, station, MailboxGeometry::standard());
+        let held = c.sdo_upload(0x1A00, 0, true).await.expect("the mapping");
+        let mut changed = held.clone();
+        // The first mapped entry's bit length (byte 2 of the image: after
+        // subindex 0's 16 bits).
+        changed[2] ^= 0x08;
+        check(&mut c, "PRE-OP", &held, &changed).await;
+        let group = group.into_safe_op(md).await.expect("safe-op");
+        check(&mut c, "SAFE-OP", &held, &changed).await;
+        let group = group.into_op(md).await.expect("op");
+        check(&mut c, "OP", &held, &changed).await;
+        drop(group);
+    });
+
+    async fn check(c: &mut MailboxClient<'_>, state: &str, held: &[u8], changed: &[u8]) {
+        c.sdo_download(0x1A00, 0, true, held)
+            .await
+            .unwrap_or_else(|e| panic!("{state}: its own values: {e}"));
+        let e = c
+            .sdo_download(0x1A00, 0, true, changed)
+            .await
+            .expect_err(state);
+        assert_eq!(e.abort_code(), Some(0x0601_0002), "{state}");
+        assert_eq!(
+            c.sdo_upload(0x1A00, 0, true).await.unwrap(),
+            held,
+            "{state}"
+        );
+    }
+}
+
 #[test]
 fn segmented_download_writes_and_an_interrupted_one_leaves_the_object_unchanged() {
     smol::block_on(async {

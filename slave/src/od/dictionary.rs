@@ -44,6 +44,8 @@ pub struct Dictionary {
     entry_count: usize,
     /// Entries plus the `i64` slots of the byte area.
     value_slots: usize,
+    /// An entry of a PDO mapping object is writable ([`writable_mapping`]).
+    writable_mapping: bool,
 }
 
 /// Total number of entries of `objects` (gaps and subindex 0 included): the
@@ -75,6 +77,28 @@ pub const fn value_slots(objects: &[Object]) -> usize {
         rest = tail;
     }
     acc
+}
+
+/// Whether an entry of a PDO mapping object (0x1600..=0x17FF,
+/// 0x1A00..=0x1BFF) is writable in some state: a master may change a
+/// mapping. Without one, a download to a mapping object can only write the
+/// values its entries hold (a complete access; any other write is refused
+/// as read-only), so the core's mapping rules have nothing to check.
+pub const fn writable_mapping(objects: &[Object]) -> bool {
+    let mut rest = objects;
+    while let Some((obj, tail)) = rest.split_first() {
+        if matches!(obj.index, 0x1600..=0x17FF | 0x1A00..=0x1BFF) {
+            let mut es = obj.entries;
+            while let Some((e, t)) = es.split_first() {
+                if e.access().writable() {
+                    return true;
+                }
+                es = t;
+            }
+        }
+        rest = tail;
+    }
+    false
 }
 
 /// Flat position of the first entry of each of the `N` objects (the prefix
@@ -544,7 +568,15 @@ impl Dictionary {
             entry_base,
             entry_count: entry_count(objects),
             value_slots: value_slots(objects),
+            writable_mapping: writable_mapping(objects),
         }
+    }
+
+    /// Whether a master may change a PDO mapping ([`writable_mapping`]).
+    /// For a `static` description the answer is a constant: a firmware
+    /// whose mappings are fixed does not link the mapping rules.
+    pub const fn has_writable_mapping(&self) -> bool {
+        self.writable_mapping
     }
 
     /// Every object, ascending by index.
@@ -757,6 +789,46 @@ mod tests {
                 proptest::prop_assert_eq!(value_le(&t, a, b), float_le(&t, a, b), "{:?} {:#x} {:#x}", t, a, b);
                 proptest::prop_assert_eq!(value_le(&t, b, a), float_le(&t, b, a), "{:?} {:#x} {:#x}", t, b, a);
             }
+        }
+    }
+
+    #[test]
+    fn a_mapping_is_writable_when_any_entry_of_a_mapping_object_is() {
+        use crate::od::build::{map, map_rw, mapping_count, setting};
+        use crate::od::{Object, ObjectCode};
+        const FIXED: &[Entry] = &[map(1, "a", 0x7000_0108)];
+        const FLEXIBLE: &[Entry] = &[mapping_count(1, 2), map_rw(1, "a", 0x7000_0108)];
+        const COUNT_ONLY: &[Entry] = &[mapping_count(1, 1), map(1, "a", 0x6000_0108)];
+        const SETTING: &[Entry] = &[setting(0, "p", DataType::UInt8, 0, &Limits::NONE)];
+        let obj = |index, entries| Object {
+            index,
+            name: "o",
+            code: ObjectCode::Record,
+            entries,
+        };
+        let cases = [
+            (vec![obj(0x1600, FIXED), obj(0x1A00, FIXED)], false),
+            (vec![obj(0x1600, FIXED), obj(0x1601, FLEXIBLE)], true),
+            (vec![obj(0x1BFF, COUNT_ONLY)], true),
+            (vec![obj(0x17FF, FLEXIBLE)], true),
+            // Writable objects just outside both ranges are not mappings.
+            (
+                vec![
+                    obj(0x15FF, FLEXIBLE),
+                    obj(0x1800, FLEXIBLE),
+                    obj(0x1C00, FLEXIBLE),
+                ],
+                false,
+            ),
+            (vec![obj(0x1600, FIXED), obj(0x8000, SETTING)], false),
+            (vec![], false),
+        ];
+        for (objects, expected) in cases {
+            let indexes: Vec<u16> = objects.iter().map(|o| o.index).collect();
+            assert_eq!(writable_mapping(&objects), expected, "{indexes:04x?}");
+            let objects: &'static [Object] = Vec::leak(objects);
+            let d = Dictionary::new(objects, &[], &[]);
+            assert_eq!(d.has_writable_mapping(), expected, "{indexes:04x?}");
         }
     }
 
