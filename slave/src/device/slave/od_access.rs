@@ -103,10 +103,11 @@ impl<A: Application> OdAccess<'_, A> {
         complete_access: bool,
         changes: Changes<'_>,
     ) -> Result<(), SdoAbortCode> {
-        // Fixed mappings (the IO8's, the PAM's) are reached here only by a
-        // complete access writing back the values they hold: nothing
-        // changes, nothing to check. Read from the description, whose
-        // dictionary a firmware's compiler knows, so it drops the rules.
+        // Fixed mappings (no writable entry in any mapping object) are
+        // reached here only by a complete access writing back the values
+        // they hold: nothing changes, nothing to check. Read from the
+        // description, whose dictionary a firmware's compiler knows, so it
+        // drops the rules.
         if !self.app.description().dictionary.has_writable_mapping() {
             return Ok(());
         }
