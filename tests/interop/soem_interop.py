@@ -167,6 +167,20 @@ RECEIVE_TIMEOUT_US = 200_000
 LONG_WATCHDOG_MS = 5000
 
 
+def fixed_mapping_by_complete_access(s, where):
+    """A fixed mapping (0x1A00, every entry read-only) by complete access:
+    its own values written back are acknowledged, a changed one is refused
+    read-only (0x06010002) and the mapping stays."""
+    held = s.sdo_read(0x1A00, 0, 256, ca=True)
+    s.sdo_write(0x1A00, 0, held, ca=True)
+    changed = bytearray(held)
+    changed[2] ^= 0x08  # the first mapped entry's bit length
+    code = abort_of(lambda: s.sdo_write(0x1A00, 0, bytes(changed), ca=True))
+    check(code == 0x06010002, f"{where}: a changed fixed mapping refused ({code and hex(code)})")
+    check(s.sdo_read(0x1A00, 0, 256, ca=True) == held,
+          f"{where}: 0x1A00 unchanged, its own values written back acknowledged")
+
+
 def cycles(m, n, period_s=0.002):
     """n process-data cycles; returns the list of working counters."""
     wkcs = []
@@ -324,6 +338,7 @@ def phase1(iface, esi, sii_path, good_efw, bad_efw, version, old_efw):
     bad = [w for w in wkcs if w != m.expected_wkc]
     log(f"      1000 cycles: working counters min {min(wkcs)} max {max(wkcs)}, {len(bad)} unexpected")
     check(not bad, "1000 cycles, every working counter as expected")
+    fixed_mapping_by_complete_access(s, "OP")
 
     # --- SM watchdog (back to its 100 ms default): stop the outputs,
     # SAFE-OP + 0x001B, back to OP
@@ -858,6 +873,7 @@ def board(iface, esi, sii_path, good_efw, bad_efw, boot_out, boot_in):
     log(f"      1000 cycles: working counters min {min(wkcs)} max {max(wkcs)}, {len(bad)} unexpected; "
         f"inputs seen {sorted(set(seen))}")
     check(not bad, "1000 cycles, every working counter as expected")
+    fixed_mapping_by_complete_access(s, "OP on the board firmware")
     sent = set(range(0, 0x9A, 0x11))
     check(set(seen) <= sent, f"every input value seen is an output sent ({sorted(set(seen) - sent)} others)")
     # The last output held until it comes back (the IO8 filters inputs
