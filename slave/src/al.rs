@@ -6,6 +6,7 @@
 //! knows nothing of the ESC or the object dictionary.
 
 use crate::codes::protocol_codes;
+
 /// EtherCAT device states (AL status bits 0-3). Each discriminant is the
 /// state's bits (`repr(u8)`), so [`AlState::bits`] is the tag itself.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

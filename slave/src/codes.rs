@@ -70,7 +70,6 @@ macro_rules! protocol_codes {
 
             /// Every listed variant with its code, for the tests.
             #[cfg(test)]
-            #[allow(dead_code)]
             pub(crate) const LISTED: &'static [(Self, $raw)] = &[$( (Self::$variant, $code), )*];
         }
 
