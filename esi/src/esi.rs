@@ -398,7 +398,7 @@ fn write_complex_types(w: &mut W, dict: &Dictionary, objects: Objects<'_>) -> io
 /// `Info` content of one entry: Min/Max/Default data (or DefaultString),
 /// then the unit code where ETG.1004 has one.
 fn write_value_info(w: &mut W, e: &Entry) -> io::Result<()> {
-    match e.default {
+    match e.default_value() {
         DefaultValue::Str(s) => text(w, "DefaultString", s)?,
         DefaultValue::Bytes(b) => {
             let mut bytes = b.to_vec();
@@ -761,7 +761,7 @@ pub fn generate(dev: &DeviceDescription) -> Result<Vec<u8>, EsiError> {
         .resolve(&strings);
     let pdos = sii_pdos(&r)?;
     let profile = match dev.dictionary.find_entry(0x1000, 0) {
-        Some((_, e)) => match e.default {
+        Some((_, e)) => match e.default_value() {
             DefaultValue::Int(v) => v.get() & 0xFFFF,
             DefaultValue::Str(_) | DefaultValue::Bytes(_) => 0,
         },
@@ -1030,7 +1030,7 @@ mod tests {
     }
 
     fn check_info(info: &Element, e: &Entry, what: &str) {
-        match e.default {
+        match e.default_value() {
             DefaultValue::Str(s) => assert_eq!(info.text_at("DefaultString"), Some(s), "{what}"),
             DefaultValue::Bytes(b) => {
                 let d = info

@@ -251,7 +251,7 @@ fn decode(e: &Entry, bytes: &[u8]) -> i64 {
 /// DEFAULT: every backup entry of `store` back to its default.
 pub fn restore_defaults(store: &mut Od) {
     for (flat, e) in stored_entries(store.dictionary()) {
-        if let DefaultValue::Int(v) = e.default {
+        if let DefaultValue::Int(v) = e.default_value() {
             store.set_value(flat, v.get());
         }
     }

@@ -36,10 +36,10 @@ pub const OBJECTS: &[Object] = &[
         var("Error register", DataType::UInt8, PdoMapping::None, 0),
     ] },
     Object { index: 0x1008, name: "Device name", code: ObjectCode::Var, entries: &[
-        string("Device name", "TD-1"),
+        string("Device name", &Limits::text("TD-1")),
     ] },
     Object { index: 0x100A, name: "Software version", code: ObjectCode::Var, entries: &[
-        string("Software version", "10"),
+        string("Software version", &Limits::text("10")),
     ] },
     Object { index: 0x1018, name: "Identity", code: ObjectCode::Record, entries: &[
         sub0(4),

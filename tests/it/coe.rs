@@ -240,7 +240,7 @@ fn other_value(
     dict: &ecat_slave::od::Dictionary,
 ) -> Option<Vec<u8>> {
     use ecat_slave::od::types::DataType;
-    let d = e.default.as_int()?;
+    let d = e.default_value().as_int()?;
     let v = match e.data_type {
         DataType::Bool => 1 - d,
         DataType::Enum(en) => dict

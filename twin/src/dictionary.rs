@@ -506,18 +506,19 @@ fn entry(spec: &EntrySpec, info: Option<&Element>) -> Result<Entry, EsiError> {
         (DefaultValue::Int(_), t) if t.is_bytes() => DefaultValue::Bytes(&[]),
         (d, _) => d,
     };
-    Ok(Entry {
+    let entry = Entry {
         sub: spec.sub,
         name: leak(&spec.name),
         data_type: spec.scalar.ty,
         bit_len: spec.scalar.bits,
-        default,
+        default_bits: 0,
         limits: crate::leak_limits(min, max, unit),
         flags: EntryFlags::new(spec.access, spec.pdo)
             .with_backup(spec.backup)
             .with_setting(spec.setting)
             .with_gap(spec.gap),
-    })
+    };
+    Ok(crate::with_default(&entry, default))
 }
 
 /// The `Info` of every sub entry: matched by `Name` (the first unused of
@@ -763,13 +764,13 @@ fn parse_object(
                     // use, as the core reads it.)
                     let list = matches!(index, 0x1C12 | 0x1C13 | 0xF030) || e.access().writable();
                     let want = i64::from(highest);
-                    let ok = matches!(e.default.as_int(), Some(v) if v == want || (list && (0..=want).contains(&v)));
+                    let ok = matches!(e.default_value().as_int(), Some(v) if v == want || (list && (0..=want).contains(&v)));
                     if !ok {
                         warnings.push(Warning::new(
                             o,
-                            format!("object {index:#06x}: subindex 0 defaults to {:?}, its highest subindex is {highest}: {highest} assumed", e.default),
+                            format!("object {index:#06x}: subindex 0 defaults to {:?}, its highest subindex is {highest}: {highest} assumed", e.default_value()),
                         ));
-                        e.default = DefaultValue::int(want);
+                        e = crate::with_default(&e, DefaultValue::int(want));
                     }
                 }
                 entries.push(e);
@@ -887,13 +888,13 @@ mod tests {
         let o = |i: u16| &objs.iter().find(|o| o.object.index == i).unwrap().object;
         let dt = o(0x1000);
         assert_eq!(
-            (dt.code, dt.entries[0].default),
+            (dt.code, dt.entries[0].default_value()),
             (ObjectCode::Var, DefaultValue::int(0x1389))
         );
         let off = &o(0x2000).entries[0];
         assert_eq!(off.data_type, DataType::Int16);
         assert_eq!(
-            (off.default, off.min(), off.max()),
+            (off.default_value(), off.min(), off.max()),
             (DefaultValue::int(-10), Some(-1000), Some(1000))
         );
         assert_eq!(
@@ -903,11 +904,11 @@ mod tests {
         let id = o(0x1018);
         assert_eq!(id.code, ObjectCode::Record);
         assert_eq!(id.entries.len(), 4);
-        assert_eq!(id.entries[1].default, DefaultValue::int(0xABC));
+        assert_eq!(id.entries[1].default_value(), DefaultValue::int(0xABC));
         assert!(id.entries[2].gap(), "BIT7 without flags is a gap");
         let mode = &id.entries[3];
         assert_eq!(
-            (mode.access(), mode.pdo(), mode.default),
+            (mode.access(), mode.pdo(), mode.default_value()),
             (Access::RwPreOp, PdoMapping::Rx, DefaultValue::int(1))
         );
         assert!(matches!(mode.data_type, DataType::Enum(e)
@@ -915,9 +916,12 @@ mod tests {
         let a = o(0x1C12);
         assert_eq!(a.code, ObjectCode::Array);
         assert_eq!(a.entries.len(), 3, "sub 0 and two elements");
-        assert_eq!(a.entries[1].default, DefaultValue::int(0x1600));
+        assert_eq!(a.entries[1].default_value(), DefaultValue::int(0x1600));
         assert_eq!(a.entries[2].name, "SubIndex 002");
-        assert_eq!(o(0x1008).entries[0].default, DefaultValue::Str("Twin 1"));
+        assert_eq!(
+            o(0x1008).entries[0].default_value(),
+            DefaultValue::Str("Twin 1")
+        );
         let dict = build(objs.into_iter().map(|p| p.object).collect(), enums);
         assert_eq!(dict.entry_count(), 1 + 1 + 4 + 3 + 1);
         assert_eq!(dict.find_entry(0x2000, 0).map(|(f, _)| f), Some(9));
@@ -1014,13 +1018,13 @@ mod tests {
         let o = |i: u16| &objs.iter().find(|o| o.object.index == i).unwrap().object;
         let rec = o(0x2000);
         assert_eq!(
-            rec.entries[0].default,
+            rec.entries[0].default_value(),
             DefaultValue::int(4),
             "subindex 0 = highest"
         );
         let key = &rec.entries[1];
         assert_eq!((key.data_type, key.bit_len), (DataType::OctetString, 32));
-        assert_eq!(key.default, DefaultValue::Bytes(&[0x0A, 0x0B]));
+        assert_eq!(key.default_value(), DefaultValue::Bytes(&[0x0A, 0x0B]));
         let mode = &rec.entries[2];
         assert_eq!(mode.pdo(), PdoMapping::RxTx);
         assert!(
@@ -1031,12 +1035,12 @@ mod tests {
         let gain = &o(0x2001).entries[0];
         assert_eq!(gain.data_type, DataType::Real32);
         assert_eq!(
-            gain.default,
+            gain.default_value(),
             DefaultValue::int(i64::from((-2.5f32).to_bits()))
         );
         assert_eq!(gain.min(), Some(i64::from((-10f32).to_bits())));
         assert_eq!(o(0x2002).entries[0].data_type, DataType::Int16);
-        assert_eq!(o(0x2002).entries[0].default, DefaultValue::int(-10));
+        assert_eq!(o(0x2002).entries[0].default_value(), DefaultValue::int(-10));
         assert_eq!(
             o(0x2003).entries[0].data_type,
             DataType::UInt16,
@@ -1045,7 +1049,7 @@ mod tests {
         assert_eq!(o(0x2005).entries[0].data_type, DataType::UInt24);
         let name = &o(0x1008).entries[0];
         assert_eq!(
-            (name.bit_len, name.default),
+            (name.bit_len, name.default_value()),
             (160, DefaultValue::Str("short"))
         );
         assert!(objs.iter().all(|o| o.object.index != 0x2004), "left out");
@@ -1108,9 +1112,9 @@ mod tests {
                 .object
                 .entries[0]
         };
-        assert_eq!(e(0x1008).default, DefaultValue::Str("EL2014"));
+        assert_eq!(e(0x1008).default_value(), DefaultValue::Str("EL2014"));
         assert_eq!(
-            e(0x1009).default,
+            e(0x1009).default_value(),
             DefaultValue::Str("01"),
             "DefaultString first"
         );
@@ -1139,9 +1143,44 @@ mod tests {
         };
         let qs = e(0x605A);
         assert_eq!((qs.min(), qs.max()), (Some(-2), Some(6)));
-        assert_eq!(qs.default, DefaultValue::int(-1));
+        assert_eq!(qs.default_value(), DefaultValue::int(-1));
         assert_eq!(e(0x2000).min(), Some(-5), "decimal as written");
         assert_eq!(e(0x2001).max(), Some(0xFFFE), "unsigned hex unchanged");
+    }
+
+    #[test]
+    fn a_64_bit_default_beyond_32_bits_survives_in_the_entrys_limits() {
+        // An entry keeps its default in 32 bits; a wider one (a ULINT, a
+        // LINT below i32::MIN, an LREAL) is kept whole beside its range.
+        let text = r##"<Dictionary><DataTypes/><Objects>
+    <Object><Index>#x2000</Index><Name>Big</Name><Type>ULINT</Type><BitSize>64</BitSize>
+    <Info><MinValue>1</MinValue><MaxValue>#x100000000000</MaxValue><DefaultValue>#x123456789A</DefaultValue></Info>
+    <Flags><Access>rw</Access></Flags></Object>
+    <Object><Index>#x2001</Index><Name>Low</Name><Type>LINT</Type><BitSize>64</BitSize>
+    <Info><DefaultValue>-5000000000</DefaultValue></Info><Flags><Access>rw</Access></Flags></Object>
+    <Object><Index>#x2002</Index><Name>Small</Name><Type>LINT</Type><BitSize>64</BitSize>
+    <Info><DefaultValue>-7</DefaultValue></Info><Flags><Access>rw</Access></Flags></Object>
+</Objects></Dictionary>"##;
+        let (objs, _, _) = parse(&xml::parse(text).unwrap()).unwrap();
+        let e = |i: u16| {
+            &objs
+                .iter()
+                .find(|o| o.object.index == i)
+                .unwrap()
+                .object
+                .entries[0]
+        };
+        let big = e(0x2000);
+        assert_eq!(big.default_value(), DefaultValue::int(0x12_3456_789A));
+        assert_eq!((big.min(), big.max()), (Some(1), Some(0x1000_0000_0000)));
+        assert_eq!(e(0x2001).default_value(), DefaultValue::int(-5_000_000_000));
+        // One that fits is in the entry's bits, its limits the shared none.
+        let small = e(0x2002);
+        assert_eq!(small.default_value(), DefaultValue::int(-7));
+        assert_eq!(
+            (small.default_bits, small.limits.default),
+            (-7i32 as u32, None)
+        );
     }
 
     #[test]

@@ -64,7 +64,40 @@ pub(crate) fn leak_limits(
         min,
         max,
         unit: leak(unit),
+        default: None,
     }))
+}
+
+/// `e` with the default `d`: in the entry's 32 default bits where they
+/// hold it, else (a text, bytes, a 64-bit number beyond the 32-bit range)
+/// in a leaked copy of its limits, as
+/// [`Entry::default_bits`](ecat_slave::od::Entry::default_bits) says.
+pub(crate) fn with_default(
+    e: &ecat_slave::od::Entry,
+    d: ecat_slave::od::DefaultValue,
+) -> ecat_slave::od::Entry {
+    use ecat_slave::od::{DefaultValue, Entry, Limits};
+    let bits = match d {
+        DefaultValue::Int(v) => ecat_slave::od::default_bits(&e.data_type, v.get()),
+        DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
+    };
+    let wide = if bits.is_some() { None } else { Some(d) };
+    let limits = Limits {
+        default: wide,
+        ..*e.limits
+    };
+    let limits: &'static Limits = if limits == *e.limits {
+        e.limits
+    } else if limits == Limits::NONE {
+        &Limits::NONE
+    } else {
+        Box::leak(Box::new(limits))
+    };
+    Entry {
+        default_bits: bits.unwrap_or(0),
+        limits,
+        ..*e
+    }
 }
 
 /// What was built (and leaked) for each distinct device: building the

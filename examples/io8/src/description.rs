@@ -49,11 +49,11 @@ pub const OBJECTS: &[Object] = &[
         var("Error register", DataType::UInt8, PdoMapping::None, 0),
     ] },
     Object { index: 0x1008, name: "Device name", code: ObjectCode::Var, entries: &[
-        string("Device name", "IO8"),
+        string("Device name", &Limits::text("IO8")),
     ] },
     // The core's firmware update writes the running version here.
     Object { index: 0x100A, name: "Software version", code: ObjectCode::Var, entries: &[
-        string("Software version", "10"),
+        string("Software version", &Limits::text("10")),
     ] },
     // Reads 1: "the device saves parameters on command".
     Object { index: STORE_PARAMETERS, name: "Store parameters", code: ObjectCode::Record, entries: &[

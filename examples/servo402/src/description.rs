@@ -17,7 +17,7 @@ use ecat_slave::device::{
 use ecat_slave::od::build::{
     SYNC_PARAMETER_ENTRIES, assign, assign_count, constant, string, sub_name, sub0, var,
 };
-use ecat_slave::od::{Access, DataType, Object, ObjectCode, PdoMapping};
+use ecat_slave::od::{Access, DataType, Limits, Object, ObjectCode, PdoMapping};
 
 /// Vendor ID of the servo402.
 ///
@@ -50,11 +50,11 @@ const HEAD: &[Object] = &[
         var("Error register", DataType::UInt8, PdoMapping::None, 0),
     ] },
     Object { index: 0x1008, name: "Device name", code: ObjectCode::Var, entries: &[
-        string("Device name", "SERVO402"),
+        string("Device name", &Limits::text("SERVO402")),
     ] },
     // The core's firmware update writes the running version here.
     Object { index: 0x100A, name: "Software version", code: ObjectCode::Var, entries: &[
-        string("Software version", "10"),
+        string("Software version", &Limits::text("10")),
     ] },
     Object { index: STORE_PARAMETERS, name: "Store parameters", code: ObjectCode::Record, entries: &[
         sub0(1),

@@ -50,7 +50,7 @@
 //! (docs/SAFETY.md C2), which a parameter must survive.
 
 use ecat_slave::od::build::{input, map_rw, mapping_count, output, ranged, sub_name, var};
-use ecat_slave::od::{DataType, DefaultValue, Entry, Limits, Object, ObjectCode, PdoMapping};
+use ecat_slave::od::{DataType, Entry, Limits, Object, ObjectCode, PdoMapping};
 
 use crate::drive::Parameters;
 use crate::mode::{Mode, SUPPORTED_DRIVE_MODES};
@@ -156,10 +156,8 @@ const fn obj(index: u16, name: &'static str, entries: &'static [Entry]) -> Objec
 }
 
 /// 6060h: an output (RxPDO-mappable, RW) defaulting to CSP.
-const MODES_OF_OPERATION: Entry = Entry {
-    default: DefaultValue::int(Mode::CyclicPosition.code() as i64),
-    ..output(0, "Modes of operation", DataType::Int8)
-};
+const MODES_OF_OPERATION: Entry = output(0, "Modes of operation", DataType::Int8)
+    .with_default(Mode::CyclicPosition.code() as i64);
 
 /// The profile area of axis 0, ascending: 0x6007-0x6502.
 #[rustfmt::skip]
@@ -177,10 +175,9 @@ pub const OBJECTS: &[Object] = &[
         ranged(0, "Fault reaction option code", DataType::Int16, D.fault_reaction_option as i64, &Limits::range(0, 4, "")),
     ]),
     obj(index::MODES_OF_OPERATION, "Modes of operation", &[MODES_OF_OPERATION]),
-    obj(index::MODES_DISPLAY, "Modes of operation display", &[Entry {
-        default: DefaultValue::int(Mode::CyclicPosition.code() as i64),
-        ..input(0, "Modes of operation display", DataType::Int8)
-    }]),
+    obj(index::MODES_DISPLAY, "Modes of operation display", &[
+        input(0, "Modes of operation display", DataType::Int8).with_default(Mode::CyclicPosition.code() as i64),
+    ]),
     obj(index::POSITION_DEMAND, "Position demand value", &[input(0, "Position demand value", DataType::Int32)]),
     obj(index::POSITION_ACTUAL, "Position actual value", &[input(0, "Position actual value", DataType::Int32)]),
     obj(index::FOLLOWING_ERROR_WINDOW, "Following error window", &[
@@ -341,7 +338,7 @@ pub const fn join<const N: usize>(parts: &[&[Object]]) -> [Object; N] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ecat_slave::od::Dictionary;
+    use ecat_slave::od::{DefaultValue, Dictionary};
 
     ecat_slave::dictionary!(PROFILE, PROFILE_ENTRIES = OBJECTS, &[]);
 
@@ -359,7 +356,10 @@ mod tests {
     #[test]
     fn the_parameter_defaults_are_the_drives_defaults() {
         let d: &Dictionary = &PROFILE;
-        let get = |i| match d.find_entry(i, 0).and_then(|(_, e)| e.default.as_int()) {
+        let get = |i| match d
+            .find_entry(i, 0)
+            .and_then(|(_, e)| e.default_value().as_int())
+        {
             Some(v) => v,
             None => panic!("{i:#06x}"),
         };
@@ -384,7 +384,7 @@ mod tests {
             o.entries
                 .iter()
                 .skip(1)
-                .map(|e| match e.default {
+                .map(|e| match e.default_value() {
                     DefaultValue::Int(v) => (v.get() & 0xFF) as u32,
                     _ => 0,
                 })
@@ -393,7 +393,7 @@ mod tests {
         assert_eq!(bits(&RX_PDO) as usize, 8 * RX_PDO_BYTES);
         assert_eq!(bits(&TX_PDO) as usize, 8 * TX_PDO_BYTES);
         let mapped = |pdo: &Object, index: u16| {
-            pdo.entries.iter().skip(1).any(|e| match e.default {
+            pdo.entries.iter().skip(1).any(|e| match e.default_value() {
                 DefaultValue::Int(v) => (v.get() >> 16) as u16 == index,
                 _ => false,
             })

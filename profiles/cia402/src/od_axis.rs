@@ -98,7 +98,7 @@ impl Cia402Axis<AxisModel> {
     /// mandatory; vendors' ESI files do not always set 0x1000).
     pub fn is_cia402(dict: &Dictionary) -> bool {
         let profile = matches!(
-            dict.find_entry(0x1000, 0).map(|(_, e)| e.default),
+            dict.find_entry(0x1000, 0).map(|(_, e)| e.default_value()),
             Some(DefaultValue::Int(v)) if v.get() & 0xFFFF == 402
         );
         let objects = dict.find_entry(index::CONTROLWORD, 0).is_some()

@@ -602,7 +602,7 @@ fn write_entry_description(
         w.u32(unit_code(e.unit()));
     }
     if info & value_info::DEFAULT != 0 {
-        match e.default {
+        match e.default_value() {
             DefaultValue::Int(v) => w.int(v.get() as u64, n),
             DefaultValue::Str(s) => {
                 let text = s.as_bytes();

@@ -268,7 +268,7 @@ const fn int_default(o: &Object, sub: u8) -> Option<i64> {
     let mut es = o.entries;
     while let Some((e, tail)) = es.split_first() {
         if e.sub == sub {
-            return match e.default {
+            return match e.default_value() {
                 DefaultValue::Int(v) => Some(v.get()),
                 DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
             };
@@ -467,7 +467,7 @@ impl DeviceDescription {
                             continue;
                         }
                         bounds.writable |= e.access().writable();
-                        let DefaultValue::Int(mapping) = e.default else {
+                        let DefaultValue::Int(mapping) = e.default_value() else {
                             return Err(DescriptionError::BadMapping { pdo, sub: e.sub });
                         };
                         let mapping = mapping.get() as u32;

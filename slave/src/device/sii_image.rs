@@ -25,14 +25,14 @@ type PdoEntries = heapless::Vec<sii::SiiPdoEntry<'static>, SII_MAX_ENTRIES>;
 /// `(index, sub, bits)`, padding as index 0.
 pub fn mapping_entries(dict: &Dictionary, pdo: u16) -> impl Iterator<Item = (u16, u8, u8)> {
     let entries = dict.find(pdo).map_or(&[][..], |(_, o)| o.entries);
-    let count = entries.first().map_or(0, |e| match e.default {
+    let count = entries.first().map_or(0, |e| match e.default_value() {
         DefaultValue::Int(v) => v.get(),
         DefaultValue::Str(_) | DefaultValue::Bytes(_) => 0,
     });
     entries
         .iter()
         .filter(move |e| e.sub != 0 && i64::from(e.sub) <= count)
-        .filter_map(|e| match e.default {
+        .filter_map(|e| match e.default_value() {
             DefaultValue::Int(m) => {
                 let m = m.get() as u32;
                 Some(((m >> 16) as u16, (m >> 8) as u8, m as u8))

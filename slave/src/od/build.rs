@@ -30,6 +30,12 @@ pub const fn sub_name(sub: u8) -> &'static str {
 }
 
 /// An entry with no range, no unit, not stored, not a gap.
+///
+/// # Panics
+///
+/// When `default` is a 64-bit number beyond the 32-bit range (see
+/// [`Entry::with_default`]), as every constructor here that takes a
+/// default: in a `const` item, a build error.
 pub const fn base(
     sub: u8,
     name: &'static str,
@@ -43,10 +49,11 @@ pub const fn base(
         name,
         data_type,
         bit_len: natural_bits(&data_type),
-        default: DefaultValue::int(default),
+        default_bits: 0,
         limits: &Limits::NONE,
         flags: EntryFlags::new(access, pdo),
     }
+    .with_default(default)
 }
 
 /// Subindex 0 of an array or record: the highest subindex, UINT8, RO.
@@ -80,40 +87,40 @@ pub const fn assign_count(count: u8, capacity: u8) -> Entry {
 #[rustfmt::skip]
 const fn capacity_limits(capacity: u8) -> &'static Limits {
     match capacity {
-            0 => &Limits { min: Some(0), max: Some(0), unit: "" },
-            1 => &Limits { min: Some(0), max: Some(1), unit: "" },
-            2 => &Limits { min: Some(0), max: Some(2), unit: "" },
-            3 => &Limits { min: Some(0), max: Some(3), unit: "" },
-            4 => &Limits { min: Some(0), max: Some(4), unit: "" },
-            5 => &Limits { min: Some(0), max: Some(5), unit: "" },
-            6 => &Limits { min: Some(0), max: Some(6), unit: "" },
-            7 => &Limits { min: Some(0), max: Some(7), unit: "" },
-            8 => &Limits { min: Some(0), max: Some(8), unit: "" },
-            9 => &Limits { min: Some(0), max: Some(9), unit: "" },
-            10 => &Limits { min: Some(0), max: Some(10), unit: "" },
-            11 => &Limits { min: Some(0), max: Some(11), unit: "" },
-            12 => &Limits { min: Some(0), max: Some(12), unit: "" },
-            13 => &Limits { min: Some(0), max: Some(13), unit: "" },
-            14 => &Limits { min: Some(0), max: Some(14), unit: "" },
-            15 => &Limits { min: Some(0), max: Some(15), unit: "" },
-            16 => &Limits { min: Some(0), max: Some(16), unit: "" },
-            17 => &Limits { min: Some(0), max: Some(17), unit: "" },
-            18 => &Limits { min: Some(0), max: Some(18), unit: "" },
-            19 => &Limits { min: Some(0), max: Some(19), unit: "" },
-            20 => &Limits { min: Some(0), max: Some(20), unit: "" },
-            21 => &Limits { min: Some(0), max: Some(21), unit: "" },
-            22 => &Limits { min: Some(0), max: Some(22), unit: "" },
-            23 => &Limits { min: Some(0), max: Some(23), unit: "" },
-            24 => &Limits { min: Some(0), max: Some(24), unit: "" },
-            25 => &Limits { min: Some(0), max: Some(25), unit: "" },
-            26 => &Limits { min: Some(0), max: Some(26), unit: "" },
-            27 => &Limits { min: Some(0), max: Some(27), unit: "" },
-            28 => &Limits { min: Some(0), max: Some(28), unit: "" },
-            29 => &Limits { min: Some(0), max: Some(29), unit: "" },
-            30 => &Limits { min: Some(0), max: Some(30), unit: "" },
-            31 => &Limits { min: Some(0), max: Some(31), unit: "" },
-            32 => &Limits { min: Some(0), max: Some(32), unit: "" },
-            _ => &Limits { min: Some(0), max: Some(255), unit: "" },
+            0 => &Limits { min: Some(0), max: Some(0), unit: "", default: None },
+            1 => &Limits { min: Some(0), max: Some(1), unit: "", default: None },
+            2 => &Limits { min: Some(0), max: Some(2), unit: "", default: None },
+            3 => &Limits { min: Some(0), max: Some(3), unit: "", default: None },
+            4 => &Limits { min: Some(0), max: Some(4), unit: "", default: None },
+            5 => &Limits { min: Some(0), max: Some(5), unit: "", default: None },
+            6 => &Limits { min: Some(0), max: Some(6), unit: "", default: None },
+            7 => &Limits { min: Some(0), max: Some(7), unit: "", default: None },
+            8 => &Limits { min: Some(0), max: Some(8), unit: "", default: None },
+            9 => &Limits { min: Some(0), max: Some(9), unit: "", default: None },
+            10 => &Limits { min: Some(0), max: Some(10), unit: "", default: None },
+            11 => &Limits { min: Some(0), max: Some(11), unit: "", default: None },
+            12 => &Limits { min: Some(0), max: Some(12), unit: "", default: None },
+            13 => &Limits { min: Some(0), max: Some(13), unit: "", default: None },
+            14 => &Limits { min: Some(0), max: Some(14), unit: "", default: None },
+            15 => &Limits { min: Some(0), max: Some(15), unit: "", default: None },
+            16 => &Limits { min: Some(0), max: Some(16), unit: "", default: None },
+            17 => &Limits { min: Some(0), max: Some(17), unit: "", default: None },
+            18 => &Limits { min: Some(0), max: Some(18), unit: "", default: None },
+            19 => &Limits { min: Some(0), max: Some(19), unit: "", default: None },
+            20 => &Limits { min: Some(0), max: Some(20), unit: "", default: None },
+            21 => &Limits { min: Some(0), max: Some(21), unit: "", default: None },
+            22 => &Limits { min: Some(0), max: Some(22), unit: "", default: None },
+            23 => &Limits { min: Some(0), max: Some(23), unit: "", default: None },
+            24 => &Limits { min: Some(0), max: Some(24), unit: "", default: None },
+            25 => &Limits { min: Some(0), max: Some(25), unit: "", default: None },
+            26 => &Limits { min: Some(0), max: Some(26), unit: "", default: None },
+            27 => &Limits { min: Some(0), max: Some(27), unit: "", default: None },
+            28 => &Limits { min: Some(0), max: Some(28), unit: "", default: None },
+            29 => &Limits { min: Some(0), max: Some(29), unit: "", default: None },
+            30 => &Limits { min: Some(0), max: Some(30), unit: "", default: None },
+            31 => &Limits { min: Some(0), max: Some(31), unit: "", default: None },
+            32 => &Limits { min: Some(0), max: Some(32), unit: "", default: None },
+            _ => &Limits { min: Some(0), max: Some(255), unit: "", default: None },
     }
 }
 
@@ -134,11 +141,19 @@ pub const fn var(name: &'static str, t: DataType, pdo: PdoMapping, default: i64)
     base(0, name, t, Access::Ro, pdo, default)
 }
 
-/// A read-only VISIBLE_STRING VAR sized by its default (0x1008-0x100A).
-pub const fn string(name: &'static str, text: &'static str) -> Entry {
+/// A read-only VISIBLE_STRING VAR sized by its default (0x1008-0x100A):
+/// `string("Device name", &Limits::text("IO8"))`. The text comes as a
+/// `&'static Limits` because an entry keeps it there (its own 32 default
+/// bits cannot hold it), and a `const fn` cannot make a `'static`
+/// reference of an argument.
+pub const fn string(name: &'static str, text: &'static Limits) -> Entry {
+    let len = match text.default {
+        Some(DefaultValue::Str(t)) => t.len(),
+        _ => 0,
+    };
     Entry {
-        bit_len: 8 * text.len() as u16,
-        default: DefaultValue::Str(text),
+        bit_len: 8 * len as u16,
+        limits: text,
         ..var(name, DataType::VisibleString, PdoMapping::None, 0)
     }
 }

@@ -471,7 +471,7 @@ const fn check_entry(
             return Err(DescriptionError::GapShape { index, sub });
         }
     }
-    match e.default {
+    match e.default_value() {
         DefaultValue::Str(s) => {
             let ok =
                 matches!(e.data_type, DataType::VisibleString) && 8 * s.len() <= e.bit_len as usize;
@@ -671,7 +671,7 @@ impl Dictionary {
                 if let Err(err) = check_entry(index, o.code, highest, e, self.enums) {
                     return Err(err);
                 }
-                if let DefaultValue::Str(text) = e.default
+                if let DefaultValue::Str(text) = e.default_value()
                     && text.len() <= MAX_STRING
                 {
                     // Strings take the store's slots in order; a writable
@@ -680,7 +680,7 @@ impl Dictionary {
                         return Err(DescriptionError::StringEntry { index, sub: e.sub });
                     }
                     strings += 1;
-                } else if let DefaultValue::Str(_) = e.default
+                } else if let DefaultValue::Str(_) = e.default_value()
                     && e.access().writable()
                 {
                     return Err(DescriptionError::StringEntry { index, sub: e.sub });

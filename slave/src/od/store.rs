@@ -142,7 +142,7 @@ impl Od {
         let mut area = dict.entry_count();
         for (flat, _, e) in dict.entries() {
             let slots = e.area_len().div_ceil(8);
-            match e.default {
+            match e.default_value() {
                 DefaultValue::Int(v) if slots == 0 => self.set_value(flat, v.get()),
                 DefaultValue::Int(_) => self.fill_area(area, slots, &[]),
                 DefaultValue::Bytes(b) => self.fill_area(area, slots, b),
@@ -273,7 +273,7 @@ impl Od {
         if entry.data_type == DataType::VisibleString {
             // A string beyond the store's slots is served from its default
             // (read-only strings of a large dictionary need no slot).
-            let fallback = match entry.default {
+            let fallback = match entry.default_value() {
                 DefaultValue::Str(d) => d,
                 DefaultValue::Int(_) | DefaultValue::Bytes(_) => "",
             };

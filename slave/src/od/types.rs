@@ -564,8 +564,7 @@ impl ObjectCode {
 
 /// An `i64` kept as two 32-bit halves, so that it is aligned to 4 bytes:
 /// with it a [`DefaultValue`] takes 12 bytes on a 32-bit microcontroller
-/// instead of 16, and an [`Entry`] 40 instead of 48 (a `i64` is aligned to
-/// 8 there, and the padding was a sixth of every dictionary table).
+/// instead of 16 (a `i64` is aligned to 8 there).
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Int64([u32; 2]);
 
@@ -603,7 +602,7 @@ impl From<Int64> for i64 {
 // (checked whenever the core is built for one, as the footprint and board
 // firmware builds of `.ci/run` do).
 #[cfg(target_pointer_width = "32")]
-const _: () = assert!(core::mem::size_of::<Entry>() == 32 && core::mem::align_of::<Entry>() == 4);
+const _: () = assert!(core::mem::size_of::<Entry>() == 24 && core::mem::align_of::<Entry>() == 4);
 
 /// The default value of an entry.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -648,11 +647,41 @@ pub struct Entry {
     /// byte; read them with [`Entry::access`], [`Entry::pdo`],
     /// [`Entry::backup`], [`Entry::setting`], [`Entry::gap`].
     pub flags: EntryFlags,
-    /// Default value (process data: the power-on value).
-    pub default: DefaultValue,
-    /// Range and unit, where the device gives them ([`Limits::NONE`] for
-    /// none); read them with [`Entry::min`], [`Entry::max`], [`Entry::unit`].
+    /// The default number's low 32 bits, sign- or zero-extended by the
+    /// data type ([`DataType::is_signed`]); read the default with
+    /// [`Entry::default_value`], set it with [`Entry::with_default`].
+    /// A default these bits cannot hold (a string's text, an octet
+    /// string's bytes, a 64-bit number beyond the 32-bit range) is the
+    /// entry's [`Limits::default`], and these bits are then 0.
+    pub default_bits: u32,
+    /// Range, unit and a default too wide for [`Entry::default_bits`],
+    /// where the device gives them ([`Limits::NONE`] for none); read them
+    /// with [`Entry::min`], [`Entry::max`], [`Entry::unit`],
+    /// [`Entry::default_value`].
     pub limits: &'static Limits,
+}
+
+/// The 32 default bits ([`Entry::default_bits`]) of the number `v` in an
+/// entry of type `t`, or `None` when they cannot hold it (then `v` goes in
+/// the entry's [`Limits::default`]). Numbers are held as the store holds
+/// them (signed types sign-extended, others zero-extended), so the bits
+/// are `v`'s low half and `v` must be their extension.
+pub const fn default_bits(t: &DataType, v: i64) -> Option<u32> {
+    let bits = v as u32;
+    if extend_default(t, bits) == v {
+        Some(bits)
+    } else {
+        None
+    }
+}
+
+/// The number held by the 32 default bits `bits` of an entry of type `t`.
+const fn extend_default(t: &DataType, bits: u32) -> i64 {
+    if t.is_signed() {
+        bits as i32 as i64
+    } else {
+        bits as i64
+    }
 }
 
 /// An entry's access rights, PDO mappability and flags in one byte (five
@@ -762,14 +791,16 @@ impl core::fmt::Debug for EntryFlags {
     }
 }
 
-/// The range and unit of an entry. Most entries have neither and share
+/// The range and unit of an entry, and a default too wide for its 32
+/// default bits. Most entries have none of them and share
 /// [`Limits::NONE`]; an entry holds one reference (4 bytes on a 32-bit
-/// microcontroller) instead of two `Option<i64>` and a `&str` (40 bytes),
-/// which is most of what a dictionary table costs in flash.
+/// microcontroller) instead of two `Option<i64>`, a `&str` and a default
+/// (56 bytes), which is most of what a dictionary table costs in flash.
 ///
 /// In a `const` item a reference to a `Limits` built by a `const fn` is
-/// `'static`: `ranged(1, "Filter", DataType::UInt16, 10, &Limits::range(0, 100, "ms"))`.
-#[derive(Debug, PartialEq, Eq)]
+/// `'static`: `ranged(1, "Filter", DataType::UInt16, 10, &Limits::range(0, 100, "ms"))`,
+/// `string("Device name", &Limits::text("IO8"))`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Limits {
     /// Smallest allowed value, where the manual gives a range.
     pub min: Option<i64>,
@@ -777,6 +808,11 @@ pub struct Limits {
     pub max: Option<i64>,
     /// Unit text as the manual gives it (`ms`, `mA`, `Hz`, `0.01 %`), or "".
     pub unit: &'static str,
+    /// The entry's default where its [`Entry::default_bits`] cannot hold
+    /// it: a visible string's text, the bytes of an octet string, `GUID`
+    /// or array entry, a 64-bit number beyond the 32-bit range. `None`
+    /// for every other entry: it is read from the default bits.
+    pub default: Option<DefaultValue>,
 }
 
 impl Limits {
@@ -785,6 +821,7 @@ impl Limits {
         min: None,
         max: None,
         unit: "",
+        default: None,
     };
 
     /// The range `min..=max` in `unit` ("" for none).
@@ -793,6 +830,7 @@ impl Limits {
             min: Some(min),
             max: Some(max),
             unit,
+            default: None,
         }
     }
 
@@ -802,6 +840,33 @@ impl Limits {
             min: None,
             max: None,
             unit,
+            default: None,
+        }
+    }
+
+    /// No range, no unit; `text` as the default of a visible string.
+    pub const fn text(text: &'static str) -> Limits {
+        Limits {
+            default: Some(DefaultValue::Str(text)),
+            ..Limits::NONE
+        }
+    }
+
+    /// No range, no unit; `bytes` as the default of an octet string,
+    /// `GUID` or array entry (zeros after them).
+    pub const fn bytes(bytes: &'static [u8]) -> Limits {
+        Limits {
+            default: Some(DefaultValue::Bytes(bytes)),
+            ..Limits::NONE
+        }
+    }
+
+    /// These limits with `default` as the entry's default (a default the
+    /// entry's 32 default bits cannot hold).
+    pub const fn with_default(self, default: DefaultValue) -> Limits {
+        Limits {
+            default: Some(default),
+            ..self
         }
     }
 }
@@ -886,6 +951,38 @@ impl Entry {
         self.flags.gap()
     }
 
+    /// The default value: [`Limits::default`] where the entry has one,
+    /// else the number its [`Entry::default_bits`] hold.
+    pub const fn default_value(&self) -> DefaultValue {
+        match self.limits.default {
+            Some(d) => d,
+            None => DefaultValue::int(extend_default(&self.data_type, self.default_bits)),
+        }
+    }
+
+    /// The entry with the number `v` as its default, held in its 32
+    /// default bits.
+    ///
+    /// # Panics
+    ///
+    /// When they cannot hold `v` ([`default_bits`] is `None`: a 64-bit
+    /// number beyond the 32-bit range); in a `const` item that is a
+    /// compile error. Give such a default with [`Limits::with_default`];
+    /// a builder of entries at run time checks [`default_bits`] first.
+    #[allow(
+        clippy::panic,
+        reason = "meant for const items, where a default the entry cannot hold becomes a build error"
+    )]
+    pub const fn with_default(self, v: i64) -> Self {
+        let Some(default_bits) = default_bits(&self.data_type, v) else {
+            panic!("a default beyond 32 bits goes in the entry's Limits (Limits::with_default)");
+        };
+        Entry {
+            default_bits,
+            ..self
+        }
+    }
+
     /// Smallest allowed value, where the device gives a range.
     pub const fn min(&self) -> Option<i64> {
         self.limits.min
@@ -931,6 +1028,73 @@ impl Object {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    use crate::od::build::{base, string, var};
+
+    #[test]
+    fn an_entry_keeps_a_32_bit_default_in_its_bits_sign_or_zero_extended() {
+        let cases = [
+            (DataType::Int8, -1),
+            (DataType::Int16, -32768),
+            (DataType::Int32, i64::from(i32::MIN)),
+            (DataType::Int32, i64::from(i32::MAX)),
+            (DataType::Int64, -5),
+            (DataType::Int40, i64::from(i32::MIN)),
+            (DataType::UInt32, i64::from(u32::MAX)),
+            (DataType::UInt64, i64::from(u32::MAX)),
+            (DataType::Real32, 0x3F80_0000),
+            (DataType::Bool, 1),
+            (DataType::Bits(3), 5),
+        ];
+        for (t, v) in cases {
+            let e = base(1, "x", t, Access::Rw, PdoMapping::None, v);
+            assert_eq!(e.default_value(), DefaultValue::int(v), "{t:?} {v}");
+            assert_eq!(e.default_bits, v as u32, "{t:?} {v}");
+            assert_eq!(e.limits.default, None, "{t:?} {v}");
+        }
+    }
+
+    #[test]
+    fn a_default_beyond_32_bits_does_not_fit_the_bits() {
+        let cases = [
+            (DataType::UInt64, 1 << 32),
+            (DataType::Int64, i64::from(i32::MIN) - 1),
+            (DataType::Int64, i64::MAX),
+            (DataType::Real64, 1.0f64.to_bits() as i64),
+            // Not the type's own bit pattern: a signed type's value is
+            // sign-extended, an unsigned type's zero-extended.
+            (DataType::UInt32, -1),
+            (DataType::Int32, i64::from(u32::MAX)),
+        ];
+        for (t, v) in cases {
+            assert_eq!(default_bits(&t, v), None, "{t:?} {v}");
+        }
+    }
+
+    #[test]
+    fn a_wide_default_or_a_text_is_read_from_the_limits() {
+        const BIG: Entry = Entry {
+            limits: &Limits::range(0, i64::MAX, "ns").with_default(DefaultValue::int(1 << 40)),
+            ..var("Big", DataType::UInt64, PdoMapping::None, 0)
+        };
+        assert_eq!(BIG.default_value(), DefaultValue::int(1 << 40));
+        assert_eq!(
+            (BIG.min(), BIG.max(), BIG.unit()),
+            (Some(0), Some(i64::MAX), "ns")
+        );
+        const NAME: Entry = string("Device name", &Limits::text("IO8"));
+        assert_eq!(NAME.default_value(), DefaultValue::Str("IO8"));
+        assert_eq!(NAME.bit_len, 24);
+        const KEY: Limits = Limits::bytes(&[1, 2]);
+        assert_eq!(KEY.default, Some(DefaultValue::Bytes(&[1, 2])));
+    }
+
+    #[test]
+    #[should_panic(expected = "Limits::with_default")]
+    fn with_default_refuses_what_the_bits_cannot_hold() {
+        let e = var("Big", DataType::UInt64, PdoMapping::None, 0);
+        let _ = core::hint::black_box(e).with_default(1 << 33);
+    }
 
     #[test]
     fn entry_flags_keep_every_combination() {

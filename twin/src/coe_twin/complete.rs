@@ -58,8 +58,13 @@ pub(super) fn normalize_assignment(
     let mut entries: Vec<Entry> = o.entries.iter().map(copy).collect();
     for e in entries.iter_mut() {
         match e.sub {
-            0 => e.default = DefaultValue::int(want.len() as i64),
-            s => e.default = DefaultValue::int(want.get(usize::from(s) - 1).copied().unwrap_or(0)),
+            0 => *e = crate::with_default(e, DefaultValue::int(want.len() as i64)),
+            s => {
+                *e = crate::with_default(
+                    e,
+                    DefaultValue::int(want.get(usize::from(s) - 1).copied().unwrap_or(0)),
+                )
+            }
         }
     }
     o.entries = Box::leak(entries.into_boxed_slice());
@@ -80,7 +85,7 @@ pub(super) fn drop_impossible_ranges(
             .iter()
             .enumerate()
             .filter(|(_, e)| {
-                let Some(v) = e.default.as_int() else {
+                let Some(v) = e.default_value().as_int() else {
                     return false;
                 };
                 if e.data_type.is_bytes() || matches!(e.data_type, DataType::Enum(_)) {
@@ -104,22 +109,25 @@ pub(super) fn drop_impossible_ranges(
                     at: dev.at.clone(),
                     message: format!(
                         "{:#06x}:{:02x}: the range {:?}..{:?} of its type does not hold the default {:?} or is empty: served without a range, the default cut to its type",
-                        o.index, e.sub, e.min(), e.max(), e.default
+                        o.index, e.sub, e.min(), e.max(), e.default_value()
                     ),
                 });
+                let default = e.default_value();
                 e.limits = crate::leak_limits(None, None, e.unit());
+                *e = crate::with_default(e, default);
                 // A default outside its type: its bits in the type's size.
-                if let Some(v) = e.default.as_int() {
+                if let Some(v) = e.default_value().as_int() {
                     let (lo, hi) =
                         ecat_slave::od::dictionary::natural_range(&e.data_type, e.bit_len);
                     if !e.data_type.is_real() && (v < lo || v > hi) {
-                        e.default = DefaultValue::int(ecat_slave::od::store::from_raw(
+                        let cut = ecat_slave::od::store::from_raw(
                             e,
                             v as u64
                                 & u64::MAX
                                     .checked_shr(64 - u32::from(e.bit_len.clamp(1, 64)))
                                     .unwrap_or(u64::MAX),
-                        ));
+                        );
+                        *e = crate::with_default(e, DefaultValue::int(cut));
                     }
                 }
             }
@@ -162,14 +170,14 @@ pub(super) fn mapped_entry(sub: u8, name: &str, ty: DataType, bits: u8, out: boo
     } else {
         input(sub, leak(name), ty)
     };
-    Entry {
+    let entry = Entry {
         bit_len: u16::from(bits),
-        default: if ty.is_bytes() {
-            DefaultValue::Bytes(&[])
-        } else {
-            DefaultValue::int(0)
-        },
         ..base
+    };
+    if ty.is_bytes() {
+        crate::with_default(&entry, DefaultValue::Bytes(&[]))
+    } else {
+        entry
     }
 }
 
@@ -215,11 +223,11 @@ pub(super) fn complete(
             index: 0x1000,
             name: "Device type",
             code: ObjectCode::Var,
-            entries: Box::leak(Box::new([var(
-                "Device type",
-                DataType::UInt32,
-                PdoMapping::None,
-                profile,
+            // The file's number, whatever its size: the entry keeps it
+            // (in its limits when 32 bits cannot hold it).
+            entries: Box::leak(Box::new([crate::with_default(
+                &var("Device type", DataType::UInt32, PdoMapping::None, 0),
+                DefaultValue::int(profile),
             )])),
         });
     }
@@ -316,7 +324,7 @@ pub(super) fn complete(
             for (k, v) in want.iter().enumerate() {
                 let sub = u8::try_from(k + 1).unwrap_or(u8::MAX);
                 match entries.iter_mut().find(|e| e.sub == sub) {
-                    Some(e) => e.default = DefaultValue::int(*v),
+                    Some(e) => *e = crate::with_default(e, DefaultValue::int(*v)),
                     None => entries.push(map(sub, ecat_slave::od::build::sub_name(sub), *v as u32)),
                 }
             }
@@ -326,8 +334,10 @@ pub(super) fn complete(
             }
             let highest = entries.iter().map(|e| e.sub).max().unwrap_or(0);
             if let Some(z) = entries.first_mut().filter(|z| z.sub == 0) {
-                z.default =
-                    DefaultValue::int(i64::from(if z.access().writable() { n } else { highest }));
+                *z = crate::with_default(
+                    z,
+                    DefaultValue::int(i64::from(if z.access().writable() { n } else { highest })),
+                );
             }
             objects[pos] = Object {
                 entries: Box::leak(entries.into_boxed_slice()),
@@ -358,14 +368,14 @@ pub(super) fn complete(
         let n = o
             .entries
             .first()
-            .and_then(|e| e.default.as_int())
+            .and_then(|e| e.default_value().as_int())
             .unwrap_or(0);
         for e in o
             .entries
             .iter()
             .filter(|e| e.sub >= 1 && i64::from(e.sub) <= n)
         {
-            let Some(v) = e.default.as_int() else {
+            let Some(v) = e.default_value().as_int() else {
                 continue;
             };
             let (index, sub, bits) = ((v >> 16) as u16, (v >> 8) as u8, v as u8);
@@ -466,7 +476,7 @@ pub(super) fn complete(
                         entries.sort_by_key(|x| x.sub);
                         let highest = entries.iter().map(|x| x.sub).max().unwrap_or(0);
                         if let Some(z) = entries.first_mut().filter(|z| z.sub == 0) {
-                            z.default = DefaultValue::int(i64::from(highest));
+                            *z = crate::with_default(z, DefaultValue::int(i64::from(highest)));
                         }
                         objects[pos] = Object {
                             entries: Box::leak(entries.into_boxed_slice()),

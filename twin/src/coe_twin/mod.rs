@@ -145,21 +145,18 @@ pub(super) fn list_defaults(o: &Object) -> Vec<i64> {
     let count = o
         .entries
         .first()
-        .and_then(|e| e.default.as_int())
+        .and_then(|e| e.default_value().as_int())
         .unwrap_or(0);
     o.entries
         .iter()
         .filter(|e| e.sub >= 1 && i64::from(e.sub) <= count)
-        .map(|e| e.default.as_int().unwrap_or(-1))
+        .map(|e| e.default_value().as_int().unwrap_or(-1))
         .collect()
 }
 
 /// A copy of `e` (every field of an entry is `Copy`).
 pub(super) fn copy(e: &Entry) -> Entry {
-    Entry {
-        default: e.default,
-        ..*e
-    }
+    Entry { ..*e }
 }
 
 pub(super) fn sm(dev: &EsiDevice, kind: SmType) -> Option<(u16, u16)> {
@@ -240,7 +237,7 @@ pub(super) fn build_description(dev: &EsiDevice) -> Result<Described, Descriptio
     for o in parsed.iter_mut() {
         let mut changed = None;
         for (k, e) in o.entries.iter().enumerate() {
-            if let DefaultValue::Str(t) = e.default {
+            if let DefaultValue::Str(t) = e.default_value() {
                 let slot = t.len() <= ecat_slave::od::STRING_CAPACITY;
                 if e.access().writable() && (!slot || strings >= ecat_slave::od::STRING_SLOTS) {
                     changed.get_or_insert_with(Vec::new).push(k);
@@ -278,12 +275,12 @@ pub(super) fn build_description(dev: &EsiDevice) -> Result<Described, Descriptio
                 .entries
                 .iter()
                 .map(|e| match e.sub {
-                    s @ 1..=3 => Entry {
-                        default: DefaultValue::int(i64::from(
+                    s @ 1..=3 => crate::with_default(
+                        e,
+                        DefaultValue::int(i64::from(
                             id.get(usize::from(s) - 1).copied().unwrap_or(0),
                         )),
-                        ..copy(e)
-                    },
+                    ),
                     _ => copy(e),
                 })
                 .collect();
@@ -722,12 +719,12 @@ mod tests {
         assert_eq!(idx, [0xF050, 0xF000, 0xF030], "the ESI's own 0xF050 kept");
         assert_eq!(objects[0].name, "Detected (the ESI's own)");
         let f000 = &objects[1];
-        assert_eq!(f000.entries[1].default, DefaultValue::int(0x800));
-        assert_eq!(f000.entries[2].default, DefaultValue::int(2));
+        assert_eq!(f000.entries[1].default_value(), DefaultValue::int(0x800));
+        assert_eq!(f000.entries[2].default_value(), DefaultValue::int(2));
         let f030 = &objects[2];
         assert_eq!(f030.entries.len(), 3, "subindex 0 and one per slot");
         assert_eq!(
-            f030.entries[0].default,
+            f030.entries[0].default_value(),
             DefaultValue::int(0),
             "nothing configured"
         );

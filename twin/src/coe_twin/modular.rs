@@ -132,7 +132,7 @@ pub(super) fn modular(
                 .iter()
                 .map(|e| {
                     // A mapping entry of slot 0 points at slot 0's object.
-                    let default = match e.default {
+                    let default = match e.default_value() {
                         DefaultValue::Int(v)
                             if (0x1600..=0x1BFF).contains(&o.index) && e.sub != 0 =>
                         {
@@ -149,7 +149,7 @@ pub(super) fn modular(
                         }
                         d => d,
                     };
-                    Entry { default, ..copy(e) }
+                    crate::with_default(e, default)
                 })
                 .collect();
             if objects.iter().any(|x| x.index == index) {
@@ -196,7 +196,7 @@ pub(super) fn modular_objects(
             ..sub0(slots).with_access(access)
         }];
         if access == Access::RwPreOp {
-            l[0].default = DefaultValue::int(0);
+            l[0] = crate::with_default(&l[0], DefaultValue::int(0));
         }
         for k in 1..=slots {
             l.push(

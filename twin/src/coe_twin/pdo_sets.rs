@@ -11,12 +11,12 @@ pub(super) fn assigned(objects: &[Object], index: u16) -> Vec<u16> {
     let n = o
         .entries
         .first()
-        .and_then(|e| e.default.as_int())
+        .and_then(|e| e.default_value().as_int())
         .unwrap_or(0);
     o.entries
         .iter()
         .filter(|e| e.sub >= 1 && i64::from(e.sub) <= n)
-        .filter_map(|e| match e.default {
+        .filter_map(|e| match e.default_value() {
             DefaultValue::Int(v) => u16::try_from(v.get()).ok().filter(|v| *v != 0),
             DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
         })

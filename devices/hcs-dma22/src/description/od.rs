@@ -45,6 +45,7 @@ const fn telegram_entries(access: Access) -> [Entry; MAX_TELEGRAM + 2] {
         min: Some(0),
         max: Some(MAX_TELEGRAM as i64),
         unit: "",
+        default: None,
     };
     l[1] = len;
     let mut k = 2;
@@ -155,13 +156,14 @@ const fn ident_list(access: Access) -> [Entry; 6] {
         min: Some(0),
         max: Some(SLOTS as i64),
         unit: "",
+        default: None,
     };
     l
 }
 
 const CONFIGURED: [Entry; 6] = {
     let mut l = ident_list(Access::RwPreOp);
-    l[0].default = ecat_slave::od::DefaultValue::int(0);
+    l[0].default_bits = 0;
     l
 };
 const DETECTED: [Entry; 6] = ident_list(Access::Ro);
@@ -190,9 +192,9 @@ const HEAD: &[Object] = &[
     // ETG.5001: device type = profile 5001 (0x1389).
     Object { index: 0x1000, name: "Device type", code: Var, entries: &[var("Device type", DataType::UInt32, NoPdo, 0x0000_1389)] },
     Object { index: 0x1001, name: "Error register", code: Var, entries: &[var("Error register", DataType::UInt8, NoPdo, 0)] },
-    Object { index: 0x1008, name: "Device name", code: Var, entries: &[string("Device name", DEVICE_NAME)] },
-    Object { index: 0x1009, name: "Hardware version", code: Var, entries: &[string("Hardware version", "1")] },
-    Object { index: 0x100A, name: "Software version", code: Var, entries: &[string("Software version", "10.01")] },
+    Object { index: 0x1008, name: "Device name", code: Var, entries: &[string("Device name", &Limits::text(DEVICE_NAME))] },
+    Object { index: 0x1009, name: "Hardware version", code: Var, entries: &[string("Hardware version", &Limits::text("1"))] },
+    Object { index: 0x100A, name: "Software version", code: Var, entries: &[string("Software version", &Limits::text("10.01"))] },
     Object { index: 0x1018, name: "Identity", code: Record, entries: &[
         sub0(4),
         constant(1, "Vendor ID", DataType::UInt32, VENDOR_ID as i64),

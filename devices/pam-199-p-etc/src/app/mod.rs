@@ -257,7 +257,7 @@ impl<P: PowerStage, N: NvStorage> Pam<P, N> {
             let next = if sub == 3 {
                 od.dictionary()
                     .find_entry(0xF800, 2)
-                    .and_then(|(_, e)| e.default.as_int())
+                    .and_then(|(_, e)| e.default_value().as_int())
             } else {
                 params::stored_value(&self.nv, od.dictionary(), 0xF800, 2)
             };

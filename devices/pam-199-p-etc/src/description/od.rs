@@ -127,6 +127,7 @@ const fn current(sub: u8, name: &'static str) -> Entry {
             min: None,
             max: None,
             unit: "mA",
+            default: None,
         },
         ..input(sub, name, DataType::UInt16)
     }
@@ -144,6 +145,7 @@ const fn pwm(sub: u8, name: &'static str) -> Entry {
             min: None,
             max: None,
             unit: "Hz",
+            default: None,
         },
         ..choice(sub, name, &DT0803EN05, PWM_2500_HZ)
     }
@@ -212,13 +214,13 @@ pub const OBJECTS: &[Object] = &[
         var("ERROR REGISTER", UInt8, NoPdo, 0),
     ] },
     Object { index: 0x1008, name: "DEVICE NAME", code: Var, entries: &[
-        string("DEVICE NAME", "PAM-199-P-ETC"),
+        string("DEVICE NAME", &Limits::text("PAM-199-P-ETC")),
     ] },
     Object { index: 0x1009, name: "HARDWARE VERSION", code: Var, entries: &[
-        string("HARDWARE VERSION", "10"),
+        string("HARDWARE VERSION", &Limits::text("10")),
     ] },
     Object { index: 0x100A, name: "SOFTWARE VERSION", code: Var, entries: &[
-        string("SOFTWARE VERSION", "10"),
+        string("SOFTWARE VERSION", &Limits::text("10")),
     ] },
     Object { index: 0x1018, name: "IDENTITY", code: Record, entries: &[
         sub0(4),
@@ -668,7 +670,7 @@ mod tests {
     }
 
     fn int(e: &Entry) -> i64 {
-        match e.default {
+        match e.default_value() {
             DefaultValue::Int(v) => v.get(),
             DefaultValue::Str(_) | DefaultValue::Bytes(_) => panic!("{} is not a number", e.name),
         }
@@ -744,7 +746,7 @@ mod tests {
     fn bit_lengths_match_data_types() {
         for o in OBJECTS {
             for e in o.entries {
-                match e.default {
+                match e.default_value() {
                     DefaultValue::Str(s) => {
                         assert_eq!(e.data_type, DataType::VisibleString);
                         assert_eq!(usize::from(e.bit_len), 8 * s.len());
@@ -762,7 +764,7 @@ mod tests {
     fn defaults_lie_within_ranges_and_enums() {
         for o in OBJECTS {
             for e in o.entries {
-                let Some(v) = e.default.as_int() else {
+                let Some(v) = e.default_value().as_int() else {
                     continue;
                 };
                 if let Some(min) = e.min() {
@@ -840,7 +842,7 @@ mod tests {
         }
         for idx in [0x800D, 0x801D, 0x802D] {
             let (_, e) = find_entry(idx, 0x05).unwrap();
-            assert_eq!(e.default, DefaultValue::int(0x09)); // 2500 Hz
+            assert_eq!(e.default_value(), DefaultValue::int(0x09)); // 2500 Hz
             assert_eq!(e.bit_len, 5);
         }
     }
@@ -918,7 +920,7 @@ mod tests {
                     );
                     assert_eq!(e.data_type, DataType::Bits(e.bit_len as u8));
                     assert_eq!(
-                        (e.access(), e.pdo(), e.default),
+                        (e.access(), e.pdo(), e.default_value()),
                         (Access::Ro, PdoMapping::None, DefaultValue::int(0))
                     );
                     assert_eq!(e.name, sub_name(e.sub));
@@ -1041,7 +1043,7 @@ mod tests {
         assert_eq!(find_entry(0x1018, 2).unwrap().1.name, "PRODUCT CODE");
         assert_eq!(int(find_entry(0x1000, 0).unwrap().1), 0x0000_1389);
         assert_eq!(
-            find_entry(0x1008, 0).unwrap().1.default,
+            find_entry(0x1008, 0).unwrap().1.default_value(),
             DefaultValue::Str("PAM-199-P-ETC")
         );
         assert_eq!(find_entry(0x1008, 0).unwrap().1.bit_len, 104);
@@ -1165,7 +1167,7 @@ mod tests {
         let strings: Vec<&str> = OBJECTS
             .iter()
             .flat_map(|o| o.entries)
-            .filter_map(|e| match e.default {
+            .filter_map(|e| match e.default_value() {
                 DefaultValue::Str(s) => Some(s),
                 DefaultValue::Int(_) | DefaultValue::Bytes(_) => None,
             })

@@ -605,7 +605,7 @@ pub fn mapping(pdo: u16) -> Vec<u32> {
     obj.entries
         .iter()
         .filter(|e| e.sub != 0)
-        .filter_map(|e| match e.default {
+        .filter_map(|e| match e.default_value() {
             ecat_slave::od::types::DefaultValue::Int(v) => Some(v.get() as u32),
             ecat_slave::od::types::DefaultValue::Str(_)
             | ecat_slave::od::types::DefaultValue::Bytes(_) => None,

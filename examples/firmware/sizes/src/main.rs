@@ -98,7 +98,7 @@ fn od_tables(device: &str, desc: &DeviceDescription) {
         for e in o.entries {
             strings.push(e.name);
             strings.push(e.unit());
-            if let DefaultValue::Str(s) = e.default {
+            if let DefaultValue::Str(s) = e.default_value() {
                 strings.push(s);
             }
             ranged += usize::from(e.min().is_some() || e.max().is_some());
@@ -139,16 +139,15 @@ fn od_tables(device: &str, desc: &DeviceDescription) {
     );
     row(
         &format!(
-            "Entry table ({entries} x {} B: &str name, DataType {} B, DefaultValue {} B, &Limits, flags)",
+            "Entry table ({entries} x {} B: &str name, DataType {} B, 32 default bits, &Limits, flags)",
             size_of::<Entry>(),
             size_of::<DataType>(),
-            size_of::<DefaultValue>()
         ),
         entry_bytes,
     );
     row(
         &format!(
-            "range and unit tables (at most {} distinct Limits + the shared NONE, {} B each)",
+            "range, unit and wide-default tables (at most {} distinct Limits + the shared NONE, {} B each)",
             limits.len(),
             size_of::<Limits>()
         ),

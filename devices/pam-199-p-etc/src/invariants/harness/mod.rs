@@ -630,7 +630,7 @@ fn default_len(assign: u16) -> u16 {
     let Some((_, obj)) = DICT.find(assign) else {
         return 0;
     };
-    let count = obj.entry(0).map_or(0, |e| match e.default {
+    let count = obj.entry(0).map_or(0, |e| match e.default_value() {
         DefaultValue::Int(v) => v.get(),
         DefaultValue::Str(_) | DefaultValue::Bytes(_) => 0,
     });
@@ -638,7 +638,7 @@ fn default_len(assign: u16) -> u16 {
         .entries
         .iter()
         .filter(|e| e.sub != 0 && i64::from(e.sub) <= count)
-        .filter_map(|e| match e.default {
+        .filter_map(|e| match e.default_value() {
             DefaultValue::Int(v) => Some(v.get() as u16),
             DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
         })
@@ -673,7 +673,7 @@ fn encode_value(value: Value, entry: Option<&ecat_slave::od::Entry>) -> Vec<u8> 
         DataType::Bool => 1,
         _ => usize::from(e.bit_len).div_ceil(8).max(1),
     });
-    let default = entry.and_then(|e| match e.default {
+    let default = entry.and_then(|e| match e.default_value() {
         DefaultValue::Int(v) => Some(v.get()),
         DefaultValue::Str(_) | DefaultValue::Bytes(_) => None,
     });

@@ -37,7 +37,7 @@ fn io_base() -> i64 {
     pam_199_p_etc::DEVICE
         .dictionary
         .find_entry(0xF800, 1)
-        .map_or(10_000, |(_, e)| match e.default {
+        .map_or(10_000, |(_, e)| match e.default_value() {
             ecat_slave::od::types::DefaultValue::Int(v) => v.get(),
             _ => 10_000,
         })
