@@ -60,12 +60,11 @@ pub(crate) fn leak_limits(
     if min.is_none() && max.is_none() && unit.is_empty() {
         return &ecat_slave::od::Limits::NONE;
     }
-    Box::leak(Box::new(ecat_slave::od::Limits {
+    Box::leak(Box::new(ecat_slave::od::Limits::bounds(
         min,
         max,
-        unit: leak(unit),
-        default: None,
-    }))
+        leak(unit),
+    )))
 }
 
 /// `e` with the default `d`: in the entry's 32 default bits where they

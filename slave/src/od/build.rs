@@ -18,7 +18,7 @@
 
 use super::dictionary::natural_bits;
 use super::sub_names::SUB_NAMES;
-use super::types::{Access, DataType, DefaultValue, Entry, EntryFlags, Limits, PdoMapping};
+use super::types::{Access, DataType, DefaultValue, Entry, EntryFlags, Int64, Limits, PdoMapping};
 
 /// `"SubIndex nnn"`, the ETG name of an unnamed subindex.
 #[allow(
@@ -87,40 +87,40 @@ pub const fn assign_count(count: u8, capacity: u8) -> Entry {
 #[rustfmt::skip]
 const fn capacity_limits(capacity: u8) -> &'static Limits {
     match capacity {
-            0 => &Limits { min: Some(0), max: Some(0), unit: "", default: None },
-            1 => &Limits { min: Some(0), max: Some(1), unit: "", default: None },
-            2 => &Limits { min: Some(0), max: Some(2), unit: "", default: None },
-            3 => &Limits { min: Some(0), max: Some(3), unit: "", default: None },
-            4 => &Limits { min: Some(0), max: Some(4), unit: "", default: None },
-            5 => &Limits { min: Some(0), max: Some(5), unit: "", default: None },
-            6 => &Limits { min: Some(0), max: Some(6), unit: "", default: None },
-            7 => &Limits { min: Some(0), max: Some(7), unit: "", default: None },
-            8 => &Limits { min: Some(0), max: Some(8), unit: "", default: None },
-            9 => &Limits { min: Some(0), max: Some(9), unit: "", default: None },
-            10 => &Limits { min: Some(0), max: Some(10), unit: "", default: None },
-            11 => &Limits { min: Some(0), max: Some(11), unit: "", default: None },
-            12 => &Limits { min: Some(0), max: Some(12), unit: "", default: None },
-            13 => &Limits { min: Some(0), max: Some(13), unit: "", default: None },
-            14 => &Limits { min: Some(0), max: Some(14), unit: "", default: None },
-            15 => &Limits { min: Some(0), max: Some(15), unit: "", default: None },
-            16 => &Limits { min: Some(0), max: Some(16), unit: "", default: None },
-            17 => &Limits { min: Some(0), max: Some(17), unit: "", default: None },
-            18 => &Limits { min: Some(0), max: Some(18), unit: "", default: None },
-            19 => &Limits { min: Some(0), max: Some(19), unit: "", default: None },
-            20 => &Limits { min: Some(0), max: Some(20), unit: "", default: None },
-            21 => &Limits { min: Some(0), max: Some(21), unit: "", default: None },
-            22 => &Limits { min: Some(0), max: Some(22), unit: "", default: None },
-            23 => &Limits { min: Some(0), max: Some(23), unit: "", default: None },
-            24 => &Limits { min: Some(0), max: Some(24), unit: "", default: None },
-            25 => &Limits { min: Some(0), max: Some(25), unit: "", default: None },
-            26 => &Limits { min: Some(0), max: Some(26), unit: "", default: None },
-            27 => &Limits { min: Some(0), max: Some(27), unit: "", default: None },
-            28 => &Limits { min: Some(0), max: Some(28), unit: "", default: None },
-            29 => &Limits { min: Some(0), max: Some(29), unit: "", default: None },
-            30 => &Limits { min: Some(0), max: Some(30), unit: "", default: None },
-            31 => &Limits { min: Some(0), max: Some(31), unit: "", default: None },
-            32 => &Limits { min: Some(0), max: Some(32), unit: "", default: None },
-            _ => &Limits { min: Some(0), max: Some(255), unit: "", default: None },
+            0 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([0, 0])), unit: "", default: None },
+            1 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([1, 0])), unit: "", default: None },
+            2 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([2, 0])), unit: "", default: None },
+            3 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([3, 0])), unit: "", default: None },
+            4 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([4, 0])), unit: "", default: None },
+            5 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([5, 0])), unit: "", default: None },
+            6 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([6, 0])), unit: "", default: None },
+            7 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([7, 0])), unit: "", default: None },
+            8 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([8, 0])), unit: "", default: None },
+            9 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([9, 0])), unit: "", default: None },
+            10 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([10, 0])), unit: "", default: None },
+            11 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([11, 0])), unit: "", default: None },
+            12 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([12, 0])), unit: "", default: None },
+            13 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([13, 0])), unit: "", default: None },
+            14 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([14, 0])), unit: "", default: None },
+            15 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([15, 0])), unit: "", default: None },
+            16 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([16, 0])), unit: "", default: None },
+            17 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([17, 0])), unit: "", default: None },
+            18 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([18, 0])), unit: "", default: None },
+            19 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([19, 0])), unit: "", default: None },
+            20 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([20, 0])), unit: "", default: None },
+            21 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([21, 0])), unit: "", default: None },
+            22 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([22, 0])), unit: "", default: None },
+            23 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([23, 0])), unit: "", default: None },
+            24 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([24, 0])), unit: "", default: None },
+            25 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([25, 0])), unit: "", default: None },
+            26 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([26, 0])), unit: "", default: None },
+            27 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([27, 0])), unit: "", default: None },
+            28 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([28, 0])), unit: "", default: None },
+            29 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([29, 0])), unit: "", default: None },
+            30 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([30, 0])), unit: "", default: None },
+            31 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([31, 0])), unit: "", default: None },
+            32 => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([32, 0])), unit: "", default: None },
+            _ => &Limits { min: Some(Int64([0, 0])), max: Some(Int64([255, 0])), unit: "", default: None },
     }
 }
 

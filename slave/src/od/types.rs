@@ -566,7 +566,7 @@ impl ObjectCode {
 /// with it a [`DefaultValue`] takes 12 bytes on a 32-bit microcontroller
 /// instead of 16 (a `i64` is aligned to 8 there).
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
-pub struct Int64([u32; 2]);
+pub struct Int64(pub(crate) [u32; 2]);
 
 impl Int64 {
     /// `v`, stored in halves.
@@ -603,6 +603,8 @@ impl From<Int64> for i64 {
 // firmware builds of `.ci/run` do).
 #[cfg(target_pointer_width = "32")]
 const _: () = assert!(core::mem::size_of::<Entry>() == 24 && core::mem::align_of::<Entry>() == 4);
+#[cfg(target_pointer_width = "32")]
+const _: () = assert!(core::mem::size_of::<Limits>() == 44);
 
 /// The default value of an entry.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -802,10 +804,13 @@ impl core::fmt::Debug for EntryFlags {
 /// `string("Device name", &Limits::text("IO8"))`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Limits {
-    /// Smallest allowed value, where the manual gives a range.
-    pub min: Option<i64>,
-    /// Largest allowed value, where the manual gives a range.
-    pub max: Option<i64>,
+    /// Smallest allowed value, where the manual gives a range (read it
+    /// with [`Entry::min`]; an [`Int64`] of two halves: 12 bytes on a
+    /// 32-bit microcontroller, where an `Option<i64>` is 16).
+    pub min: Option<Int64>,
+    /// Largest allowed value, where the manual gives a range
+    /// ([`Entry::max`]).
+    pub max: Option<Int64>,
     /// Unit text as the manual gives it (`ms`, `mA`, `Hz`, `0.01 %`), or "".
     pub unit: &'static str,
     /// The entry's default where its [`Entry::default_bits`] cannot hold
@@ -827,8 +832,25 @@ impl Limits {
     /// The range `min..=max` in `unit` ("" for none).
     pub const fn range(min: i64, max: i64, unit: &'static str) -> Limits {
         Limits {
-            min: Some(min),
-            max: Some(max),
+            min: Some(Int64::new(min)),
+            max: Some(Int64::new(max)),
+            unit,
+            default: None,
+        }
+    }
+
+    /// The optional ends `min` and `max` in `unit` ("" for none): a
+    /// range open at one end, as an ESI may give it.
+    pub const fn bounds(min: Option<i64>, max: Option<i64>, unit: &'static str) -> Limits {
+        Limits {
+            min: match min {
+                Some(v) => Some(Int64::new(v)),
+                None => None,
+            },
+            max: match max {
+                Some(v) => Some(Int64::new(v)),
+                None => None,
+            },
             unit,
             default: None,
         }
@@ -985,12 +1007,18 @@ impl Entry {
 
     /// Smallest allowed value, where the device gives a range.
     pub const fn min(&self) -> Option<i64> {
-        self.limits.min
+        match self.limits.min {
+            Some(v) => Some(v.get()),
+            None => None,
+        }
     }
 
     /// Largest allowed value, where the device gives a range.
     pub const fn max(&self) -> Option<i64> {
-        self.limits.max
+        match self.limits.max {
+            Some(v) => Some(v.get()),
+            None => None,
+        }
     }
 
     /// Unit text (`ms`, `mA`, `Hz`, `0.01 %`), or "".
@@ -1087,6 +1115,23 @@ mod tests {
         assert_eq!(NAME.bit_len, 24);
         const KEY: Limits = Limits::bytes(&[1, 2]);
         assert_eq!(KEY.default, Some(DefaultValue::Bytes(&[1, 2])));
+    }
+
+    #[test]
+    fn a_range_keeps_its_64_bit_ends_and_may_be_open_at_either() {
+        const E: Entry = var("x", DataType::Int64, PdoMapping::None, 0);
+        let with = |l: &'static Limits| Entry { limits: l, ..E };
+        const FULL: Limits = Limits::range(i64::MIN, i64::MAX, "ns");
+        let full = with(&FULL);
+        assert_eq!((full.min(), full.max()), (Some(i64::MIN), Some(i64::MAX)));
+        let low = Box::leak(Box::new(Limits::bounds(Some(-(1 << 40)), None, "")));
+        assert_eq!((with(low).min(), with(low).max()), (Some(-(1 << 40)), None));
+        let high = Box::leak(Box::new(Limits::bounds(None, Some(7), "mA")));
+        assert_eq!(
+            (with(high).min(), with(high).max(), with(high).unit()),
+            (None, Some(7), "mA")
+        );
+        assert_eq!(Limits::bounds(None, None, ""), Limits::NONE);
     }
 
     #[test]

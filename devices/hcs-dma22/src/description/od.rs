@@ -33,6 +33,13 @@ use super::params::{PARAMETERS_HIGH, PARAMETERS_LOW};
 /// Most bytes of a telegram in the channel (a CMD 15 for 5 modules has 28).
 pub const MAX_TELEGRAM: usize = 32;
 
+/// 0..=MAX_TELEGRAM bytes of a telegram (a constant: a `const fn` can
+/// refer to it, not build it, as a `'static` reference).
+const TELEGRAM_LENGTH: Limits = Limits::range(0, MAX_TELEGRAM as i64, "");
+
+/// 0..=SLOTS modules.
+const SLOT_COUNT: Limits = Limits::range(0, SLOTS as i64, "");
+
 #[allow(
     clippy::indexing_slicing,
     reason = "evaluated only in const items: an index out of range fails the build"
@@ -41,12 +48,7 @@ const fn telegram_entries(access: Access) -> [Entry; MAX_TELEGRAM + 2] {
     let mut l = [const { sub0(0) }; MAX_TELEGRAM + 2];
     l[0] = sub0(MAX_TELEGRAM as u8 + 1);
     let mut len = base(1, "Length", DataType::UInt8, access, PdoMapping::None, 0);
-    len.limits = &Limits {
-        min: Some(0),
-        max: Some(MAX_TELEGRAM as i64),
-        unit: "",
-        default: None,
-    };
+    len.limits = &TELEGRAM_LENGTH;
     l[1] = len;
     let mut k = 2;
     while k < l.len() {
@@ -152,12 +154,7 @@ const fn ident_list(access: Access) -> [Entry; 6] {
         l[k].flags = l[k].flags.with_access(access);
         k += 1;
     }
-    l[0].limits = &Limits {
-        min: Some(0),
-        max: Some(SLOTS as i64),
-        unit: "",
-        default: None,
-    };
+    l[0].limits = &SLOT_COUNT;
     l
 }
 
