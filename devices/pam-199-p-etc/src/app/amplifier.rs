@@ -26,6 +26,7 @@ use super::deadband::{Deadband, DirectionalDeadband, MmType};
 use super::entries::{
     BASIS, DIAGNOSIS, DIRECTIONAL, INDEPENDENT, IndependentEntries, StageEntries,
 };
+use super::sat_i32;
 use crate::board::{Faults, PowerStage, Solenoid, StageParams, acc_gains, pwm_from_code};
 use ecat_slave::od::Od;
 
@@ -143,7 +144,7 @@ fn u16_of(v: i64) -> u16 {
 }
 
 fn stage_params(store: &Od, e: &StageEntries) -> StageParams {
-    let pwm_hz = pwm_from_code(e.pwm.get(store).clamp(0, 255) as u8).unwrap_or(2500);
+    let pwm_hz = pwm_from_code(sat_i32(e.pwm.get(store)).clamp(0, 255) as u8).unwrap_or(2500);
     StageParams {
         current_ma: u16_of(e.current.get(store)),
         dampl: u16_of(e.dampl.get(store)),
@@ -163,13 +164,13 @@ fn directional_params(store: &Od) -> DirectionalParams {
     let d = &DIRECTIONAL;
     let mut curve = DirectionalCurve::default();
     for (sub, v) in d.curve.values(store) {
-        curve.od_set(sub, v.clamp(-10_000, 10_000) as i16);
+        curve.od_set(sub, sat_i32(v).clamp(-10_000, 10_000) as i16);
     }
     DirectionalParams {
-        ramp_up_a_ms: d.ramp_up_a.get(store).clamp(1, 120_000) as u32,
-        ramp_down_a_ms: d.ramp_down_a.get(store).clamp(1, 120_000) as u32,
-        ramp_up_b_ms: d.ramp_up_b.get(store).clamp(1, 120_000) as u32,
-        ramp_down_b_ms: d.ramp_down_b.get(store).clamp(1, 120_000) as u32,
+        ramp_up_a_ms: sat_i32(d.ramp_up_a.get(store)).clamp(1, 120_000) as u32,
+        ramp_down_a_ms: sat_i32(d.ramp_down_a.get(store)).clamp(1, 120_000) as u32,
+        ramp_up_b_ms: sat_i32(d.ramp_up_b.get(store)).clamp(1, 120_000) as u32,
+        ramp_down_b_ms: sat_i32(d.ramp_down_b.get(store)).clamp(1, 120_000) as u32,
         cc_enabled: d.cc_mode.get(store) == 1,
         curve,
         deadband: DirectionalDeadband {
@@ -188,11 +189,11 @@ fn directional_params(store: &Od) -> DirectionalParams {
 fn independent_params(store: &Od, e: &IndependentEntries) -> IndependentParams {
     let mut curve = IndependentCurve::default();
     for (sub, v) in e.curve.values(store) {
-        curve.od_set(sub, v.clamp(0, 10_000) as i16);
+        curve.od_set(sub, sat_i32(v).clamp(0, 10_000) as i16);
     }
     IndependentParams {
-        ramp_up_ms: e.ramp_up.get(store).clamp(1, 120_000) as u32,
-        ramp_down_ms: e.ramp_down.get(store).clamp(1, 120_000) as u32,
+        ramp_up_ms: sat_i32(e.ramp_up.get(store)).clamp(1, 120_000) as u32,
+        ramp_down_ms: sat_i32(e.ramp_down.get(store)).clamp(1, 120_000) as u32,
         cc_enabled: e.cc_mode.get(store) == 1,
         curve,
         deadband: Deadband {

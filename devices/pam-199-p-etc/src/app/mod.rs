@@ -527,6 +527,18 @@ mod tests {
             let expected = if n >= 0 { q } else { -q };
             proptest::prop_assert_eq!(i128::from(div_round(n, d)), expected);
         }
+
+        /// The amplifier clamps its parameters as `sat_i32(v).clamp(lo,
+        /// hi)` (a 32-bit clamp after one out-of-line call): the same as
+        /// the 64-bit clamp for any range inside `i32`.
+        #[test]
+        fn a_32_bit_clamp_after_sat_i32_is_the_64_bit_clamp(v: i64, a: i32, b: i32) {
+            let (lo, hi) = (a.min(b), a.max(b));
+            proptest::prop_assert_eq!(
+                i64::from(sat_i32(v).clamp(lo, hi)),
+                v.clamp(i64::from(lo), i64::from(hi))
+            );
+        }
     }
 
     #[test]
