@@ -1,6 +1,7 @@
 //! Where a Cortex-M firmware's code goes, by source module.
 //!
 //!     code_by_module [--lines | --functions] <linked-elf-with-debug-info> [top]
+//!     code_by_module --diff <old-elf> <new-elf> [top]
 //!
 //! Reads the Thumb-2 disassembly (`$OBJDUMP`, default
 //! `arm-none-eabi-objdump -d`) for the address and size of every
@@ -19,6 +20,10 @@
 //! innermost function of ours (`addr2line -f -C`): the bytes a function
 //! brings wherever LTO inlined it, which `nm` cannot say (a function
 //! inlined into `fw_poll` has no symbol of its own).
+//!
+//! With `--diff`, what a change did: both builds counted by function,
+//! and the `top` largest differences (new minus old) either way, so a size
+//! step shows where its bytes went or came from.
 //!
 //! Prints the `top` (default 40) files by bytes, then the totals of the
 //! areas the footprint table of docs/book/src/performance.md uses. LTO
@@ -145,21 +150,115 @@ fn other(file: &str) -> String {
     file.to_string()
 }
 
+/// Bytes of code of one ELF: the total, by file (or file:line), and with
+/// `functions` by function.
+struct Measured {
+    total: u64,
+    by_file: BTreeMap<String, u64>,
+    by_func: BTreeMap<String, u64>,
+}
+
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let diff = args.first().is_some_and(|a| a == "--diff");
     let lines = args.first().is_some_and(|a| a == "--lines");
     let functions = args.first().is_some_and(|a| a == "--functions");
-    if lines || functions {
+    if lines || functions || diff {
         args.remove(0);
+    }
+    if diff {
+        let (Some(old), Some(new)) = (args.first(), args.get(1)) else {
+            eprintln!("usage: code_by_module --diff <old-elf> <new-elf> [top]");
+            exit(2);
+        };
+        let top: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(40);
+        print_diff(&measure(old, false, true), &measure(new, false, true), top);
+        return;
     }
     let Some(elf) = args.first() else {
         eprintln!(
-            "usage: code_by_module [--lines | --functions] <linked-elf-with-debug-info> [top]"
+            "usage: code_by_module [--lines | --functions] <linked-elf-with-debug-info> [top]\n       code_by_module --diff <old-elf> <new-elf> [top]"
         );
         exit(2);
     };
     let top: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(40);
+    let Measured {
+        total,
+        by_file,
+        by_func,
+    } = measure(elf, lines, functions);
 
+    if functions {
+        let mut fs: Vec<(&String, &u64)> = by_func.iter().collect();
+        fs.sort_by(|a, b| b.1.cmp(a.1).then(a.0.cmp(b.0)));
+        println!("    {total} bytes of code; by the innermost function of this repository:");
+        for (f, n) in fs.iter().take(top) {
+            println!("    {n:7} {f}");
+        }
+        if fs.len() > top {
+            let rest: u64 = fs.iter().skip(top).map(|(_, n)| **n).sum();
+            println!("    {rest:7} ({} more functions)", fs.len() - top);
+        }
+        return;
+    }
+
+    let unit = if lines { "line" } else { "file" };
+    println!("    {total} bytes of code; by the innermost source {unit} of this repository:");
+    let mut files: Vec<(&String, &u64)> = by_file.iter().collect();
+    files.sort_by(|a, b| b.1.cmp(a.1).then(a.0.cmp(b.0)));
+    for (f, n) in files.iter().take(top) {
+        println!("    {n:7} {f}");
+    }
+    if files.len() > top {
+        let rest: u64 = files.iter().skip(top).map(|(_, n)| **n).sum();
+        println!("    {rest:7} ({} more {unit}s)", files.len() - top);
+    }
+    println!("    by area:");
+    let mut areas = [0u64; AREAS.len()];
+    for (f, n) in &by_file {
+        let k = AREAS
+            .iter()
+            .position(|(_, ps)| ps.iter().any(|p| f.starts_with(p)))
+            .unwrap_or(AREAS.len() - 1);
+        areas[k] += n;
+    }
+    for ((label, _), n) in AREAS.iter().zip(areas) {
+        println!("    {n:7} {label}");
+    }
+}
+
+/// What a change did to the code, function by function: the `top`
+/// largest differences (new minus old) either way, then the total.
+fn print_diff(old: &Measured, new: &Measured, top: usize) {
+    let keys: std::collections::BTreeSet<&String> =
+        old.by_func.keys().chain(new.by_func.keys()).collect();
+    let mut d: Vec<(i64, &String)> = keys
+        .into_iter()
+        .map(|k| {
+            let n = |m: &Measured| m.by_func.get(k).copied().unwrap_or(0) as i64;
+            (n(new) - n(old), k)
+        })
+        .filter(|(d, _)| *d != 0)
+        .collect();
+    d.sort_by(|a, b| b.0.abs().cmp(&a.0.abs()).then(a.1.cmp(b.1)));
+    println!(
+        "    {} -> {} bytes of code ({:+}); the largest changes by the innermost function of this repository:",
+        old.total,
+        new.total,
+        new.total as i64 - old.total as i64
+    );
+    for (n, f) in d.iter().take(top) {
+        println!("    {n:+7} {f}");
+    }
+    if d.len() > top {
+        let rest: i64 = d.iter().skip(top).map(|(n, _)| n).sum();
+        println!("    {rest:+7} ({} more functions)", d.len() - top);
+    }
+}
+
+/// Runs objdump and addr2line on `elf` and counts each instruction's bytes
+/// for the innermost frame of ours (see the module docs).
+fn measure(elf: &str, lines: bool, functions: bool) -> Measured {
     let objdump = tool("OBJDUMP", "arm-none-eabi-objdump");
     let out = Command::new(&objdump)
         .args(["-d", "--no-show-raw-insn", "-j", ".text", elf])
@@ -190,7 +289,7 @@ fn main() {
     }
 
     let addr2line = tool("ADDR2LINE", "arm-none-eabi-addr2line");
-    let mut a2l_args = vec!["-e", elf.as_str(), "-i", "-a"];
+    let mut a2l_args = vec!["-e", elf, "-i", "-a"];
     if functions {
         a2l_args.extend(["-f", "-C"]);
     }
@@ -271,42 +370,9 @@ fn main() {
         }
         *by_file.entry(file).or_default() += size;
     }
-
-    if functions {
-        let mut fs: Vec<(&String, &u64)> = by_func.iter().collect();
-        fs.sort_by(|a, b| b.1.cmp(a.1).then(a.0.cmp(b.0)));
-        println!("    {total} bytes of code; by the innermost function of this repository:");
-        for (f, n) in fs.iter().take(top) {
-            println!("    {n:7} {f}");
-        }
-        if fs.len() > top {
-            let rest: u64 = fs.iter().skip(top).map(|(_, n)| **n).sum();
-            println!("    {rest:7} ({} more functions)", fs.len() - top);
-        }
-        return;
-    }
-
-    let unit = if lines { "line" } else { "file" };
-    println!("    {total} bytes of code; by the innermost source {unit} of this repository:");
-    let mut files: Vec<(&String, &u64)> = by_file.iter().collect();
-    files.sort_by(|a, b| b.1.cmp(a.1).then(a.0.cmp(b.0)));
-    for (f, n) in files.iter().take(top) {
-        println!("    {n:7} {f}");
-    }
-    if files.len() > top {
-        let rest: u64 = files.iter().skip(top).map(|(_, n)| **n).sum();
-        println!("    {rest:7} ({} more {unit}s)", files.len() - top);
-    }
-    println!("    by area:");
-    let mut areas = [0u64; AREAS.len()];
-    for (f, n) in &by_file {
-        let k = AREAS
-            .iter()
-            .position(|(_, ps)| ps.iter().any(|p| f.starts_with(p)))
-            .unwrap_or(AREAS.len() - 1);
-        areas[k] += n;
-    }
-    for ((label, _), n) in AREAS.iter().zip(areas) {
-        println!("    {n:7} {label}");
+    Measured {
+        total,
+        by_file,
+        by_func,
     }
 }
