@@ -1104,14 +1104,7 @@ mod tests {
     <Info><DefaultData>3030</DefaultData><DefaultString>01</DefaultString></Info><Flags><Access>ro</Access></Flags></Object>
 </Objects></Dictionary>"##;
         let (objs, _, _) = parse(&xml::parse(text).unwrap()).unwrap();
-        let e = |i: u16| {
-            &objs
-                .iter()
-                .find(|o| o.object.index == i)
-                .unwrap()
-                .object
-                .entries[0]
-        };
+        let e = |i: u16| first_entry(&objs, i);
         assert_eq!(e(0x1008).default_value(), DefaultValue::Str("EL2014"));
         assert_eq!(
             e(0x1009).default_value(),
@@ -1133,19 +1126,22 @@ mod tests {
     <Info><MaxValue>#xFFFE</MaxValue></Info><Flags><Access>rw</Access></Flags></Object>
 </Objects></Dictionary>"##;
         let (objs, _, _) = parse(&xml::parse(text).unwrap()).unwrap();
-        let e = |i: u16| {
-            &objs
-                .iter()
-                .find(|o| o.object.index == i)
-                .unwrap()
-                .object
-                .entries[0]
-        };
+        let e = |i: u16| first_entry(&objs, i);
         let qs = e(0x605A);
         assert_eq!((qs.min(), qs.max()), (Some(-2), Some(6)));
         assert_eq!(qs.default_value(), DefaultValue::int(-1));
         assert_eq!(e(0x2000).min(), Some(-5), "decimal as written");
         assert_eq!(e(0x2001).max(), Some(0xFFFE), "unsigned hex unchanged");
+    }
+
+    /// Entry 0 of object `index` of a parsed dictionary.
+    fn first_entry(objs: &[ParsedObject], index: u16) -> &Entry {
+        &objs
+            .iter()
+            .find(|o| o.object.index == index)
+            .unwrap()
+            .object
+            .entries[0]
     }
 
     #[test]
@@ -1162,14 +1158,7 @@ mod tests {
     <Info><DefaultValue>-7</DefaultValue></Info><Flags><Access>rw</Access></Flags></Object>
 </Objects></Dictionary>"##;
         let (objs, _, _) = parse(&xml::parse(text).unwrap()).unwrap();
-        let e = |i: u16| {
-            &objs
-                .iter()
-                .find(|o| o.object.index == i)
-                .unwrap()
-                .object
-                .entries[0]
-        };
+        let e = |i: u16| first_entry(&objs, i);
         let big = e(0x2000);
         assert_eq!(big.default_value(), DefaultValue::int(0x12_3456_789A));
         assert_eq!((big.min(), big.max()), (Some(1), Some(0x1000_0000_0000)));
