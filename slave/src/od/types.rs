@@ -796,8 +796,8 @@ impl core::fmt::Debug for EntryFlags {
 /// The range and unit of an entry, and a default too wide for its 32
 /// default bits. Most entries have none of them and share
 /// [`Limits::NONE`]; an entry holds one reference (4 bytes on a 32-bit
-/// microcontroller) instead of two `Option<i64>`, a `&str` and a default
-/// (56 bytes), which is most of what a dictionary table costs in flash.
+/// microcontroller) instead of its two ends, a unit and a default (44
+/// bytes), which is most of what a dictionary table costs in flash.
 ///
 /// In a `const` item a reference to a `Limits` built by a `const fn` is
 /// `'static`: `ranged(1, "Filter", DataType::UInt16, 10, &Limits::range(0, 100, "ms"))`,
