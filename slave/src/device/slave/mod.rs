@@ -16,7 +16,7 @@ mod sync;
 mod transition;
 
 use od_access::{OdAccess, object_view};
-use transition::{mailbox_matches, read_sm};
+use transition::{mailbox_matches, process_data_sms};
 
 use crate::al::{self, AlState, AlStatus, AlStatusCode, TransitionChecks};
 use crate::coe::ObjectAccess;
@@ -688,33 +688,12 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
             }
         }
         if matches!(self.al.state, AlState::SafeOp | AlState::Op) {
-            let sm2 = read_sm(&mut self.esc, 2)?;
-            let sm3 = read_sm(&mut self.esc, 3)?;
             // The rule of the PRE-OP -> SAFE-OP check
-            // (`Checks::check_process_data`): an unused SM is disabled or
-            // enabled with length 0; enabling it with a length ends the
-            // state as any changed process-data SM does.
-            let out_ok = if self.outputs.byte_len() == 0 {
-                !sm2.3 || sm2.1 == 0
-            } else {
-                sm2.3
-                    && sm2.0 == self.layout.pd_out
-                    && usize::from(sm2.1) == self.outputs.byte_len()
-                    && sm2.2 & 0x0F == SM_CONTROL[2] & 0x0F
-            };
-            let in_ok = if self.inputs.byte_len() == 0 {
-                !sm3.3 || sm3.1 == 0
-            } else {
-                sm3.3
-                    && sm3.0 == self.layout.pd_in
-                    && usize::from(sm3.1) == self.inputs.byte_len()
-                    && sm3.2 & 0x0F == SM_CONTROL[3] & 0x0F
-            };
-            if !out_ok {
-                return self.local_error(AlState::PreOp, AlStatusCode::InvalidOutputConfig);
-            }
-            if !in_ok {
-                return self.local_error(AlState::PreOp, AlStatusCode::InvalidInputConfig);
+            // (`Checks::check_process_data`): a changed process-data SM
+            // ends the state; enabling an unused one with a length too.
+            let (outputs, inputs) = (self.outputs.byte_len(), self.inputs.byte_len());
+            if let Some(code) = process_data_sms(&mut self.esc, &self.layout, outputs, inputs)? {
+                return self.local_error(AlState::PreOp, code);
             }
         }
         Ok(())

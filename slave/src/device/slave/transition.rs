@@ -17,6 +17,26 @@ pub(super) fn read_sm<E: Esc>(esc: &mut E, n: u8) -> Result<(u16, u16, u8, bool)
     ))
 }
 
+/// SyncManager `n` is set up as this firmware expects: enabled at `start`
+/// with `len` bytes and the low control bits of [`SM_CONTROL`]. A
+/// process-data SM (2, 3) of `len` 0 (no PDO in its direction) is unused:
+/// disabled, or enabled with length 0 as SOEM leaves it (an ESC does not
+/// activate a SyncManager of length 0; SOES accepts it too). A mailbox SM
+/// (0, 1) is always needed. `Err` when the PDI cannot read it.
+pub(super) fn sm_matches<E: Esc>(
+    esc: &mut E,
+    n: u8,
+    start: u16,
+    len: usize,
+) -> Result<bool, EscError> {
+    let (s, l, control, enabled) = read_sm(esc, n)?;
+    if n >= 2 && len == 0 {
+        return Ok(!enabled || l == 0);
+    }
+    let expected = SM_CONTROL.get(usize::from(n)).copied().unwrap_or(0);
+    Ok(enabled && s == start && usize::from(l) == len && control & 0x0F == expected & 0x0F)
+}
+
 /// SM0/SM1 are enabled with the given start and length and mailbox
 /// control bits; `Err` when the PDI cannot read them.
 pub(super) fn mailbox_matches<E: Esc>(
@@ -24,12 +44,26 @@ pub(super) fn mailbox_matches<E: Esc>(
     out: (u16, u16),
     inp: (u16, u16),
 ) -> Result<bool, EscError> {
-    let sm0 = read_sm(esc, 0)?;
-    let sm1 = read_sm(esc, 1)?;
-    Ok(sm0 == (out.0, out.1, sm0.2, true)
-        && sm0.2 & 0x0F == SM_CONTROL[0] & 0x0F
-        && sm1 == (inp.0, inp.1, sm1.2, true)
-        && sm1.2 & 0x0F == SM_CONTROL[1] & 0x0F)
+    Ok(sm_matches(esc, 0, out.0, usize::from(out.1))?
+        && sm_matches(esc, 1, inp.0, usize::from(inp.1))?)
+}
+
+/// The process-data SMs (SM2 outputs, SM3 inputs) set up for images of
+/// `outputs` and `inputs` bytes at `layout`'s addresses ([`sm_matches`]):
+/// the AL status code of the first that is not, `None` when both are.
+pub(super) fn process_data_sms<E: Esc>(
+    esc: &mut E,
+    layout: &MemoryLayout,
+    outputs: usize,
+    inputs: usize,
+) -> Result<Option<AlStatusCode>, EscError> {
+    Ok(if !sm_matches(esc, 2, layout.pd_out, outputs)? {
+        Some(AlStatusCode::InvalidOutputConfig)
+    } else if !sm_matches(esc, 3, layout.pd_in, inputs)? {
+        Some(AlStatusCode::InvalidInputConfig)
+    } else {
+        None
+    })
 }
 
 /// What the checks need to see while the AL state machine runs.
@@ -172,32 +206,10 @@ impl<E: Esc, A: Application, const PDO: usize, const IMG: usize> TransitionCheck
         if sets == 0 {
             return Err(AlStatusCode::InvalidInputConfig);
         }
-        let sm2 = read_sm(self.esc, 2).map_err(|e| self.pdi_failed(e))?;
-        let sm3 = read_sm(self.esc, 3).map_err(|e| self.pdi_failed(e))?;
-        // With no PDO in a direction its SM is unused: disabled, or
-        // enabled with length 0 as SOEM leaves it (an ESC does not activate
-        // a SyncManager of length 0; SOES accepts it too).
-        let out_ok = if outputs == 0 {
-            !sm2.3 || sm2.1 == 0
-        } else {
-            sm2.3
-                && sm2.0 == self.layout.pd_out
-                && usize::from(sm2.1) == outputs
-                && sm2.2 & 0x0F == SM_CONTROL[2] & 0x0F
-        };
-        if !out_ok {
-            return Err(AlStatusCode::InvalidOutputConfig);
-        }
-        let in_ok = if inputs == 0 {
-            !sm3.3 || sm3.1 == 0
-        } else {
-            sm3.3
-                && sm3.0 == self.layout.pd_in
-                && usize::from(sm3.1) == inputs
-                && sm3.2 & 0x0F == SM_CONTROL[3] & 0x0F
-        };
-        if !in_ok {
-            return Err(AlStatusCode::InvalidInputConfig);
+        match process_data_sms(self.esc, &self.layout, outputs, inputs) {
+            Ok(None) => {}
+            Ok(Some(code)) => return Err(code),
+            Err(e) => return Err(self.pdi_failed(e)),
         }
         self.sync_mode = Some(self.check_dc()?);
         Ok(())
