@@ -314,3 +314,165 @@ impl<E: Esc, A: Application, const MBX: usize, const SDO: usize, const PDO: usiz
         self.write_al_status()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The SyncManager registers (0x0800..0x0840) as plain memory; a read
+    /// elsewhere fails as a PDI failure would.
+    struct SmRegisters([u8; 64]);
+
+    impl SmRegisters {
+        fn new() -> Self {
+            SmRegisters([0; 64])
+        }
+
+        /// SM `n` at `start` with `len` bytes, control byte `control`,
+        /// enabled or not.
+        fn set(&mut self, n: usize, start: u16, len: u16, control: u8, enabled: bool) {
+            let r = &mut self.0[8 * n..8 * n + 8];
+            r[..2].copy_from_slice(&start.to_le_bytes());
+            r[2..4].copy_from_slice(&len.to_le_bytes());
+            r[4] = control;
+            r[6] = u8::from(enabled);
+        }
+    }
+
+    impl Esc for SmRegisters {
+        fn read(&mut self, addr: u16, buf: &mut [u8]) -> Result<(), EscError> {
+            let at = usize::from(addr.wrapping_sub(0x0800));
+            let src = self.0.get(at..at + buf.len()).ok_or(EscError::OutOfRange {
+                addr,
+                len: buf.len(),
+            })?;
+            buf.copy_from_slice(src);
+            Ok(())
+        }
+
+        fn write(&mut self, addr: u16, data: &[u8]) -> Result<(), EscError> {
+            Err(EscError::OutOfRange {
+                addr,
+                len: data.len(),
+            })
+        }
+    }
+
+    const LAYOUT: MemoryLayout = match MemoryLayout::new(128, None) {
+        Some(l) => l,
+        None => panic!("layout"),
+    };
+
+    /// The SMs as the PRE-OP -> SAFE-OP check wants them for 2 output
+    /// and 3 input bytes.
+    fn configured() -> SmRegisters {
+        let mut esc = SmRegisters::new();
+        esc.set(0, LAYOUT.mbx_out.0, LAYOUT.mbx_out.1, SM_CONTROL[0], true);
+        esc.set(1, LAYOUT.mbx_in.0, LAYOUT.mbx_in.1, SM_CONTROL[1], true);
+        esc.set(2, LAYOUT.pd_out, 2, SM_CONTROL[2], true);
+        esc.set(3, LAYOUT.pd_in, 3, SM_CONTROL[3], true);
+        esc
+    }
+
+    #[test]
+    fn sync_managers_set_up_as_described_match() {
+        let mut esc = configured();
+        assert_eq!(
+            mailbox_matches(&mut esc, LAYOUT.mbx_out, LAYOUT.mbx_in),
+            Ok(true)
+        );
+        assert_eq!(process_data_sms(&mut esc, &LAYOUT, 2, 3), Ok(None));
+    }
+
+    #[test]
+    fn a_process_data_sm_of_another_length_start_control_or_disabled_is_refused_with_its_direction_code()
+     {
+        let sms = [
+            (2, LAYOUT.pd_out, 2, AlStatusCode::InvalidOutputConfig),
+            (3, LAYOUT.pd_in, 3, AlStatusCode::InvalidInputConfig),
+        ];
+        for (n, start, len, code) in sms {
+            let control = SM_CONTROL[n];
+            let wrong = [
+                (start, len + 1, control, true),
+                (start + 1, len, control, true),
+                (start, len, control ^ 0x04, true),
+                (start, len, control, false),
+            ];
+            for (start, len, control, enabled) in wrong {
+                let mut esc = configured();
+                esc.set(n, start, len, control, enabled);
+                assert_eq!(process_data_sms(&mut esc, &LAYOUT, 2, 3), Ok(Some(code)));
+            }
+        }
+    }
+
+    #[test]
+    fn control_bits_above_the_low_four_do_not_matter() {
+        let mut esc = configured();
+        esc.set(2, LAYOUT.pd_out, 2, SM_CONTROL[2] | 0xF0, true);
+        assert_eq!(process_data_sms(&mut esc, &LAYOUT, 2, 3), Ok(None));
+    }
+
+    #[test]
+    fn an_unused_process_data_sm_may_be_disabled_or_enabled_with_length_0_not_with_a_length() {
+        let mut esc = configured();
+        esc.set(2, 0, 0, 0, false);
+        assert_eq!(process_data_sms(&mut esc, &LAYOUT, 0, 3), Ok(None));
+        // As SOEM leaves it.
+        esc.set(2, LAYOUT.pd_out, 0, SM_CONTROL[2], true);
+        assert_eq!(process_data_sms(&mut esc, &LAYOUT, 0, 3), Ok(None));
+        esc.set(2, LAYOUT.pd_out, 1, SM_CONTROL[2], true);
+        assert_eq!(
+            process_data_sms(&mut esc, &LAYOUT, 0, 3),
+            Ok(Some(AlStatusCode::InvalidOutputConfig))
+        );
+    }
+
+    #[test]
+    fn a_mailbox_sm_is_always_needed() {
+        let mut esc = configured();
+        esc.set(1, LAYOUT.mbx_in.0, LAYOUT.mbx_in.1, SM_CONTROL[1], false);
+        assert_eq!(
+            mailbox_matches(&mut esc, LAYOUT.mbx_out, LAYOUT.mbx_in),
+            Ok(false)
+        );
+        let mut esc = configured();
+        esc.set(
+            0,
+            LAYOUT.mbx_out.0,
+            LAYOUT.mbx_out.1 - 1,
+            SM_CONTROL[0],
+            true,
+        );
+        assert_eq!(
+            mailbox_matches(&mut esc, LAYOUT.mbx_out, LAYOUT.mbx_in),
+            Ok(false)
+        );
+        // Even one described with length 0 is not "unused" as SM2/SM3 are.
+        let mut esc = configured();
+        esc.set(0, 0, 0, 0, false);
+        assert_eq!(mailbox_matches(&mut esc, (0, 0), LAYOUT.mbx_in), Ok(false));
+    }
+
+    #[test]
+    fn a_failed_pdi_read_is_an_error_not_a_mismatch() {
+        struct Broken;
+        impl Esc for Broken {
+            fn read(&mut self, addr: u16, buf: &mut [u8]) -> Result<(), EscError> {
+                Err(EscError::OutOfRange {
+                    addr,
+                    len: buf.len(),
+                })
+            }
+            fn write(&mut self, addr: u16, data: &[u8]) -> Result<(), EscError> {
+                Err(EscError::OutOfRange {
+                    addr,
+                    len: data.len(),
+                })
+            }
+        }
+        assert!(process_data_sms(&mut Broken, &LAYOUT, 2, 3).is_err());
+        assert!(mailbox_matches(&mut Broken, LAYOUT.mbx_out, LAYOUT.mbx_in).is_err());
+    }
+}
