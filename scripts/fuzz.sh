@@ -8,14 +8,16 @@
 #   bash scripts/fuzz.sh regressions    # replay fuzz/regressions/<target>/*
 #
 # Each target runs on fuzz/corpus/<target> (ignored by git: what the fuzzer
-# finds) and fuzz/seeds/<target> (committed seeds, see fuzz/examples/seed.rs):
+# finds), fuzz/seeds/<target> (committed seeds, see fuzz/examples/seed.rs)
+# and fuzz/regressions/<target> (committed inputs that once crashed, so
+# smoke and long replay them too):
 #
-#   cargo +nightly fuzz run -s none T fuzz/corpus/T fuzz/seeds/T -- ...
+#   cargo +nightly fuzz run -s none T fuzz/corpus/T fuzz/seeds/T fuzz/regressions/T -- ...
 #
 # smoke: -max_total_time=$FUZZ_SMOKE_SECONDS (8) per target; installs
 #   cargo-fuzz and the nightly toolchain when missing; fails on any crash,
-#   panic, timeout or leak (libFuzzer's exit status), naming the input it
-#   saved under fuzz/artifacts/<target>/.
+#   panic, timeout or leak (libFuzzer's exit status), printing the panic
+#   and the input (base64, up to 16 KiB; saved under fuzz/artifacts/<target>/).
 # long: -runs=$FUZZ_LONG_RUNS (10 000 000) capped at -max_total_time=
 #   $FUZZ_LONG_SECONDS (900) per target, one target at a time; executions,
 #   executions/s, coverage and corpus size per target go to
@@ -76,7 +78,11 @@ run_target() {
     local t="$1"
     shift
     mkdir -p "fuzz/corpus/$t" "fuzz/artifacts/$t"
-    cargo +nightly fuzz run -s "$sanitizer" "$t" "fuzz/corpus/$t" "fuzz/seeds/$t" -- \
+    # The saved crash inputs are read first with the seeds, so every run
+    # replays them; new finds go to the first directory only.
+    local dirs=("fuzz/corpus/$t" "fuzz/seeds/$t")
+    if [ -d "fuzz/regressions/$t" ]; then dirs+=("fuzz/regressions/$t"); fi
+    cargo +nightly fuzz run -s "$sanitizer" "$t" "${dirs[@]}" -- \
         -max_len="$(max_len "$t")" -timeout=30 -print_final_stats=1 "$@"
 }
 
@@ -91,10 +97,20 @@ figures() {
     echo "runs=${runs:-?} exec/s=${rate:-?} cov=${cov:-?} corpus=${corp:-?}"
 }
 
+# A crash: the panic with its message, libFuzzer's summary, and the input
+# itself in base64 (CI runs in a throw-away clone, where the saved
+# artifact is lost with it).
 crashed() {
-    local t="$1" f="$2"
+    local t="$1" f="$2" artifact
     echo "fuzz: $t FAILED" >&2
-    grep -E "panicked at|ERROR: libFuzzer|SUMMARY|Test unit written to|Failing input" "$f" >&2 || tail -30 "$f" >&2
+    grep -A1 "panicked at" "$f" >&2 || true
+    grep -E "ERROR: libFuzzer|SUMMARY|Test unit written to" "$f" >&2 || tail -30 "$f" >&2
+    artifact=$(grep -o 'Test unit written to .*' "$f" | tail -1 | cut -d' ' -f5- || true)
+    if [ -n "$artifact" ] && [ -f "$artifact" ] && [ "$(stat -c %s "$artifact")" -le 16384 ]; then
+        echo "fuzz: the input, base64 (decode with base64 -d):" >&2
+        base64 -w 0 "$artifact" >&2
+        echo >&2
+    fi
     echo "fuzz: save the input under fuzz/regressions/$t/ once understood" >&2
 }
 

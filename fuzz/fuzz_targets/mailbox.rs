@@ -14,7 +14,8 @@
 //!   unknown mailbox types; with lies about the mailbox header;
 //! - 2: read the reply mailbox (SM1);
 //! - 3: idle time (the firmware polls);
-//! - 4: a write of any bytes anywhere in the mailbox RAM (partial buffers);
+//! - 4: a write of any bytes anywhere in the mailbox RAM (partial buffers),
+//!   at most one datagram's worth;
 //! - 5: the SM1 repeat request toggled;
 //! - 6: a read of part of SM1.
 //!
@@ -601,7 +602,11 @@ fn run(data: &[u8]) {
                 };
                 let span = ram.1 - ram.0;
                 let at = ram.0 + off % span;
-                let n = bytes.len().min(usize::from(ram.1 - at));
+                // The boot mailboxes span more RAM than one datagram carries.
+                let n = bytes
+                    .len()
+                    .min(usize::from(ram.1 - at))
+                    .min(line::MAX_DATAGRAM_DATA);
                 h.line.fpwr(STATION, at, &bytes[..n]);
             }
             5 => {

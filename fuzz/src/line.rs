@@ -14,7 +14,7 @@ use ecat_sim::esc::FrameOutcome;
 use ecat_sim::chain::Chain;
 use ecat_slave::sii::{PdoDirection, SiiReader};
 use ecat_slave::wire::builder::FrameBuilder;
-use ecat_slave::wire::ecat::Command;
+use ecat_slave::wire::ecat::{self, Command, Datagram};
 
 /// Source MAC of the frames the harness builds (a master's).
 pub const MASTER_MAC: [u8; 6] = [0x10, 0x10, 0x10, 0x10, 0x10, 0x10];
@@ -24,6 +24,10 @@ pub const FIRST_STATION: u16 = 0x1000;
 pub const STEP_NS: u64 = 1_000_000;
 /// Largest frame the harness builds (EtherCAT header length is 11 bits).
 pub const MAX_FRAME: usize = 16 + 0x7FF;
+/// Most data bytes one datagram of a harness frame carries (the frame's
+/// 11-bit length less the datagram header and working counter).
+pub const MAX_DATAGRAM_DATA: usize =
+    ecat::MAX_LENGTH as usize - Datagram::<()>::HEADER_LEN - Datagram::<()>::WKC_LEN;
 
 /// AL control register.
 pub const AL_CONTROL: u16 = 0x0120;
