@@ -10,8 +10,8 @@
 use std::ops::Range;
 use std::sync::OnceLock;
 
-use ecat_sim::esc::FrameOutcome;
 use ecat_sim::chain::Chain;
+use ecat_sim::esc::FrameOutcome;
 use ecat_slave::sii::{PdoDirection, SiiReader};
 use ecat_slave::wire::builder::FrameBuilder;
 use ecat_slave::wire::ecat::{self, Command, Datagram};
