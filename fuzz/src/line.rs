@@ -15,6 +15,7 @@ use ecat_sim::esc::FrameOutcome;
 use ecat_slave::sii::{PdoDirection, SiiReader};
 use ecat_slave::wire::builder::FrameBuilder;
 use ecat_slave::wire::ecat::{self, Command, Datagram};
+use ecat_slave::wire::ethernet;
 
 /// Source MAC of the frames the harness builds (a master's).
 pub const MASTER_MAC: [u8; 6] = [0x10, 0x10, 0x10, 0x10, 0x10, 0x10];
@@ -23,7 +24,7 @@ pub const FIRST_STATION: u16 = 0x1000;
 /// Time between two frames (or two idle polls).
 pub const STEP_NS: u64 = 1_000_000;
 /// Largest frame the harness builds (EtherCAT header length is 11 bits).
-pub const MAX_FRAME: usize = 16 + 0x7FF;
+pub const MAX_FRAME: usize = ethernet::HEADER_LEN + ecat::HEADER_LEN + ecat::MAX_LENGTH as usize;
 /// Most data bytes one datagram of a harness frame carries (the frame's
 /// 11-bit length less the datagram header and working counter).
 pub const MAX_DATAGRAM_DATA: usize =
